@@ -1,0 +1,88 @@
+// SPDX-License-Identifier: MIT
+// ModeBank: everything the synthesizer and the simulator need to know about one object's
+// vibration, and its file format (docs/bank-format.md). Target strike_bank: C++ standard
+// library only, so the plugin runtime can load banks.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "strike/material.hpp"
+#include "strike/result.hpp"
+
+namespace strike {
+
+/// The file format version this build writes. Readers accept versions <= this.
+constexpr uint32_t kBankFormatVersion = 1;
+
+struct ModeBank {
+  uint32_t format_version = kBankFormatVersion;
+
+  Material material;
+
+  // What it was computed from, so a cache can reuse it safely.
+  uint64_t mesh_hash = 0;        ///< FNV-1a 64 of the mesh file bytes or primitive spec
+  std::string mesh_source;       ///< the MESH argument as given (informational)
+  uint32_t element_order = 1;    ///< 1 Tet4, 2 Tet10
+  double target_edge_m = 0.0;    ///< resolution asked for (0 = automatic)
+  uint32_t mesh_nodes = 0;
+  uint32_t mesh_tets = 0;
+  double max_freq_hz = 0.0;      ///< cut-off the modes were computed up to
+  uint32_t max_modes = 0;
+
+  // Mass properties of the solid (from the tet mesh).
+  double mass_kg = 0.0;
+  double volume_m3 = 0.0;
+  std::array<double, 3> centre_m{};        ///< centre of mass, mesh frame
+  std::array<double, 9> inertia_kg_m2{};   ///< row-major 3x3 about centre_m
+
+  // Modes: eigenvalues lambda_i (rad^2/s^2) ascending; shapes are mass-normalized
+  // (phi^T M phi = 1, units 1/sqrt(kg)) and sampled on surface vertices only.
+  std::vector<double> eigenvalues;               ///< #modes
+  std::vector<float> shapes;                     ///< #modes * #surface vertices * 3: [mode][vertex][xyz]
+  std::vector<double> frequency_error_estimate;  ///< #modes relative error estimate, or empty
+
+  // The surface: collision shape and where impacts land.
+  std::vector<double> surface_positions;   ///< #V * 3, metres, mesh frame
+  std::vector<float> surface_normals;      ///< #V * 3, unit, outward (area-weighted vertex normals)
+  std::vector<uint32_t> surface_triangles; ///< #F * 3, indices into surface vertices, CCW from outside
+  std::vector<uint32_t> surface_node_index;///< #V: which tet-mesh node each surface vertex is
+
+  // Provenance: what the precompute cost.
+  double meshing_seconds = 0.0, assembly_seconds = 0.0, factorize_seconds = 0.0,
+         lanczos_seconds = 0.0, total_seconds = 0.0;
+  uint32_t rigid_modes_dropped = 0;
+  uint32_t above_cutoff_dropped = 0;
+  std::string tool_version;
+
+  size_t modeCount() const { return eigenvalues.size(); }
+  size_t surfaceVertexCount() const { return surface_positions.size() / 3; }
+  /// Undamped natural frequency sqrt(lambda)/2pi, Hz.
+  double frequencyHz(size_t mode) const;
+  /// Rayleigh damping c = a1 lambda + a2 (1/s); an under-damped mode decays as exp(-c t / 2).
+  double dampingCoefficient(size_t mode) const;
+  /// Amplitude decay rate c/2 (1/s), the ARCHITECTURE's `decay_per_s`.
+  double decayPerS(size_t mode) const { return 0.5 * dampingCoefficient(mode); }
+  /// Mode shape at surface vertex v: 3 floats.
+  const float* shapeAt(size_t mode, size_t vertex) const {
+    return shapes.data() + (mode * surfaceVertexCount() + vertex) * 3;
+  }
+  /// Empty when consistent, else a description of the first inconsistency.
+  std::string checkConsistency() const;
+};
+
+/// Writes atomically: to PATH.tmp-XXXX in the same directory, then rename().
+Status writeBank(const std::string& path, const ModeBank& bank);
+/// Serializes to bytes (what writeBank writes).
+std::vector<uint8_t> encodeBank(const ModeBank& bank);
+/// Reads and verifies magic, version, size and checksum; errors name the file and the problem.
+Result<ModeBank> readBank(const std::string& path);
+/// Parses bytes; `source` names them in messages.
+Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string& source);
+
+/// FNV-1a 64-bit hash, used for mesh hashes and cache keys.
+uint64_t fnv1a64(const void* data, size_t size, uint64_t seed = 0xcbf29ce484222325ull);
+
+}  // namespace strike

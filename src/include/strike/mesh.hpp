@@ -1,0 +1,114 @@
+// SPDX-License-Identifier: MIT
+// Meshes: surface meshes (triangles), tetrahedral meshes (Tet4 / Tet10), primitives, and the
+// loaders that turn a MESH argument of `strike modes` into a TetMesh.
+//
+// Target strike_mesh (Eigen only): readers, primitives, validation, surface extraction.
+// Target strike_tetgen (links TetGen, AGPL): tetrahedralize() and loadTetMesh(), the dispatcher
+// that also handles surface meshes.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "strike/progress.hpp"
+#include "strike/result.hpp"
+
+namespace strike {
+
+/// A closed triangle surface. V #V by 3 (metres), F #F by 3 (0-based, counter-clockwise seen
+/// from outside, so normals point out).
+struct SurfaceMesh {
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+};
+
+/// A tetrahedral mesh.
+///  nodes    #N by 3, metres.
+///  tets     #T by 4 (order 1) or #T by 10 (order 2). Corners 0..3 are positively oriented
+///           (det[x1-x0, x2-x0, x3-x0] > 0). Tet10 mid-edge nodes 4..9 follow Gmsh's order:
+///           edges (0,1) (1,2) (2,0) (3,0) (3,2) (3,1).
+///  order    1 or 2.
+///  surface  #F by 3 corner-node indices of the boundary triangles, outward (CCW from outside).
+struct TetMesh {
+  Eigen::MatrixXd nodes;
+  Eigen::MatrixXi tets;
+  int order = 1;
+  Eigen::MatrixXi surface;
+};
+
+/// Options for turning a MESH argument into a TetMesh.
+struct MeshOptions {
+  int order = 1;                  ///< 1: Tet4, 2: Tet10 (mid-edge nodes added, straight edges)
+  double target_edge_m = 0.0;     ///< target tet edge length; 0 picks one from the bounding box
+  double radius_edge_ratio = 1.4; ///< TetGen quality bound (-q), smaller = better shaped tets
+  ProgressFn progress;            ///< optional
+};
+
+/// A warning about a mesh that was still usable (unreferenced nodes, duplicate vertices...).
+struct MeshWarning {
+  std::string message;
+};
+
+/// A loaded mesh with its warnings and provenance.
+struct LoadedMesh {
+  TetMesh mesh;
+  std::vector<MeshWarning> warnings;
+  uint64_t source_hash = 0;  ///< FNV-1a 64 of the input file bytes or of the primitive spec text
+  double meshing_seconds = 0.0;
+};
+
+// ---- strike_mesh ---------------------------------------------------------------------------
+
+/// True if `spec` names a primitive ("box:LX,LY,LZ", "sphere:R", "cylinder:R,H").
+bool isPrimitiveSpec(const std::string& spec);
+
+/// Primitives, centred at the origin, metres. Box: structured hex grid split into tets,
+/// cells about target_edge_m (0: ~8 cells along the shortest side... see the implementation).
+/// Sphere and cylinder: a closed triangle surface (for tetrahedralize()).
+Result<TetMesh> makeBox(double lx, double ly, double lz, const MeshOptions& options);
+Result<SurfaceMesh> makeSphereSurface(double radius, double target_edge_m);
+Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double target_edge_m);
+
+/// Surface readers: Wavefront .obj (v/f, polygons fan-triangulated), .stl (ASCII and binary),
+/// .ply (ASCII and binary little/big endian, vertex x y z and face vertex_indices).
+Result<SurfaceMesh> readObj(const std::string& path);
+Result<SurfaceMesh> readStl(const std::string& path);
+Result<SurfaceMesh> readPly(const std::string& path);
+/// Dispatch on the extension (.obj .stl .ply, case-insensitive).
+Result<SurfaceMesh> readSurfaceMesh(const std::string& path);
+
+/// Tet mesh readers: Gmsh .msh 2.2 and 4.1 ASCII (element types 4 = Tet4, 11 = Tet10; other
+/// elements ignored), TetGen .node + .ele (path may name either file or the common stem).
+Result<TetMesh> readGmsh(const std::string& path, std::vector<MeshWarning>* warnings);
+Result<TetMesh> readTetgen(const std::string& path, std::vector<MeshWarning>* warnings);
+
+/// Checks a tet mesh and repairs what is safe: fixes orientation of negatively oriented tets
+/// (with a warning), rejects degenerate (near-zero volume) tets and NaN/Inf coordinates with
+/// an error naming the tet and its volume, removes unreferenced nodes with a warning, and
+/// (re)computes `surface`. `source` names the file in messages.
+Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<MeshWarning>* warnings);
+
+/// Boundary triangles (faces used by exactly one tet), oriented outward. #F by 3 corner nodes.
+Eigen::MatrixXi extractSurface(const Eigen::MatrixXi& tets);
+
+/// Adds mid-edge nodes to a Tet4 mesh, giving a Tet10 mesh with straight edges.
+TetMesh promoteToTet10(const TetMesh& tet4);
+
+/// Checks a surface mesh is closed and manifold (every edge shared by exactly two triangles)
+/// and has no degenerate triangles; the error names the first bad edge or triangle.
+Status checkClosedSurface(const SurfaceMesh& surface, const std::string& source);
+
+// ---- strike_tetgen (AGPL) -------------------------------------------------------------------
+
+/// Tetrahedralizes a closed surface with TetGen ("pq<ratio>a<volume>", quiet), then
+/// validates. Throws nothing; TetGen failures become Errors.
+Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& options,
+                               const std::string& source);
+
+/// Turns a MESH argument (a primitive spec or a file path) into a validated TetMesh of the
+/// requested order. Surface files and sphere/cylinder primitives go through tetrahedralize().
+Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& options);
+
+}  // namespace strike

@@ -1,0 +1,38 @@
+// SPDX-License-Identifier: MIT
+// The generalized eigenproblem K x = lambda M x: lowest elastic modes of a free solid by
+// shift-invert Lanczos (ARPACK dsaupd/dseupd mode 3) on a CHOLMOD factorization of K - sigma M.
+// Target strike_arpack.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "strike/progress.hpp"
+#include "strike/result.hpp"
+
+namespace strike {
+
+struct ModalSettings {
+  double max_freq_hz = 20000.0;  ///< keep every elastic mode with sqrt(lambda)/2pi <= this
+  int max_modes = 200;           ///< but at most this many (lowest first)
+  /// Modes with sqrt(|lambda|)/2pi below this are rigid-body modes (a free solid has 6).
+  double rigid_freq_hz = 1.0;
+  ProgressFn progress;           ///< optional
+};
+
+struct ModalResult {
+  Eigen::VectorXd eigenvalues;   ///< lambda_i, rad^2/s^2, ascending, elastic modes only
+  Eigen::MatrixXd shapes;        ///< 3N by #modes, M-orthonormal: shapes^T M shapes = I
+  int rigid_modes_dropped = 0;   ///< normally 6 for a free body
+  int above_cutoff_dropped = 0;  ///< converged modes found above max_freq_hz and not kept
+  bool capped_by_max_modes = false;  ///< true when more modes lie below max_freq_hz
+  double factorize_seconds = 0.0;
+  double lanczos_seconds = 0.0;
+  int operator_applications = 0; ///< solves with the factorization
+};
+
+Result<ModalResult> solveModes(const Eigen::SparseMatrix<double>& K,
+                               const Eigen::SparseMatrix<double>& M,
+                               const ModalSettings& settings);
+
+}  // namespace strike

@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: MIT
+// The oscillator bank: modes of struck objects advanced exactly, sample by sample, and summed.
+// Target strike_synth: C++ standard library only (SIMD intrinsics allowed); no allocation in
+// render() once objects and capacity are set up.
+//
+// Each mode i of an object obeys  q'' + c q' + lambda q = g_i f(t)  (mass-normalized modal
+// coordinate q, c = a1 lambda + a2, f a unit-area force pulse, g_i = phi_i(p) . J the modal
+// impulse). The state advances by its exact discrete-time transition (a complex multiply for
+// under-damped modes), so there is no step-size limit and any damping is stable.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "strike/bank.hpp"
+
+namespace strike {
+
+struct SynthSettings {
+  double sample_rate_hz = 48000.0;
+  double min_freq_hz = 20.0;        ///< modes below are not synthesized
+  double max_freq_hz = 20000.0;     ///< modes above min(this, 0.45 * sample rate) are not synthesized
+  /// Output amplitude (same units as the output) below which a mode is not started and at which
+  /// a ringing mode goes to sleep. Default ~ -120 dB re full scale 1.0.
+  double audibility_threshold = 1e-6;
+  bool double_precision = false;    ///< reference path: double state, no SIMD (for accuracy studies)
+};
+
+/// The modes of one sounding object as the synth needs them.
+struct ModalObjectDesc {
+  std::vector<double> eigenvalues;       ///< lambda_i, rad^2/s^2
+  double rayleigh_stiffness = 0.0;       ///< a1, s
+  double rayleigh_mass = 0.0;            ///< a2, 1/s
+  /// Per mode: output units per unit modal acceleration (m/s^2 * sqrt(kg)). Output sample =
+  /// sum_i radiation_weight_i * q_i''(t - delay). Build it with radiationWeights().
+  std::vector<double> radiation_weight;
+  double delay_s = 0.0;                  ///< propagation delay to the listener
+};
+
+/// One contact: a half-sine force pulse of `duration_s` (0 = ideal impulse) starting at
+/// `time_s`, of total impulse 1 N s, scaled per mode by modal_impulse[i] = phi_i(p) . J.
+struct ImpactDesc {
+  uint32_t object = 0;
+  double time_s = 0.0;
+  double duration_s = 0.0;
+  const double* modal_impulse = nullptr;  ///< one per mode of the object (N s / sqrt(kg))
+};
+
+struct SynthStats {
+  uint64_t modes_total = 0;         ///< over all objects
+  uint64_t modes_out_of_band = 0;   ///< never synthesized (below min or above max frequency)
+  uint64_t impacts = 0;
+  uint64_t impacts_inaudible = 0;   ///< changed no mode above the threshold
+  uint64_t mode_starts = 0;         ///< a sleeping mode woken by an impact
+  uint64_t mode_samples = 0;        ///< work done: active modes x samples rendered
+  uint64_t max_active_modes = 0;
+};
+
+class OscillatorBank {
+ public:
+  explicit OscillatorBank(const SynthSettings& settings);
+  ~OscillatorBank();
+  OscillatorBank(OscillatorBank&&) noexcept;
+  OscillatorBank& operator=(OscillatorBank&&) noexcept;
+
+  /// Adds an object's modes; returns its id (0, 1, ...). Not real-time safe (allocates).
+  uint32_t addObject(const ModalObjectDesc& object);
+  /// Schedules an impact. Impacts may be added in any order, but not before the current render
+  /// time (late ones start at the current sample). Copies modal_impulse.
+  void addImpact(const ImpactDesc& impact);
+  /// Renders the next `frames` mono samples into out (overwrites). Sample n of the first call is
+  /// time n / sample_rate.
+  void render(float* out, size_t frames);
+  /// Time of the next sample to be rendered, s.
+  double time() const;
+  SynthStats stats() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Modal impulse g_i = phi_i(p) . J for an impulse J (N s, mesh frame) at point p (metres, mesh
+/// frame): p is projected onto the nearest surface triangle and the shapes are interpolated
+/// barycentrically. Returns #modes values.
+std::vector<double> projectImpulse(const ModeBank& bank, const double point[3], const double impulse[3]);
+/// Same, at surface vertex v.
+std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]);
+
+/// Hertz contact duration of two elastic bodies meeting at normal speed v_n (m/s):
+/// tau = 2.868 (m*^2 / (R* E*^2 v_n))^(1/5), 1/E* = (1-nu1^2)/E1 + (1-nu2^2)/E2,
+/// 1/R* = 1/R1 + 1/R2, 1/m* = 1/m1 + 1/m2 (Johnson, Contact Mechanics, 1985, ch. 11).
+/// Pass infinite mass or radius for a half-space. Returns seconds.
+double hertzContactDuration(double youngs1_pa, double poisson1, double radius1_m, double mass1_kg,
+                            double youngs2_pa, double poisson2, double radius2_m, double mass2_kg,
+                            double normal_speed_m_s);
+
+/// Listener model, per mode, for a listener at distance_m from the object (see radiation.cpp for
+/// the approximation and what it leaves out). Returns #modes weights for ModalObjectDesc.
+std::vector<double> radiationWeights(const ModeBank& bank, double distance_m);
+
+}  // namespace strike

@@ -1,1 +1,314 @@
 // SPDX-License-Identifier: MIT
+// The mode bank file: see docs/bank-format.md. Little-endian, chunked, checksummed.
+//
+//   header (32 bytes): magic "STRKBANK", u32 format_version, u32 header_size (32),
+//                      u64 payload_size, u64 payload_checksum (FNV-1a 64 of the payload)
+//   payload: chunks, each: char[4] tag, u32 flags (0), u64 size, then `size` bytes.
+//
+// Unknown chunks are skipped, so a reader of the same major format can read files that carry
+// more. Every read is bounds-checked: a hostile file can make decoding fail, never overrun.
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "strike/atomic_file.hpp"
+#include "strike/bank.hpp"
+
+namespace strike {
+namespace {
+
+constexpr char kMagic[8] = {'S', 'T', 'R', 'K', 'B', 'A', 'N', 'K'};
+constexpr uint32_t kHeaderSize = 32;
+// A bank larger than this is not a bank: refuse it before allocating (10^8 floats of shapes).
+constexpr uint64_t kMaxBankBytes = uint64_t(1) << 31;
+
+static_assert(sizeof(float) == 4 && sizeof(double) == 8, "IEEE-754 float and double required");
+
+// --- writing ------------------------------------------------------------------------------
+
+class ByteWriter {
+ public:
+  template <class T>
+  void put(T value) {
+    // Why: the format is little-endian; x86 and ARM Linux are, and we check it at compile time.
+    static_assert(std::is_arithmetic_v<T>);
+    uint8_t bytes[sizeof(T)];
+    std::memcpy(bytes, &value, sizeof(T));
+    data_.insert(data_.end(), bytes, bytes + sizeof(T));
+  }
+  template <class T>
+  void putArray(const std::vector<T>& values) {
+    const auto* bytes = reinterpret_cast<const uint8_t*>(values.data());
+    data_.insert(data_.end(), bytes, bytes + values.size() * sizeof(T));
+  }
+  void putString(const std::string& text) {
+    put<uint32_t>(static_cast<uint32_t>(text.size()));
+    data_.insert(data_.end(), text.begin(), text.end());
+  }
+  /// Starts a chunk; returns where its size goes.
+  size_t beginChunk(const char tag[4]) {
+    data_.insert(data_.end(), tag, tag + 4);
+    put<uint32_t>(0);
+    const size_t size_at = data_.size();
+    put<uint64_t>(0);
+    return size_at;
+  }
+  void endChunk(size_t size_at) {
+    const uint64_t size = data_.size() - (size_at + 8);
+    std::memcpy(data_.data() + size_at, &size, 8);
+  }
+  std::vector<uint8_t>& data() { return data_; }
+
+ private:
+  std::vector<uint8_t> data_;
+};
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the bank codec assumes a little-endian host");
+
+// --- reading ------------------------------------------------------------------------------
+
+class ByteReader {
+ public:
+  ByteReader(const uint8_t* data, size_t size) : data_(data), size_(size) {}
+  bool failed() const { return failed_; }
+  size_t remaining() const { return size_ - pos_; }
+
+  template <class T>
+  T get() {
+    T value{};
+    if (remaining() < sizeof(T)) {
+      failed_ = true;
+      return value;
+    }
+    std::memcpy(&value, data_ + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return value;
+  }
+  template <class T>
+  bool getArray(std::vector<T>& values, uint64_t count) {
+    if (count > remaining() / sizeof(T)) {  // checked before allocating
+      failed_ = true;
+      return false;
+    }
+    values.resize(count);
+    std::memcpy(values.data(), data_ + pos_, count * sizeof(T));
+    pos_ += count * sizeof(T);
+    return true;
+  }
+  std::string getString() {
+    const uint32_t length = get<uint32_t>();
+    if (failed_ || length > remaining()) {
+      failed_ = true;
+      return {};
+    }
+    std::string text(reinterpret_cast<const char*>(data_ + pos_), length);
+    pos_ += length;
+    return text;
+  }
+
+ private:
+  const uint8_t* data_;
+  size_t size_;
+  size_t pos_ = 0;
+  bool failed_ = false;
+};
+
+Error corrupt(const std::string& source, const std::string& what) {
+  return badInput(source + ": error: not a valid mode bank: " + what);
+}
+
+}  // namespace
+
+std::vector<uint8_t> encodeBank(const ModeBank& bank) {
+  ByteWriter w;
+  w.data().insert(w.data().end(), kMagic, kMagic + 8);
+  w.put<uint32_t>(kBankFormatVersion);
+  w.put<uint32_t>(kHeaderSize);
+  w.put<uint64_t>(0);  // payload size, patched below
+  w.put<uint64_t>(0);  // checksum, patched below
+
+  size_t at = w.beginChunk("MATL");
+  w.putString(bank.material.name);
+  w.put(bank.material.youngs_pa);
+  w.put(bank.material.poisson);
+  w.put(bank.material.density_kg_m3);
+  w.put(bank.material.rayleigh_stiffness);
+  w.put(bank.material.rayleigh_mass);
+  w.endChunk(at);
+
+  at = w.beginChunk("MESH");
+  w.put<uint64_t>(bank.mesh_hash);
+  w.putString(bank.mesh_source);
+  w.put<uint32_t>(bank.element_order);
+  w.put(bank.target_edge_m);
+  w.put<uint32_t>(bank.mesh_nodes);
+  w.put<uint32_t>(bank.mesh_tets);
+  w.put(bank.max_freq_hz);
+  w.put<uint32_t>(bank.max_modes);
+  w.endChunk(at);
+
+  at = w.beginChunk("MASS");
+  w.put(bank.mass_kg);
+  w.put(bank.volume_m3);
+  for (double v : bank.centre_m) w.put(v);
+  for (double v : bank.inertia_kg_m2) w.put(v);
+  w.endChunk(at);
+
+  at = w.beginChunk("SURF");
+  w.put<uint32_t>(static_cast<uint32_t>(bank.surfaceVertexCount()));
+  w.put<uint32_t>(static_cast<uint32_t>(bank.surface_triangles.size() / 3));
+  w.put<uint32_t>(bank.surface_normals.empty() ? 0u : 1u);
+  w.put<uint32_t>(bank.surface_node_index.empty() ? 0u : 1u);
+  w.putArray(bank.surface_positions);
+  w.putArray(bank.surface_normals);
+  w.putArray(bank.surface_triangles);
+  w.putArray(bank.surface_node_index);
+  w.endChunk(at);
+
+  at = w.beginChunk("MODE");
+  w.put<uint32_t>(static_cast<uint32_t>(bank.modeCount()));
+  w.put<uint32_t>(static_cast<uint32_t>(bank.surfaceVertexCount()));
+  w.putArray(bank.eigenvalues);
+  w.putArray(bank.shapes);
+  w.endChunk(at);
+
+  if (!bank.frequency_error_estimate.empty()) {
+    at = w.beginChunk("FERR");
+    w.put<uint32_t>(static_cast<uint32_t>(bank.frequency_error_estimate.size()));
+    w.putArray(bank.frequency_error_estimate);
+    w.endChunk(at);
+  }
+
+  at = w.beginChunk("PROV");
+  w.put(bank.meshing_seconds);
+  w.put(bank.assembly_seconds);
+  w.put(bank.factorize_seconds);
+  w.put(bank.lanczos_seconds);
+  w.put(bank.total_seconds);
+  w.put<uint32_t>(bank.rigid_modes_dropped);
+  w.put<uint32_t>(bank.above_cutoff_dropped);
+  w.putString(bank.tool_version);
+  w.endChunk(at);
+
+  std::vector<uint8_t>& bytes = w.data();
+  const uint64_t payload_size = bytes.size() - kHeaderSize;
+  const uint64_t checksum = fnv1a64(bytes.data() + kHeaderSize, payload_size);
+  std::memcpy(bytes.data() + 16, &payload_size, 8);
+  std::memcpy(bytes.data() + 24, &checksum, 8);
+  return std::move(bytes);
+}
+
+Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string& source) {
+  if (size < kHeaderSize || std::memcmp(data, kMagic, 8) != 0) {
+    if (size >= 8 && std::memcmp(data, kMagic, 8) == 0)
+      return corrupt(source, "file is " + std::to_string(size) + " bytes, shorter than the 32-byte header (truncated)");
+    return corrupt(source, "wrong magic number (expected a file written by `strike modes`)");
+  }
+  ByteReader header(data + 8, kHeaderSize - 8);
+  ModeBank bank;
+  bank.format_version = header.get<uint32_t>();
+  const uint32_t header_size = header.get<uint32_t>();
+  const uint64_t payload_size = header.get<uint64_t>();
+  const uint64_t checksum = header.get<uint64_t>();
+  if (bank.format_version == 0 || bank.format_version > kBankFormatVersion)
+    return badInput(source + ": error: mode bank format version " + std::to_string(bank.format_version) +
+                    " is not supported by this build (reads versions 1 to " + std::to_string(kBankFormatVersion) +
+                    "); recompute it with `strike modes` or update strike");
+  if (header_size != kHeaderSize)
+    return corrupt(source, "header size " + std::to_string(header_size) + ", expected " + std::to_string(kHeaderSize));
+  if (payload_size != size - kHeaderSize)
+    return corrupt(source, "header says " + std::to_string(payload_size) + " payload bytes, file has " +
+                               std::to_string(size - kHeaderSize) + (payload_size > size - kHeaderSize ? " (truncated)" : ""));
+  if (fnv1a64(data + kHeaderSize, payload_size) != checksum)
+    return corrupt(source, "checksum mismatch (the file is damaged)");
+
+  ByteReader payload(data + kHeaderSize, payload_size);
+  bool seen_modes = false, seen_surface = false;
+  uint32_t surface_vertices = 0;
+  while (payload.remaining() > 0) {
+    char tag_chars[4];
+    for (char& c : tag_chars) c = static_cast<char>(payload.get<uint8_t>());
+    payload.get<uint32_t>();  // flags, reserved
+    const uint64_t chunk_size = payload.get<uint64_t>();
+    if (payload.failed() || chunk_size > payload.remaining())
+      return corrupt(source, "chunk '" + std::string(tag_chars, 4) + "' runs past the end of the file");
+    const std::string tag(tag_chars, 4);
+    std::vector<uint8_t> chunk_bytes;
+    payload.getArray(chunk_bytes, chunk_size);
+    ByteReader r(chunk_bytes.data(), chunk_bytes.size());
+    if (tag == "MATL") {
+      bank.material.name = r.getString();
+      bank.material.youngs_pa = r.get<double>();
+      bank.material.poisson = r.get<double>();
+      bank.material.density_kg_m3 = r.get<double>();
+      bank.material.rayleigh_stiffness = r.get<double>();
+      bank.material.rayleigh_mass = r.get<double>();
+    } else if (tag == "MESH") {
+      bank.mesh_hash = r.get<uint64_t>();
+      bank.mesh_source = r.getString();
+      bank.element_order = r.get<uint32_t>();
+      bank.target_edge_m = r.get<double>();
+      bank.mesh_nodes = r.get<uint32_t>();
+      bank.mesh_tets = r.get<uint32_t>();
+      bank.max_freq_hz = r.get<double>();
+      bank.max_modes = r.get<uint32_t>();
+    } else if (tag == "MASS") {
+      bank.mass_kg = r.get<double>();
+      bank.volume_m3 = r.get<double>();
+      for (double& v : bank.centre_m) v = r.get<double>();
+      for (double& v : bank.inertia_kg_m2) v = r.get<double>();
+    } else if (tag == "SURF") {
+      surface_vertices = r.get<uint32_t>();
+      const uint32_t triangles = r.get<uint32_t>();
+      const bool has_normals = r.get<uint32_t>() != 0;
+      const bool has_node_index = r.get<uint32_t>() != 0;
+      r.getArray(bank.surface_positions, uint64_t(surface_vertices) * 3);
+      if (has_normals) r.getArray(bank.surface_normals, uint64_t(surface_vertices) * 3);
+      r.getArray(bank.surface_triangles, uint64_t(triangles) * 3);
+      if (has_node_index) r.getArray(bank.surface_node_index, surface_vertices);
+      seen_surface = true;
+    } else if (tag == "MODE") {
+      const uint32_t modes = r.get<uint32_t>();
+      const uint32_t vertices = r.get<uint32_t>();
+      if (seen_surface && vertices != surface_vertices)
+        return corrupt(source, "modes are sampled on " + std::to_string(vertices) + " vertices, the surface has " +
+                                   std::to_string(surface_vertices));
+      r.getArray(bank.eigenvalues, modes);
+      r.getArray(bank.shapes, uint64_t(modes) * vertices * 3);
+      seen_modes = true;
+    } else if (tag == "FERR") {
+      const uint32_t count = r.get<uint32_t>();
+      r.getArray(bank.frequency_error_estimate, count);
+    } else if (tag == "PROV") {
+      bank.meshing_seconds = r.get<double>();
+      bank.assembly_seconds = r.get<double>();
+      bank.factorize_seconds = r.get<double>();
+      bank.lanczos_seconds = r.get<double>();
+      bank.total_seconds = r.get<double>();
+      bank.rigid_modes_dropped = r.get<uint32_t>();
+      bank.above_cutoff_dropped = r.get<uint32_t>();
+      bank.tool_version = r.getString();
+    }  // else: a chunk from a newer writer of the same version; skipped on purpose.
+    if (r.failed()) return corrupt(source, "chunk '" + tag + "' is shorter than its contents");
+  }
+  if (!seen_modes || !seen_surface)
+    return corrupt(source, std::string("missing the ") + (seen_modes ? "SURF" : "MODE") + " chunk");
+  const std::string problem = bank.checkConsistency();
+  if (!problem.empty()) return corrupt(source, problem);
+  return bank;
+}
+
+Status writeBank(const std::string& path, const ModeBank& bank) {
+  const std::string problem = bank.checkConsistency();
+  if (!problem.empty()) return internalError("refusing to write an inconsistent mode bank to " + path + ": " + problem);
+  const std::vector<uint8_t> bytes = encodeBank(bank);
+  return writeFileAtomically(path, bytes.data(), bytes.size());
+}
+
+Result<ModeBank> readBank(const std::string& path) {
+  Result<std::string> bytes = readWholeFile(path, kMaxBankBytes);
+  if (!bytes) return bytes.error();
+  return decodeBank(reinterpret_cast<const uint8_t*>(bytes->data()), bytes->size(), path);
+}
+
+}  // namespace strike

@@ -1,1 +1,71 @@
 // SPDX-License-Identifier: MIT
+// ModeBank helpers that do not touch files.
+#include <cmath>
+#include <string>
+
+#include "strike/bank.hpp"
+
+namespace strike {
+
+double ModeBank::frequencyHz(size_t mode) const {
+  // The undamped natural frequency of mode i is sqrt(lambda_i) / 2pi (K x = lambda M x).
+  const double lambda = eigenvalues[mode];
+  return lambda > 0.0 ? std::sqrt(lambda) / (2.0 * M_PI) : 0.0;
+}
+
+double ModeBank::dampingCoefficient(size_t mode) const {
+  return rayleighDamping(material.rayleigh_stiffness, material.rayleigh_mass, eigenvalues[mode]);
+}
+
+std::string ModeBank::checkConsistency() const {
+  const size_t modes = eigenvalues.size();
+  const size_t vertices = surfaceVertexCount();
+  if (surface_positions.size() % 3 != 0) return "surface positions are not a multiple of 3";
+  if (shapes.size() != modes * vertices * 3)
+    return "mode shapes hold " + std::to_string(shapes.size()) + " values, expected " +
+           std::to_string(modes) + " modes x " + std::to_string(vertices) + " vertices x 3";
+  if (!surface_normals.empty() && surface_normals.size() != vertices * 3)
+    return "surface normals hold " + std::to_string(surface_normals.size()) + " values, expected " +
+           std::to_string(vertices * 3);
+  if (!surface_node_index.empty() && surface_node_index.size() != vertices)
+    return "surface node index holds " + std::to_string(surface_node_index.size()) + " values, expected " +
+           std::to_string(vertices);
+  if (surface_triangles.size() % 3 != 0) return "surface triangles are not a multiple of 3";
+  for (size_t t = 0; t < surface_triangles.size(); ++t)
+    if (surface_triangles[t] >= vertices)
+      return "surface triangle " + std::to_string(t / 3) + " references vertex " +
+             std::to_string(surface_triangles[t]) + ", the surface has " + std::to_string(vertices);
+  if (!frequency_error_estimate.empty() && frequency_error_estimate.size() != modes)
+    return "frequency error estimates hold " + std::to_string(frequency_error_estimate.size()) +
+           " values, expected " + std::to_string(modes);
+  for (size_t i = 0; i < modes; ++i) {
+    if (!std::isfinite(eigenvalues[i]) || eigenvalues[i] < 0.0)
+      return "eigenvalue " + std::to_string(i) + " is " + std::to_string(eigenvalues[i]) + " (must be finite, >= 0)";
+    if (i > 0 && eigenvalues[i] < eigenvalues[i - 1])
+      return "eigenvalues are not ascending at mode " + std::to_string(i);
+  }
+  for (float v : shapes)
+    if (!std::isfinite(v)) return "a mode shape value is not finite";
+  for (double v : surface_positions)
+    if (!std::isfinite(v)) return "a surface position is not finite";
+  const double material_values[] = {material.youngs_pa, material.poisson, material.density_kg_m3,
+                                    material.rayleigh_stiffness, material.rayleigh_mass};
+  for (double v : material_values)
+    if (!std::isfinite(v)) return "a material value is not finite";
+  if (!(mass_kg >= 0.0) || !std::isfinite(mass_kg)) return "mass is " + std::to_string(mass_kg);
+  return {};
+}
+
+uint64_t fnv1a64(const void* data, size_t size, uint64_t seed) {
+  // FNV-1a, 64-bit (Fowler, Noll, Vo): simple, deterministic, good enough to detect corruption
+  // and key a cache; not a cryptographic hash.
+  const auto* bytes = static_cast<const uint8_t*>(data);
+  uint64_t hash = seed;
+  for (size_t i = 0; i < size; ++i) {
+    hash ^= bytes[i];
+    hash *= 0x100000001b3ull;
+  }
+  return hash;
+}
+
+}  // namespace strike

@@ -1,0 +1,45 @@
+// SPDX-License-Identifier: MIT
+// Mesh -> FEM -> eigen-solve -> ModeBank: the whole precompute of `strike modes`, also used by
+// the scene renderer for objects without a cached bank.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "strike/bank.hpp"
+#include "strike/material.hpp"
+#include "strike/mesh.hpp"
+#include "strike/modal.hpp"
+
+namespace strike {
+
+struct PrecomputeSettings {
+  std::string mesh_spec;    ///< file path or primitive ("box:0.3,0.02,0.02")
+  Material material;
+  int order = 1;            ///< 1 Tet4, 2 Tet10
+  double target_edge_m = 0; ///< 0: automatic
+  double max_freq_hz = 20000.0;
+  int max_modes = 200;
+  ProgressFn progress;      ///< optional
+};
+
+struct PrecomputeReport {
+  std::vector<MeshWarning> warnings;
+  size_t dofs = 0;
+  bool capped_by_max_modes = false;
+  int operator_applications = 0;
+};
+
+struct PrecomputeResult {
+  ModeBank bank;
+  PrecomputeReport report;
+};
+
+/// Runs the precompute. Errors name the mesh, the material field or the solver failure.
+Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings);
+
+/// Restricts a full mode-shape matrix (3N by #modes) to the surface of `mesh` and fills the
+/// bank's surface (positions, area-weighted outward normals, triangles, node index) and shapes.
+void fillSurfaceAndShapes(const TetMesh& mesh, const Eigen::MatrixXd& shapes, ModeBank& bank);
+
+}  // namespace strike

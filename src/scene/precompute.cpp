@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: MIT
+#include "strike/precompute.hpp"
+
+#include <chrono>
+#include <map>
+
+#include "strike/fem.hpp"
+#include "strike/materials.hpp"
+
+namespace strike {
+namespace {
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+}  // namespace
+
+void fillSurfaceAndShapes(const TetMesh& mesh, const Eigen::MatrixXd& shapes, ModeBank& bank) {
+  // Surface vertices are the corner nodes used by boundary triangles, numbered in order of
+  // first use so the bank is deterministic.
+  std::map<int, uint32_t> surface_index_of_node;
+  std::vector<uint32_t> node_of_surface;
+  bank.surface_triangles.clear();
+  for (Eigen::Index f = 0; f < mesh.surface.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int node = mesh.surface(f, c);
+      auto [it, inserted] = surface_index_of_node.emplace(node, static_cast<uint32_t>(node_of_surface.size()));
+      if (inserted) node_of_surface.push_back(static_cast<uint32_t>(node));
+      bank.surface_triangles.push_back(it->second);
+    }
+  const size_t vertices = node_of_surface.size();
+  bank.surface_node_index = node_of_surface;
+  bank.surface_positions.resize(vertices * 3);
+  for (size_t v = 0; v < vertices; ++v)
+    for (int a = 0; a < 3; ++a) bank.surface_positions[v * 3 + a] = mesh.nodes(node_of_surface[v], a);
+
+  // Area-weighted vertex normals: the cross product of two edges is twice the area times the
+  // unit normal, so summing it weights each face by its area.
+  std::vector<double> normals(vertices * 3, 0.0);
+  for (size_t t = 0; t + 2 < bank.surface_triangles.size(); t += 3) {
+    const uint32_t* tri = &bank.surface_triangles[t];
+    const Eigen::Vector3d p0(&bank.surface_positions[tri[0] * 3]), p1(&bank.surface_positions[tri[1] * 3]),
+        p2(&bank.surface_positions[tri[2] * 3]);
+    const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
+    for (int c = 0; c < 3; ++c)
+      for (int a = 0; a < 3; ++a) normals[tri[c] * 3 + a] += n[a];
+  }
+  bank.surface_normals.resize(vertices * 3);
+  for (size_t v = 0; v < vertices; ++v) {
+    const Eigen::Vector3d n(&normals[v * 3]);
+    const double length = n.norm();
+    for (int a = 0; a < 3; ++a) bank.surface_normals[v * 3 + a] = static_cast<float>(length > 0 ? n[a] / length : 0.0);
+  }
+
+  const Eigen::Index modes = shapes.cols();
+  bank.shapes.resize(static_cast<size_t>(modes) * vertices * 3);
+  for (Eigen::Index m = 0; m < modes; ++m)
+    for (size_t v = 0; v < vertices; ++v)
+      for (int a = 0; a < 3; ++a)
+        bank.shapes[(static_cast<size_t>(m) * vertices + v) * 3 + a] =
+            static_cast<float>(shapes(3 * static_cast<Eigen::Index>(node_of_surface[v]) + a, m));
+}
+
+Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings) {
+  const auto start = std::chrono::steady_clock::now();
+  Status valid = validateMaterial(settings.material, "material");
+  if (!valid) return valid.error();
+  if (settings.order != 1 && settings.order != 2)
+    return badInput("--order = " + std::to_string(settings.order) + " (must be 1 or 2)");
+  if (!(settings.max_freq_hz > 0)) return badInput("--max-freq = " + std::to_string(settings.max_freq_hz) + " (must be > 0)");
+  if (settings.max_modes < 1) return badInput("--max-modes = " + std::to_string(settings.max_modes) + " (must be >= 1)");
+  if (!(settings.target_edge_m >= 0)) return badInput("--size = " + std::to_string(settings.target_edge_m) + " (must be > 0)");
+
+  MeshOptions mesh_options;
+  mesh_options.order = settings.order;
+  mesh_options.target_edge_m = settings.target_edge_m;
+  mesh_options.progress = settings.progress;
+  Result<LoadedMesh> loaded = loadTetMesh(settings.mesh_spec, mesh_options);
+  if (!loaded) return loaded.error();
+  const TetMesh& mesh = loaded->mesh;
+
+  PrecomputeResult result;
+  result.report.warnings = loaded->warnings;
+  ModeBank& bank = result.bank;
+  bank.meshing_seconds = loaded->meshing_seconds;
+
+  const auto assembly_start = std::chrono::steady_clock::now();
+  if (settings.progress) settings.progress("assemble", -1.0);
+  Eigen::SparseMatrix<double> K, M;
+  assembleStiffness(mesh, settings.material, K);
+  assembleMass(mesh, settings.material.density_kg_m3, M);
+  const MassProperties mass = computeMassProperties(mesh, settings.material.density_kg_m3);
+  bank.assembly_seconds = secondsSince(assembly_start);
+  result.report.dofs = static_cast<size_t>(K.rows());
+
+  ModalSettings modal;
+  modal.max_freq_hz = settings.max_freq_hz;
+  modal.max_modes = settings.max_modes;
+  modal.progress = settings.progress;
+  Result<ModalResult> modes = solveModes(K, M, modal);
+  if (!modes) return modes.error();
+
+  bank.material = settings.material;
+  bank.mesh_hash = loaded->source_hash;
+  bank.mesh_source = settings.mesh_spec;
+  bank.element_order = static_cast<uint32_t>(mesh.order);
+  bank.target_edge_m = settings.target_edge_m;
+  bank.mesh_nodes = static_cast<uint32_t>(mesh.nodes.rows());
+  bank.mesh_tets = static_cast<uint32_t>(mesh.tets.rows());
+  bank.max_freq_hz = settings.max_freq_hz;
+  bank.max_modes = static_cast<uint32_t>(settings.max_modes);
+  bank.mass_kg = mass.mass_kg;
+  bank.volume_m3 = mass.volume_m3;
+  for (int a = 0; a < 3; ++a) bank.centre_m[a] = mass.centre_m[a];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) bank.inertia_kg_m2[r * 3 + c] = mass.inertia_kg_m2(r, c);
+  bank.eigenvalues.assign(modes->eigenvalues.data(), modes->eigenvalues.data() + modes->eigenvalues.size());
+  fillSurfaceAndShapes(mesh, modes->shapes, bank);
+  bank.factorize_seconds = modes->factorize_seconds;
+  bank.lanczos_seconds = modes->lanczos_seconds;
+  bank.rigid_modes_dropped = static_cast<uint32_t>(modes->rigid_modes_dropped);
+  bank.above_cutoff_dropped = static_cast<uint32_t>(modes->above_cutoff_dropped);
+  bank.tool_version = "strike " STRIKE_VERSION_STRING;
+  result.report.capped_by_max_modes = modes->capped_by_max_modes;
+  result.report.operator_applications = modes->operator_applications;
+  bank.total_seconds = secondsSince(start);
+
+  const std::string problem = bank.checkConsistency();
+  if (!problem.empty()) return internalError("the computed mode bank is inconsistent: " + problem);
+  return result;
+}
+
+}  // namespace strike

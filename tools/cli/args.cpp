@@ -1,0 +1,120 @@
+// SPDX-License-Identifier: MIT
+#include "args.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+namespace strike::cli {
+
+Result<double> parseNumber(const std::string& text, const std::string& what) {
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double value = std::strtod(begin, &end);
+  if (text.empty() || end != begin + text.size())
+    return badInput(what + " = '" + text + "' (expected a number)");
+  if (!std::isfinite(value) || errno == ERANGE) return badInput(what + " = '" + text + "' (must be finite)");
+  return value;
+}
+
+std::string ParsedArgs::text(const std::string& name, const std::string& fallback) const {
+  auto it = values_.find(name);
+  return it == values_.end() ? fallback : it->second;
+}
+
+Result<double> ParsedArgs::number(const std::string& name, double fallback) const {
+  if (!has(name)) return fallback;
+  return parseNumber(text(name), name);
+}
+
+Result<long long> ParsedArgs::integer(const std::string& name, long long fallback) const {
+  if (!has(name)) return fallback;
+  const std::string value = text(name);
+  char* end = nullptr;
+  errno = 0;
+  const long long parsed = std::strtoll(value.c_str(), &end, 10);
+  if (value.empty() || end != value.c_str() + value.size() || errno == ERANGE)
+    return badInput(name + " = '" + value + "' (expected a whole number)");
+  return parsed;
+}
+
+Result<std::array<double, 3>> ParsedArgs::vector3(const std::string& name, std::array<double, 3> fallback) const {
+  if (!has(name)) return fallback;
+  const std::string value = text(name);
+  std::array<double, 3> out{};
+  std::stringstream parts(value);
+  std::string part;
+  int count = 0;
+  while (std::getline(parts, part, ',')) {
+    if (count == 3) return badInput(name + " = '" + value + "' (expected three numbers X,Y,Z)");
+    Result<double> number = parseNumber(part, name);
+    if (!number) return badInput(name + " = '" + value + "' (expected three finite numbers X,Y,Z)");
+    out[count++] = *number;
+  }
+  if (count != 3) return badInput(name + " = '" + value + "' (expected three numbers X,Y,Z)");
+  return out;
+}
+
+bool wantsHelp(const std::vector<std::string>& args) {
+  for (const std::string& a : args)
+    if (a == "--help" || a == "-h") return true;
+  return false;
+}
+
+Result<ParsedArgs> parseArgs(const CommandSpec& spec, const std::vector<std::string>& args) {
+  ParsedArgs parsed;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (arg.size() > 1 && arg[0] == '-' && !(arg.size() > 1 && (std::isdigit(static_cast<unsigned char>(arg[1])) || arg[1] == '.'))) {
+      std::string name = arg, value;
+      bool has_inline_value = false;
+      if (const size_t eq = arg.find('='); eq != std::string::npos) {
+        name = arg.substr(0, eq);
+        value = arg.substr(eq + 1);
+        has_inline_value = true;
+      }
+      const OptionSpec* option = nullptr;
+      for (const OptionSpec& o : spec.options)
+        if (o.name == name) option = &o;
+      if (!option) return badInput("unknown option '" + name + "' (see `" + spec.usage.substr(0, spec.usage.find(' ', 7)) + " --help`)");
+      if (option->value_name.empty()) {
+        if (has_inline_value) return badInput("option " + name + " takes no value");
+        parsed.values_[name] = "1";
+        continue;
+      }
+      if (!has_inline_value) {
+        if (i + 1 >= args.size()) return badInput("option " + name + " needs a value " + option->value_name);
+        value = args[++i];
+      }
+      if (parsed.values_.count(name)) return badInput("option " + name + " given twice");
+      parsed.values_[name] = value;
+    } else {
+      parsed.positional.push_back(arg);
+    }
+  }
+  const int count = static_cast<int>(parsed.positional.size());
+  if (count < spec.min_positional) return badInput("missing argument; usage: " + spec.usage);
+  if (count > spec.max_positional)
+    return badInput("unexpected argument '" + parsed.positional[spec.max_positional] + "'; usage: " + spec.usage);
+  return parsed;
+}
+
+std::string helpText(const CommandSpec& spec) {
+  std::ostringstream out;
+  out << "usage: " << spec.usage << "\n\n" << spec.summary << "\n";
+  if (!spec.options.empty()) {
+    out << "\noptions:\n";
+    for (const OptionSpec& o : spec.options) {
+      std::string left = "  " + o.name + (o.value_name.empty() ? "" : " " + o.value_name);
+      if (left.size() < 30) left.resize(30, ' ');
+      else left += "\n" + std::string(30, ' ');
+      out << left << o.help << "\n";
+    }
+  }
+  if (!spec.examples.empty()) out << "\nexamples:\n" << spec.examples;
+  return out.str();
+}
+
+}  // namespace strike::cli

@@ -1,0 +1,51 @@
+// SPDX-License-Identifier: MIT
+// A small, strict command-line parser: every option is declared with its help text, an unknown
+// option or a malformed value is an error that names the option and the value (exit code 1).
+#pragma once
+
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "strike/result.hpp"
+
+namespace strike::cli {
+
+struct OptionSpec {
+  std::string name;         ///< "--max-freq"
+  std::string value_name;   ///< "HZ"; empty for a flag
+  std::string help;         ///< one line; say the unit and the default
+};
+
+struct CommandSpec {
+  std::string usage;        ///< "strike modes MESH -o BANK.modes [options]"
+  std::string summary;      ///< what the command does, a few lines
+  std::vector<OptionSpec> options;
+  std::string examples;     ///< shown by --help
+  int min_positional = 0, max_positional = 0;
+};
+
+class ParsedArgs {
+ public:
+  std::vector<std::string> positional;
+  bool has(const std::string& name) const { return values_.count(name) > 0; }
+  std::string text(const std::string& name, const std::string& fallback = "") const;
+  /// A finite number; the error names the option and the value.
+  Result<double> number(const std::string& name, double fallback) const;
+  Result<long long> integer(const std::string& name, long long fallback) const;
+  /// "X,Y,Z" as three finite numbers.
+  Result<std::array<double, 3>> vector3(const std::string& name, std::array<double, 3> fallback) const;
+  std::map<std::string, std::string> values_;
+};
+
+/// Parses argv (after the command name). `--help` is handled by the caller via wantsHelp.
+Result<ParsedArgs> parseArgs(const CommandSpec& spec, const std::vector<std::string>& args);
+bool wantsHelp(const std::vector<std::string>& args);
+std::string helpText(const CommandSpec& spec);
+
+/// Parses a number strictly: the whole text, finite. `what` names it in the error.
+Result<double> parseNumber(const std::string& text, const std::string& what);
+
+}  // namespace strike::cli

@@ -1,0 +1,94 @@
+// SPDX-License-Identifier: MIT
+// `strike analyze AUDIO.wav [--json]`: peaks, levels and decay of a sound.
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "strike/audio.hpp"
+
+namespace strike::cli {
+namespace {
+
+CommandSpec analyzeSpec() {
+  CommandSpec spec;
+  spec.usage = "strike analyze AUDIO.wav [--json] [--peaks N]";
+  spec.summary =
+      "Measures a sound: peak amplitude, RMS, clipping, and the strongest spectral peaks from a windowed\n"
+      "FFT (FFTW) with sub-bin interpolation: frequency, level relative to the strongest peak, and the\n"
+      "amplitude decay rate d of A e^(-d t) fitted per peak (T60 = 6.91 / d).";
+  spec.options = {
+      {"--json", "", "print one JSON object on stdout (the contract in ARCHITECTURE.md)"},
+      {"--peaks", "N", "report the N strongest peaks; default 20"},
+      {"--floor", "DB", "ignore peaks more than DB below the strongest; default -60"},
+  };
+  spec.examples = "  strike analyze hit.wav\n  strike analyze hit.wav --json --peaks 5\n";
+  spec.min_positional = 1;
+  spec.max_positional = 1;
+  return spec;
+}
+
+}  // namespace
+
+int runAnalyze(const std::vector<std::string>& raw_args) {
+  const CommandSpec spec = analyzeSpec();
+  if (wantsHelp(raw_args)) {
+    std::fputs(helpText(spec).c_str(), stdout);
+    return 0;
+  }
+  Result<ParsedArgs> args = parseArgs(spec, raw_args);
+  if (!args) return reportError("analyze", args.error());
+  AnalyzeOptions options;
+  Result<long long> peaks = args->integer("--peaks", options.max_peaks);
+  if (!peaks) return reportError("analyze", peaks.error());
+  if (*peaks < 1 || *peaks > 10000)
+    return reportError("analyze", badInput("--peaks = " + args->text("--peaks") + " (must be 1 to 10000)"));
+  options.max_peaks = static_cast<int>(*peaks);
+  Result<double> floor_db = args->number("--floor", options.floor_db);
+  if (!floor_db) return reportError("analyze", floor_db.error());
+  if (!(*floor_db < 0)) return reportError("analyze", badInput("--floor = " + args->text("--floor") + " (must be < 0 dB)"));
+  options.floor_db = *floor_db;
+
+  const std::string path = args->positional[0];
+  Result<AudioBuffer> audio = readAudio(path);
+  if (!audio) return reportError("analyze", audio.error());
+  const AudioAnalysis analysis = analyzeAudio(*audio, options);
+
+  if (args->has("--json")) {
+    nlohmann::json j;
+    j["file"] = path;
+    j["sample_rate"] = analysis.sample_rate_hz;
+    j["channels"] = audio->channels;
+    j["duration_s"] = analysis.duration_s;
+    j["peak_amplitude"] = analysis.peak_amplitude;
+    j["peak_dbfs"] = 20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30));
+    j["rms"] = analysis.rms;
+    j["clipped_samples"] = analysis.clipped_samples;
+    j["peaks"] = nlohmann::json::array();
+    for (const SpectralPeak& p : analysis.peaks) {
+      nlohmann::json peak = {{"freq_hz", p.freq_hz}, {"level_db", p.level_db}};
+      if (p.decay_per_s >= 0) peak["decay_per_s"] = p.decay_per_s;
+      j["peaks"].push_back(peak);
+    }
+    std::printf("%s\n", j.dump(2).c_str());
+    return 0;
+  }
+  std::printf("%s: %.0f Hz, %d channel(s), %.3f s\n", path.c_str(), analysis.sample_rate_hz, audio->channels,
+              analysis.duration_s);
+  std::printf("peak %.4g (%.1f dBFS), RMS %.4g (%.1f dBFS)%s\n\n", analysis.peak_amplitude,
+              20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30)), analysis.rms,
+              20.0 * std::log10(std::max(analysis.rms, 1e-30)),
+              analysis.clipped_samples > 0 ? (", " + std::to_string(analysis.clipped_samples) + " samples clipped").c_str() : "");
+  std::printf("%5s %14s %10s %12s %10s\n", "peak", "frequency Hz", "level dB", "decay 1/s", "T60 s");
+  for (size_t i = 0; i < analysis.peaks.size(); ++i) {
+    const SpectralPeak& p = analysis.peaks[i];
+    if (p.decay_per_s > 0)
+      std::printf("%5zu %14.3f %10.2f %12.4g %10.4g\n", i, p.freq_hz, p.level_db, p.decay_per_s, 6.907755 / p.decay_per_s);
+    else
+      std::printf("%5zu %14.3f %10.2f %12s %10s\n", i, p.freq_hz, p.level_db, "-", "-");
+  }
+  return 0;
+}
+
+}  // namespace strike::cli

@@ -1,0 +1,121 @@
+// SPDX-License-Identifier: MIT
+// `strike info BANK.modes [--json]`: what a mode bank holds.
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "strike/bank.hpp"
+
+namespace strike::cli {
+namespace {
+
+CommandSpec infoSpec() {
+  CommandSpec spec;
+  spec.usage = "strike info BANK.modes [--json]";
+  spec.summary =
+      "Shows a mode bank: material, mesh, mass properties, and per mode the undamped frequency,\n"
+      "the amplitude decay rate d = (a1 lambda + a2) / 2 and T60 = ln(1000) / d (time to fall by 60 dB).";
+  spec.options = {{"--json", "", "print one JSON object on stdout (the contract in ARCHITECTURE.md)"}};
+  spec.examples = "  strike info bar.modes\n  strike info bar.modes --json | jq '.frequencies_hz[:5]'\n";
+  spec.min_positional = 1;
+  spec.max_positional = 1;
+  return spec;
+}
+
+// ln(1000): an amplitude decaying as exp(-d t) falls by 60 dB after ln(1000)/d seconds.
+constexpr double kLn1000 = 6.907755278982137;
+
+double t60Seconds(double decay_per_s) { return decay_per_s > 0 ? kLn1000 / decay_per_s : INFINITY; }
+
+nlohmann::json bankJson(const ModeBank& bank) {
+  nlohmann::json j;
+  j["format_version"] = bank.format_version;
+  std::vector<double> freqs, decays, t60;
+  for (size_t i = 0; i < bank.modeCount(); ++i) {
+    freqs.push_back(bank.frequencyHz(i));
+    decays.push_back(bank.decayPerS(i));
+    const double t = t60Seconds(bank.decayPerS(i));
+    t60.push_back(std::isfinite(t) ? t : -1.0);  // JSON has no infinity: -1 means "never decays"
+  }
+  j["modes"] = bank.modeCount();
+  j["frequencies_hz"] = freqs;
+  j["decay_per_s"] = decays;
+  j["t60_s"] = t60;
+  j["eigenvalues"] = bank.eigenvalues;
+  if (!bank.frequency_error_estimate.empty()) j["frequency_error_estimate"] = bank.frequency_error_estimate;
+  j["mass_kg"] = bank.mass_kg;
+  j["volume_m3"] = bank.volume_m3;
+  j["centre_of_mass_m"] = bank.centre_m;
+  j["inertia_kg_m2"] = bank.inertia_kg_m2;
+  j["material"] = {{"name", bank.material.name},
+                   {"youngs_pa", bank.material.youngs_pa},
+                   {"poisson", bank.material.poisson},
+                   {"density_kg_m3", bank.material.density_kg_m3},
+                   {"rayleigh_stiffness", bank.material.rayleigh_stiffness},
+                   {"rayleigh_mass", bank.material.rayleigh_mass}};
+  char hash[32];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(bank.mesh_hash));
+  j["mesh"] = {{"nodes", bank.mesh_nodes},
+               {"tets", bank.mesh_tets},
+               {"order", bank.element_order},
+               {"surface_vertices", bank.surfaceVertexCount()},
+               {"surface_triangles", bank.surface_triangles.size() / 3},
+               {"source", bank.mesh_source},
+               {"hash", hash},
+               {"target_edge_m", bank.target_edge_m}};
+  j["cutoff"] = {{"max_freq_hz", bank.max_freq_hz},
+                 {"max_modes", bank.max_modes},
+                 {"rigid_modes_dropped", bank.rigid_modes_dropped},
+                 {"above_cutoff_dropped", bank.above_cutoff_dropped}};
+  j["precompute_seconds"] = {{"meshing", bank.meshing_seconds},     {"assembly", bank.assembly_seconds},
+                             {"factorize", bank.factorize_seconds}, {"lanczos", bank.lanczos_seconds},
+                             {"total", bank.total_seconds}};
+  j["tool_version"] = bank.tool_version;
+  return j;
+}
+
+void printTable(const std::string& path, const ModeBank& bank) {
+  std::printf("%s: mode bank format %u, written by %s\n", path.c_str(), bank.format_version, bank.tool_version.c_str());
+  std::printf("material  %s: E %.4g Pa, nu %.4g, rho %.5g kg/m^3, Rayleigh a1 %.4g s, a2 %.4g 1/s\n",
+              bank.material.name.c_str(), bank.material.youngs_pa, bank.material.poisson, bank.material.density_kg_m3,
+              bank.material.rayleigh_stiffness, bank.material.rayleigh_mass);
+  std::printf("mesh      %s: %u nodes, %u tets, order %u, %zu surface vertices\n", bank.mesh_source.c_str(),
+              bank.mesh_nodes, bank.mesh_tets, bank.element_order, bank.surfaceVertexCount());
+  std::printf("solid     mass %.6g kg, volume %.6g m^3, centre (%.4g, %.4g, %.4g) m\n", bank.mass_kg, bank.volume_m3,
+              bank.centre_m[0], bank.centre_m[1], bank.centre_m[2]);
+  std::printf("modes     %zu up to %.0f Hz (max %u); dropped %u rigid, %u above the cut-off; computed in %.2f s\n\n",
+              bank.modeCount(), bank.max_freq_hz, bank.max_modes, bank.rigid_modes_dropped, bank.above_cutoff_dropped,
+              bank.total_seconds);
+  const bool has_error = !bank.frequency_error_estimate.empty();
+  std::printf("%5s %14s %12s %10s%s\n", "mode", "frequency Hz", "decay 1/s", "T60 s", has_error ? "  est. error" : "");
+  for (size_t i = 0; i < bank.modeCount(); ++i) {
+    const double t60 = t60Seconds(bank.decayPerS(i));
+    std::printf("%5zu %14.3f %12.4g %10.4g", i, bank.frequencyHz(i), bank.decayPerS(i), t60);
+    if (has_error) std::printf("  %9.3g%%", 100.0 * bank.frequency_error_estimate[i]);
+    std::printf("\n");
+  }
+}
+
+}  // namespace
+
+int runInfo(const std::vector<std::string>& raw_args) {
+  const CommandSpec spec = infoSpec();
+  if (wantsHelp(raw_args)) {
+    std::fputs(helpText(spec).c_str(), stdout);
+    return 0;
+  }
+  Result<ParsedArgs> args = parseArgs(spec, raw_args);
+  if (!args) return reportError("info", args.error());
+  const std::string path = args->positional[0];
+  Result<ModeBank> bank = readBank(path);
+  if (!bank) return reportError("info", bank.error());
+  if (args->has("--json"))
+    std::printf("%s\n", bankJson(*bank).dump(2).c_str());
+  else
+    printTable(path, *bank);
+  return 0;
+}
+
+}  // namespace strike::cli

@@ -1,0 +1,178 @@
+// SPDX-License-Identifier: MIT
+// `strike modes MESH -o BANK.modes`: precompute an object's vibration modes.
+#include <cmath>
+#include <cstdio>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "progress_reporter.hpp"
+#include "strike/materials.hpp"
+#include "strike/precompute.hpp"
+
+namespace strike::cli {
+namespace {
+
+CommandSpec modesSpec() {
+  CommandSpec spec;
+  spec.usage = "strike modes MESH -o BANK.modes [--material NAME | --youngs PA --poisson NU --density KG_M3] [options]";
+  spec.summary =
+      "Computes the free vibration modes of a solid: tetrahedralizes MESH (TetGen) if it is a surface,\n"
+      "assembles linear-elastic FEM stiffness K and mass M (Tet4 or Tet10), solves K x = lambda M x for the\n"
+      "lowest modes with shift-invert Lanczos (ARPACK on a CHOLMOD factorization), drops the 6 rigid-body\n"
+      "modes and writes the bank: frequencies, Rayleigh damping, mass-normalized shapes on the surface,\n"
+      "mass properties and provenance.\n"
+      "\n"
+      "MESH is a surface mesh (.obj .stl .ply), a tet mesh (Gmsh .msh 2.2/4.1 ASCII, TetGen .node/.ele),\n"
+      "or a primitive centred at the origin, in metres: box:LX,LY,LZ  sphere:R  cylinder:R,H";
+  spec.options = {
+      {"-o", "BANK.modes", "output mode bank (required); written atomically"},
+      {"--material", "NAME", "a material from the built-in table (see --list-materials)"},
+      {"--youngs", "PA", "Young's modulus, Pa (overrides the material's)"},
+      {"--poisson", "NU", "Poisson ratio, in (-1, 0.5)"},
+      {"--density", "KG_M3", "density, kg/m^3"},
+      {"--rayleigh-stiffness", "A1", "Rayleigh damping a1 (s) in C = a1 K + a2 M; default 0 or the material's"},
+      {"--rayleigh-mass", "A2", "Rayleigh damping a2 (1/s); default 0 or the material's"},
+      {"--order", "1|2", "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default 1"},
+      {"--size", "METRES", "target tet edge length; default: chosen from the object's size"},
+      {"--max-freq", "HZ", "keep every mode up to this frequency; default 20000"},
+      {"--max-modes", "N", "but at most N modes (lowest first); default 200"},
+      {"--quiet", "", "no progress or summary on stderr"},
+      {"--list-materials", "", "print the material table with sources and exit"},
+  };
+  spec.examples =
+      "  strike modes box:0.3,0.02,0.02 --material steel --order 2 -o bar.modes\n"
+      "  strike modes assets/meshes/bowl.obj --material ceramic -o bowl.modes\n"
+      "  strike modes part.msh --youngs 7e10 --poisson 0.33 --density 2700 -o part.modes\n";
+  spec.min_positional = 0;
+  spec.max_positional = 1;
+  return spec;
+}
+
+int listMaterials() {
+  const MaterialTable& table = builtinMaterials();
+  std::printf("%-14s %11s %7s %9s %11s %11s  %s\n", "material", "E (Pa)", "nu", "rho", "a1 (s)", "a2 (1/s)", "source");
+  for (const auto& [name, m] : table.materials) {
+    auto source = table.sources.find(name);
+    std::printf("%-14s %11.3g %7.3f %9.0f %11.3g %11.3g  %s\n", name.c_str(), m.youngs_pa, m.poisson, m.density_kg_m3,
+                m.rayleigh_stiffness, m.rayleigh_mass, source == table.sources.end() ? "" : source->second.c_str());
+  }
+  return 0;
+}
+
+/// The material from --material and/or the numeric options (numbers override the named entry).
+Result<Material> materialFromArgs(const ParsedArgs& args) {
+  Material material;
+  const bool named = args.has("--material");
+  if (named) {
+    Result<Material> found = builtinMaterials().find(args.text("--material"));
+    if (!found) return found.error();
+    material = *found;
+  } else {
+    if (!args.has("--youngs") || !args.has("--poisson") || !args.has("--density"))
+      return badInput("no material: give --material NAME, or all of --youngs PA --poisson NU --density KG_M3");
+    material.name = "custom";
+  }
+  struct Field {
+    const char* option;
+    double* value;
+  };
+  const Field fields[] = {{"--youngs", &material.youngs_pa},
+                          {"--poisson", &material.poisson},
+                          {"--density", &material.density_kg_m3},
+                          {"--rayleigh-stiffness", &material.rayleigh_stiffness},
+                          {"--rayleigh-mass", &material.rayleigh_mass}};
+  for (const Field& f : fields) {
+    Result<double> value = args.number(f.option, *f.value);
+    if (!value) return value.error();
+    *f.value = *value;
+    if (named && args.has(f.option)) material.name = args.text("--material") + " (modified)";
+  }
+  // Name the option the user typed, not the internal field.
+  if (!(material.youngs_pa > 0)) return badInput("--youngs = " + args.text("--youngs", "?") + " (must be > 0)");
+  if (!(material.poisson > -1.0 && material.poisson < 0.5))
+    return badInput("--poisson = " + args.text("--poisson", "?") + " (must be in (-1, 0.5); 0.5 is incompressible)");
+  if (!(material.density_kg_m3 > 0)) return badInput("--density = " + args.text("--density", "?") + " (must be > 0)");
+  if (!(material.rayleigh_stiffness >= 0))
+    return badInput("--rayleigh-stiffness = " + args.text("--rayleigh-stiffness") + " (must be >= 0)");
+  if (!(material.rayleigh_mass >= 0)) return badInput("--rayleigh-mass = " + args.text("--rayleigh-mass") + " (must be >= 0)");
+  return material;
+}
+
+void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& result, const std::string& output) {
+  const ModeBank& bank = result.bank;
+  std::fprintf(stderr, "strike modes: %s, %s (E %.3g Pa, nu %.3g, rho %.4g kg/m^3)\n", settings.mesh_spec.c_str(),
+               bank.material.name.c_str(), bank.material.youngs_pa, bank.material.poisson, bank.material.density_kg_m3);
+  std::fprintf(stderr, "  mesh        %u nodes, %u tets (Tet%d), %zu DOF, %zu surface vertices\n", bank.mesh_nodes,
+               bank.mesh_tets, bank.element_order == 2 ? 10 : 4, result.report.dofs, bank.surfaceVertexCount());
+  std::fprintf(stderr, "  solid       mass %.6g kg, volume %.6g m^3\n", bank.mass_kg, bank.volume_m3);
+  if (bank.modeCount() > 0)
+    std::fprintf(stderr, "  modes       %zu kept, %.2f Hz to %.2f Hz\n", bank.modeCount(), bank.frequencyHz(0),
+                 bank.frequencyHz(bank.modeCount() - 1));
+  else
+    std::fprintf(stderr, "  modes       none below %.0f Hz: the object is too small or too stiff to ring in that band\n",
+                 settings.max_freq_hz);
+  std::fprintf(stderr, "  dropped     %u rigid-body, %u above %.0f Hz%s\n", bank.rigid_modes_dropped,
+               bank.above_cutoff_dropped, settings.max_freq_hz,
+               result.report.capped_by_max_modes ? ", and more below it (capped by --max-modes)" : "");
+  std::fprintf(stderr, "  time        mesh %.2f s, assemble %.2f s, factorize %.2f s, Lanczos %.2f s, total %.2f s\n",
+               bank.meshing_seconds, bank.assembly_seconds, bank.factorize_seconds, bank.lanczos_seconds,
+               bank.total_seconds);
+  std::fprintf(stderr, "  wrote       %s\n", output.c_str());
+}
+
+}  // namespace
+
+int runModes(const std::vector<std::string>& raw_args) {
+  const CommandSpec spec = modesSpec();
+  if (wantsHelp(raw_args)) {
+    std::fputs(helpText(spec).c_str(), stdout);
+    return 0;
+  }
+  Result<ParsedArgs> parsed = parseArgs(spec, raw_args);
+  if (!parsed) return reportError("modes", parsed.error());
+  const ParsedArgs& args = *parsed;
+  if (args.has("--list-materials")) return listMaterials();
+  if (args.positional.empty()) return reportError("modes", badInput("missing MESH; usage: " + spec.usage));
+  if (!args.has("-o")) return reportError("modes", badInput("missing -o BANK.modes (where to write the bank)"));
+
+  PrecomputeSettings settings;
+  settings.mesh_spec = args.positional[0];
+  Result<Material> material = materialFromArgs(args);
+  if (!material) return reportError("modes", material.error());
+  settings.material = *material;
+  Result<long long> order = args.integer("--order", 1);
+  if (!order) return reportError("modes", order.error());
+  if (*order != 1 && *order != 2)
+    return reportError("modes", badInput("--order = " + args.text("--order") + " (must be 1 or 2)"));
+  settings.order = static_cast<int>(*order);
+  Result<double> size = args.number("--size", 0.0);
+  if (!size) return reportError("modes", size.error());
+  if (args.has("--size") && !(*size > 0)) return reportError("modes", badInput("--size = " + args.text("--size") + " (must be > 0 metres)"));
+  settings.target_edge_m = *size;
+  Result<double> max_freq = args.number("--max-freq", 20000.0);
+  if (!max_freq) return reportError("modes", max_freq.error());
+  if (!(*max_freq > 0)) return reportError("modes", badInput("--max-freq = " + args.text("--max-freq") + " (must be > 0 Hz)"));
+  settings.max_freq_hz = *max_freq;
+  Result<long long> max_modes = args.integer("--max-modes", 200);
+  if (!max_modes) return reportError("modes", max_modes.error());
+  if (*max_modes < 1 || *max_modes > 100000)
+    return reportError("modes", badInput("--max-modes = " + args.text("--max-modes") + " (must be 1 to 100000)"));
+  settings.max_modes = static_cast<int>(*max_modes);
+
+  const bool quiet = args.has("--quiet");
+  ProgressReporter progress(quiet);
+  settings.progress = progress.callback();
+  Result<PrecomputeResult> result = computeModeBank(settings);
+  progress.finish();
+  if (!result) return reportError("modes", result.error());
+  if (!quiet)
+    for (const MeshWarning& warning : result->report.warnings)
+      std::fprintf(stderr, "strike modes: warning: %s\n", warning.message.c_str());
+  const std::string output = args.text("-o");
+  Status written = writeBank(output, result->bank);
+  if (!written) return reportError("modes", written.error());
+  if (!quiet) printSummary(settings, *result, output);
+  return 0;
+}
+
+}  // namespace strike::cli

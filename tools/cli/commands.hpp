@@ -1,0 +1,21 @@
+// SPDX-License-Identifier: MIT
+// The `strike` subcommands. Each returns the process exit code: 0 success, 1 bad input,
+// 2 internal error. Diagnostics go to stderr, data to stdout.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "strike/result.hpp"
+
+namespace strike::cli {
+
+int runModes(const std::vector<std::string>& args);
+int runInfo(const std::vector<std::string>& args);
+int runHit(const std::vector<std::string>& args);
+int runAnalyze(const std::vector<std::string>& args);
+
+/// Prints "strike <command>: error: <message>" and returns the exit code for the error's kind.
+int reportError(const std::string& command, const Error& error);
+
+}  // namespace strike::cli

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# Installs the Debian 12 packages Strike builds with, if any is missing. Idempotent.
+set -euo pipefail
+
+packages=(
+  cmake ninja-build g++ pkg-config
+  libeigen3-dev          # FEM, dense/sparse linear algebra (MPL2)
+  libsuitesparse-dev     # CHOLMOD supernodal Cholesky (LGPL)
+  libopenblas-dev        # BLAS under CHOLMOD
+  libarpack2-dev         # shift-invert Lanczos (BSD)
+  libtet1.5-dev          # TetGen tetrahedralization (AGPL: command-line tool only)
+  libsndfile1-dev        # WAV/FLAC (LGPL)
+  libfftw3-dev           # FFT analysis (GPL: tool and tests only)
+  nlohmann-json3-dev     # JSON (MIT)
+  libgtest-dev           # tests
+)
+[ "${STRIKE_BENCHMARKS:-0}" = 1 ] && packages+=(libbenchmark-dev)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+sudo=""
+[ "$(id -u)" -ne 0 ] && sudo="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: MIT
+// Rigid-body simulation with Bullet (double precision) and contact event extraction.
+// Target strike_bullet. Phase 1 of a render: rigid motion does not depend on the sound, so the
+// whole scene is simulated first and its contacts recorded; sound comes after.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "strike/progress.hpp"
+#include "strike/result.hpp"
+
+namespace strike {
+
+/// A body for the simulator. Geometry and mass properties are in the body's MESH frame (the
+/// frame of its mode bank); the pose places the mesh frame in the world.
+struct SimBodyDesc {
+  std::string name;
+  bool is_static = false;                  ///< a table or tray: never moves, still sounds when struck
+  std::vector<double> surface_positions;   ///< #V * 3, metres, mesh frame
+  std::vector<uint32_t> surface_triangles; ///< #F * 3, CCW from outside
+  double mass_kg = 0.0;                    ///< from the tet mesh (ignored when static)
+  std::array<double, 3> centre_m{};        ///< centre of mass, mesh frame
+  std::array<double, 9> inertia_kg_m2{};   ///< about centre_m, mesh frame, row-major
+  std::array<double, 3> position_m{};      ///< world position of the mesh-frame origin
+  std::array<double, 4> orientation_wxyz{1, 0, 0, 0};  ///< unit quaternion, mesh frame -> world
+  std::array<double, 3> velocity_m_s{};    ///< of the centre of mass, world
+  std::array<double, 3> angular_velocity_rad_s{};     ///< world
+  double restitution = 0.5;                ///< Bullet combines the two bodies' values by product
+  double friction = 0.5;
+  /// Collision shape: "auto" picks a convex hull when the mesh fills >= 90% of its hull's volume,
+  /// else a concave shape (GImpact) so things can fall inside (a bowl, a mug).
+  enum class Shape { Auto, ConvexHull, Concave } shape = Shape::Auto;
+};
+
+struct SimSettings {
+  double duration_s = 3.0;
+  std::array<double, 3> gravity_m_s2{0, 0, -9.81};
+  double substep_s = 1.0 / 1000.0;         ///< fixed physics step, <= 1 ms
+  bool ground = true;                      ///< a static plane z = ground_height_m (silent)
+  double ground_height_m = 0.0;
+  double ground_restitution = 0.5, ground_friction = 0.6;
+  /// Contacts whose normal impulse is below this are not recorded, N s.
+  double min_impulse_n_s = 1e-9;
+  ProgressFn progress;
+};
+
+constexpr uint32_t kGroundBody = 0xffffffffu;
+
+/// One contact point during one substep.
+struct ContactEvent {
+  double time_s = 0.0;              ///< start of the substep in which the impulse was applied
+  uint32_t body_a = 0, body_b = 0;  ///< indices into the body list; body_b may be kGroundBody
+  std::array<double, 3> point_a_mesh{}, point_b_mesh{};      ///< contact point in each body's mesh frame
+  std::array<double, 3> impulse_on_a_mesh{}, impulse_on_b_mesh{};  ///< total impulse (normal + friction), N s, in each body's mesh frame
+  std::array<double, 3> point_world{}, normal_world{};       ///< normal points from b to a
+  double normal_impulse_n_s = 0.0;
+  double friction_impulse_n_s = 0.0;   ///< magnitude of the tangential impulse
+  double normal_speed_m_s = 0.0;       ///< approach speed along the normal before the substep (>= 0)
+  bool new_contact = false;            ///< first substep of this contact point (an impact, not resting)
+};
+
+struct SimResult {
+  std::vector<ContactEvent> events;    ///< in time order
+  /// Total mechanical energy (kinetic + gravitational potential) of the dynamic bodies, J,
+  /// sampled every substep; and each body's kinetic energy maximum over the run.
+  std::vector<double> energy_trace_j;
+  std::vector<double> max_kinetic_energy_j;
+  std::vector<double> initial_kinetic_energy_j;
+  std::vector<std::array<double, 3>> final_position_m;      ///< mesh-frame origin, world
+  std::vector<std::array<double, 3>> final_velocity_m_s;
+  double simulate_seconds = 0.0;       ///< wall time
+  uint64_t substeps = 0;
+};
+
+/// Simulates the bodies; errors name the body and the bad value (NaN pose, zero mass...).
+Result<SimResult> simulate(const std::vector<SimBodyDesc>& bodies, const SimSettings& settings);
+
+}  // namespace strike

@@ -1,0 +1,51 @@
+// SPDX-License-Identifier: MIT
+// The scene file (JSON, see ARCHITECTURE.md): what is in the world, how it moves at t = 0, and
+// where the listener is. Parsing is strict: unknown keys and wrong types are errors that name
+// the key path and the value.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "strike/material.hpp"
+#include "strike/result.hpp"
+
+namespace strike {
+
+struct SceneObject {
+  std::string name;
+  std::string mesh;          ///< primitive spec, or a path resolved against the scene's folder
+  std::string bank;          ///< optional precomputed bank path (resolved); empty: compute or cache
+  Material material;
+  int order = 1;             ///< element order when the bank is computed
+  double size_m = 0.0;       ///< target tet edge when the bank is computed (0 = automatic)
+  bool is_static = false;    ///< never moves (a table); still sounds when struck
+  std::string shape = "auto";  ///< collision shape: auto, convex, concave
+  std::array<double, 3> position_m{};
+  std::array<double, 4> orientation_wxyz{1, 0, 0, 0};
+  std::array<double, 3> velocity_m_s{};
+  std::array<double, 3> angular_velocity_rad_s{};
+};
+
+struct Scene {
+  std::string path;          ///< the scene file, for messages
+  double sample_rate_hz = 48000.0;
+  double duration_s = 3.0;
+  std::array<double, 3> gravity_m_s2{0, 0, -9.81};
+  std::array<double, 3> listener_position_m{0, -1, 0.5};
+  bool has_ground = true;
+  Material ground_material;  ///< concrete unless given
+  double ground_height_m = 0.0;
+  double max_freq_hz = 20000.0;  ///< modes computed up to this (and never above 0.45 sample rate when synthesized)
+  int max_modes = 200;
+  std::vector<SceneObject> objects;
+};
+
+/// Parses scene JSON. `path` names the file in messages and anchors relative paths.
+Result<Scene> parseScene(const std::string& json_text, const std::string& path);
+/// Reads and parses a scene file (at most 64 MiB).
+Result<Scene> loadScene(const std::string& path);
+
+}  // namespace strike

@@ -1,0 +1,337 @@
+// SPDX-License-Identifier: MIT
+// Strict scene parsing: every key is known, every value checked, every error names the key
+// path ("objects[2].velocity[1]") and the value.
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "strike/atomic_file.hpp"
+#include "strike/materials.hpp"
+#include "strike/mesh.hpp"
+#include "strike/scene.hpp"
+
+namespace strike {
+namespace {
+
+using nlohmann::json;
+
+constexpr int kMaxNestingDepth = 64;           // a scene is shallow; deeper input is hostile
+constexpr uint64_t kMaxSceneBytes = 64ull << 20;
+constexpr size_t kMaxObjects = 10000;
+
+/// Context for messages: the file and the key path.
+struct Where {
+  const std::string& file;
+  std::string key;
+  Where at(const std::string& child) const { return Where{file, key.empty() ? child : key + "." + child}; }
+  Where index(size_t i) const { return Where{file, key + "[" + std::to_string(i) + "]"}; }
+  Error error(const std::string& what) const { return badInput(file + ": error: " + key + ": " + what); }
+};
+
+std::string show(const json& value) {
+  std::string text = value.dump();
+  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  return text;
+}
+
+/// Line and column of a byte offset, for JSON syntax errors.
+std::string lineColumn(const std::string& text, size_t offset) {
+  size_t line = 1, column = 1;
+  for (size_t i = 0; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') ++line, column = 1;
+    else ++column;
+  }
+  return std::to_string(line) + ":" + std::to_string(column);
+}
+
+/// Rejects nesting deeper than kMaxNestingDepth before the recursive parser sees it.
+std::optional<size_t> tooDeepAt(const std::string& text) {
+  int depth = 0;
+  bool in_string = false, escaped = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (escaped) escaped = false;
+      else if (c == '\\') escaped = true;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '{' || c == '[') {
+      if (++depth > kMaxNestingDepth) return i;
+    } else if (c == '}' || c == ']') {
+      --depth;
+    }
+  }
+  return std::nullopt;
+}
+
+Status checkKeys(const json& object, const Where& where, std::initializer_list<const char*> known) {
+  if (!object.is_object()) return where.error("expected an object, got " + show(object));
+  for (const auto& item : object.items()) {
+    bool found = false;
+    for (const char* k : known) found = found || item.key() == k;
+    if (!found) {
+      std::string list;
+      for (const char* k : known) list += std::string(list.empty() ? "" : ", ") + k;
+      return where.at(item.key()).error("unknown key (known keys here: " + list + ")");
+    }
+  }
+  return {};
+}
+
+Result<double> number(const json& value, const Where& where) {
+  if (!value.is_number()) return where.error("expected a number, got " + show(value));
+  const double x = value.get<double>();
+  if (!std::isfinite(x)) return where.error("expected a finite number, got " + show(value));
+  return x;
+}
+
+template <size_t N>
+Result<std::array<double, N>> vector(const json& value, const Where& where) {
+  if (!value.is_array() || value.size() != N)
+    return where.error("expected an array of " + std::to_string(N) + " numbers, got " + show(value));
+  std::array<double, N> out{};
+  for (size_t i = 0; i < N; ++i) {
+    Result<double> x = number(value[i], where.index(i));
+    if (!x) return x.error();
+    out[i] = *x;
+  }
+  return out;
+}
+
+Result<std::string> text(const json& value, const Where& where) {
+  if (!value.is_string()) return where.error("expected a string, got " + show(value));
+  return value.get<std::string>();
+}
+
+/// "steel", or {"youngs_pa":..., "poisson":..., "density_kg_m3":..., "loss_factor" | "rayleigh_*"}.
+Result<Material> material(const json& value, const Where& where) {
+  if (value.is_string()) {
+    Result<Material> m = builtinMaterials().find(value.get<std::string>());
+    if (!m) return where.error(m.error().message);
+    return m;
+  }
+  Status keys = checkKeys(value, where, {"name", "youngs_pa", "poisson", "density_kg_m3", "loss_factor",
+                                         "rayleigh_stiffness", "rayleigh_mass"});
+  if (!keys) return keys.error();
+  Material m;
+  m.name = value.contains("name") && value["name"].is_string() ? value["name"].get<std::string>() : "custom";
+  for (const char* key : {"youngs_pa", "poisson", "density_kg_m3"})
+    if (!value.contains(key)) return where.at(key).error("missing (a material needs youngs_pa, poisson, density_kg_m3)");
+  struct Field {
+    const char* key;
+    double* out;
+  } fields[] = {{"youngs_pa", &m.youngs_pa},
+                {"poisson", &m.poisson},
+                {"density_kg_m3", &m.density_kg_m3},
+                {"rayleigh_stiffness", &m.rayleigh_stiffness},
+                {"rayleigh_mass", &m.rayleigh_mass}};
+  for (const Field& f : fields) {
+    if (!value.contains(f.key)) continue;
+    Result<double> x = number(value[f.key], where.at(f.key));
+    if (!x) return x.error();
+    *f.out = *x;
+  }
+  if (value.contains("loss_factor")) {
+    Result<double> eta = number(value["loss_factor"], where.at("loss_factor"));
+    if (!eta) return eta.error();
+    if (*eta < 0) return where.at("loss_factor").error("must be >= 0, got " + show(value["loss_factor"]));
+    const MaterialTable& table = builtinMaterials();
+    rayleighFromLossFactor(*eta, table.fit_band_low_hz, table.fit_band_high_hz, m.rayleigh_stiffness, m.rayleigh_mass);
+  }
+  Status valid = validateMaterial(m, where.file + ": error: " + where.key);
+  if (!valid) return valid.error();
+  return m;
+}
+
+std::string resolvePath(const std::string& scene_path, const std::string& relative) {
+  namespace fs = std::filesystem;
+  if (relative.empty() || fs::path(relative).is_absolute()) return relative;
+  return (fs::path(scene_path).parent_path() / relative).lexically_normal().string();
+}
+
+Result<SceneObject> object(const json& value, const Where& where, const std::string& scene_path) {
+  Status keys = checkKeys(value, where, {"name", "mesh", "bank", "material", "order", "size", "static", "shape",
+                                         "position", "orientation", "velocity", "angular_velocity"});
+  if (!keys) return keys.error();
+  SceneObject o;
+  if (value.contains("name")) {
+    Result<std::string> name = text(value["name"], where.at("name"));
+    if (!name) return name.error();
+    o.name = *name;
+  }
+  if (!value.contains("mesh") && !value.contains("bank"))
+    return where.error("needs \"mesh\" (a file or primitive like \"box:0.3,0.02,0.02\") or \"bank\"");
+  if (value.contains("mesh")) {
+    Result<std::string> mesh = text(value["mesh"], where.at("mesh"));
+    if (!mesh) return mesh.error();
+    o.mesh = isPrimitiveSpec(*mesh) ? *mesh : resolvePath(scene_path, *mesh);
+    if (!isPrimitiveSpec(*mesh) && !std::filesystem::is_regular_file(o.mesh))
+      return where.at("mesh").error("file not found: " + o.mesh);
+  }
+  if (value.contains("bank")) {
+    Result<std::string> bank = text(value["bank"], where.at("bank"));
+    if (!bank) return bank.error();
+    o.bank = resolvePath(scene_path, *bank);
+    if (!std::filesystem::is_regular_file(o.bank)) return where.at("bank").error("file not found: " + o.bank);
+  }
+  if (value.contains("material")) {
+    Result<Material> m = material(value["material"], where.at("material"));
+    if (!m) return m.error();
+    o.material = *m;
+  } else if (o.bank.empty()) {
+    return where.error("needs \"material\" (a name like \"steel\" or an object with youngs_pa, poisson, density_kg_m3)");
+  }
+  if (value.contains("order")) {
+    if (!value["order"].is_number_integer() || (value["order"] != 1 && value["order"] != 2))
+      return where.at("order").error("expected 1 or 2, got " + show(value["order"]));
+    o.order = value["order"].get<int>();
+  }
+  if (value.contains("size")) {
+    Result<double> size = number(value["size"], where.at("size"));
+    if (!size) return size.error();
+    if (*size <= 0) return where.at("size").error("must be > 0 metres, got " + show(value["size"]));
+    o.size_m = *size;
+  }
+  if (value.contains("static")) {
+    if (!value["static"].is_boolean()) return where.at("static").error("expected true or false, got " + show(value["static"]));
+    o.is_static = value["static"].get<bool>();
+  }
+  if (value.contains("shape")) {
+    Result<std::string> shape = text(value["shape"], where.at("shape"));
+    if (!shape) return shape.error();
+    if (*shape != "auto" && *shape != "convex" && *shape != "concave")
+      return where.at("shape").error("expected \"auto\", \"convex\" or \"concave\", got " + show(value["shape"]));
+    o.shape = *shape;
+  }
+  struct Vec3Field {
+    const char* key;
+    std::array<double, 3>* out;
+  } vectors[] = {{"position", &o.position_m}, {"velocity", &o.velocity_m_s}, {"angular_velocity", &o.angular_velocity_rad_s}};
+  for (const Vec3Field& f : vectors) {
+    if (!value.contains(f.key)) continue;
+    Result<std::array<double, 3>> v = vector<3>(value[f.key], where.at(f.key));
+    if (!v) return v.error();
+    *f.out = *v;
+  }
+  if (value.contains("orientation")) {
+    Result<std::array<double, 4>> q = vector<4>(value["orientation"], where.at("orientation"));
+    if (!q) return q.error();
+    const double norm = std::sqrt((*q)[0] * (*q)[0] + (*q)[1] * (*q)[1] + (*q)[2] * (*q)[2] + (*q)[3] * (*q)[3]);
+    if (std::fabs(norm - 1.0) > 1e-3)
+      return where.at("orientation").error("expected a unit quaternion [w, x, y, z], got " + show(value["orientation"]) +
+                                           " (norm " + std::to_string(norm) + ")");
+    for (int i = 0; i < 4; ++i) o.orientation_wxyz[i] = (*q)[i] / norm;
+  }
+  return o;
+}
+
+}  // namespace
+
+Result<Scene> parseScene(const std::string& json_text, const std::string& path) {
+  if (std::optional<size_t> at = tooDeepAt(json_text))
+    return badInput(path + ":" + lineColumn(json_text, *at) + ": error: JSON nested deeper than " +
+                    std::to_string(kMaxNestingDepth) + " levels");
+  json doc = json::parse(json_text, nullptr, /*allow_exceptions=*/false);
+  if (doc.is_discarded()) {
+    // Re-parse with exceptions only to learn where it failed (the message has the byte offset).
+    try {
+      const json unused = json::parse(json_text);
+      (void)unused;
+    } catch (const json::parse_error& e) {
+      return badInput(path + ":" + lineColumn(json_text, e.byte > 0 ? e.byte - 1 : 0) + ": error: invalid JSON: " +
+                      std::string(e.what()).substr(std::string(e.what()).find(':') + 2));
+    }
+    return badInput(path + ": error: invalid JSON");
+  }
+  const Where root{path, ""};
+  Scene scene;
+  scene.path = path;
+  Status keys = checkKeys(doc, Where{path, "(top level)"},
+                          {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes"});
+  if (!keys) return keys.error();
+  if (doc.contains("sample_rate")) {
+    Result<double> rate = number(doc["sample_rate"], root.at("sample_rate"));
+    if (!rate) return rate.error();
+    if (*rate < 8000 || *rate > 384000) return root.at("sample_rate").error("must be 8000 to 384000 Hz, got " + show(doc["sample_rate"]));
+    scene.sample_rate_hz = *rate;
+  }
+  if (doc.contains("duration")) {
+    Result<double> duration = number(doc["duration"], root.at("duration"));
+    if (!duration) return duration.error();
+    if (*duration <= 0 || *duration > 3600) return root.at("duration").error("must be in (0, 3600] s, got " + show(doc["duration"]));
+    scene.duration_s = *duration;
+  }
+  if (doc.contains("gravity")) {
+    Result<std::array<double, 3>> g = vector<3>(doc["gravity"], root.at("gravity"));
+    if (!g) return g.error();
+    scene.gravity_m_s2 = *g;
+  }
+  if (doc.contains("max_freq")) {
+    Result<double> f = number(doc["max_freq"], root.at("max_freq"));
+    if (!f) return f.error();
+    if (*f <= 0) return root.at("max_freq").error("must be > 0 Hz, got " + show(doc["max_freq"]));
+    scene.max_freq_hz = *f;
+  }
+  if (doc.contains("max_modes")) {
+    if (!doc["max_modes"].is_number_integer() || doc["max_modes"].get<long long>() < 1 || doc["max_modes"].get<long long>() > 100000)
+      return root.at("max_modes").error("expected a whole number 1 to 100000, got " + show(doc["max_modes"]));
+    scene.max_modes = doc["max_modes"].get<int>();
+  }
+  if (doc.contains("listener")) {
+    const Where where = root.at("listener");
+    Status listener_keys = checkKeys(doc["listener"], where, {"position"});
+    if (!listener_keys) return listener_keys.error();
+    if (doc["listener"].contains("position")) {
+      Result<std::array<double, 3>> p = vector<3>(doc["listener"]["position"], where.at("position"));
+      if (!p) return p.error();
+      scene.listener_position_m = *p;
+    }
+  }
+  scene.ground_material = *builtinMaterials().find("concrete");
+  if (doc.contains("ground")) {
+    const json& ground = doc["ground"];
+    const Where where = root.at("ground");
+    if (ground.is_null() || (ground.is_boolean() && !ground.get<bool>())) {
+      scene.has_ground = false;
+    } else {
+      Status ground_keys = checkKeys(ground, where, {"material", "height"});
+      if (!ground_keys) return ground_keys.error();
+      if (ground.contains("material")) {
+        Result<Material> m = material(ground["material"], where.at("material"));
+        if (!m) return m.error();
+        scene.ground_material = *m;
+      }
+      if (ground.contains("height")) {
+        Result<double> h = number(ground["height"], where.at("height"));
+        if (!h) return h.error();
+        scene.ground_height_m = *h;
+      }
+    }
+  }
+  if (!doc.contains("objects")) return root.at("objects").error("missing: a scene needs a list of objects");
+  const json& objects = doc["objects"];
+  if (!objects.is_array()) return root.at("objects").error("expected a list, got " + show(objects));
+  if (objects.empty()) return root.at("objects").error("the list is empty: nothing to hear");
+  if (objects.size() > kMaxObjects)
+    return root.at("objects").error(std::to_string(objects.size()) + " objects, more than the limit of " + std::to_string(kMaxObjects));
+  std::set<std::string> names;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    Result<SceneObject> o = object(objects[i], root.at("objects").index(i), path);
+    if (!o) return o.error();
+    if (o->name.empty()) o->name = "object" + std::to_string(i);
+    if (!names.insert(o->name).second)
+      return root.at("objects").index(i).at("name").error("duplicate name \"" + o->name + "\"");
+    scene.objects.push_back(std::move(*o));
+  }
+  return scene;
+}
+
+Result<Scene> loadScene(const std::string& path) {
+  Result<std::string> text = readWholeFile(path, kMaxSceneBytes);
+  if (!text) return text.error();
+  return parseScene(*text, path);
+}
+
+}  // namespace strike

@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: MIT
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "strike/scene.hpp"
+
+namespace strike {
+namespace {
+
+const char kGoodScene[] = R"({
+  "sample_rate": 48000,
+  "duration": 3.0,
+  "gravity": [0, 0, -9.81],
+  "listener": {"position": [0.0, -1.0, 0.5]},
+  "ground": {"material": "concrete"},
+  "objects": [
+    {"name": "bar", "mesh": "box:0.3,0.02,0.02", "material": "steel",
+     "position": [0, 0, 0.5], "orientation": [1, 0, 0, 0],
+     "velocity": [0, 0, 0], "angular_velocity": [0, 0, 0]},
+    {"mesh": "sphere:0.01", "material": {"youngs_pa": 7e10, "poisson": 0.22, "density_kg_m3": 2500, "loss_factor": 1e-3},
+     "position": [0, 0, 1], "order": 2}
+  ]
+})";
+
+TEST(SceneFile, ParsesTheArchitectureExample) {
+  Result<Scene> scene = parseScene(kGoodScene, "/tmp/s/scene.json");
+  ASSERT_TRUE(scene) << scene.error().message;
+  EXPECT_EQ(scene->sample_rate_hz, 48000);
+  EXPECT_EQ(scene->duration_s, 3.0);
+  ASSERT_EQ(scene->objects.size(), 2u);
+  EXPECT_EQ(scene->objects[0].name, "bar");
+  EXPECT_EQ(scene->objects[0].material.name, "steel");
+  EXPECT_EQ(scene->objects[0].position_m[2], 0.5);
+  EXPECT_EQ(scene->objects[1].name, "object1");
+  EXPECT_EQ(scene->objects[1].order, 2);
+  EXPECT_GT(scene->objects[1].material.rayleigh_mass, 0.0);
+  EXPECT_TRUE(scene->has_ground);
+  EXPECT_EQ(scene->ground_material.name, "concrete");
+  EXPECT_EQ(scene->listener_position_m[1], -1.0);
+}
+
+struct BadCase {
+  std::string json, expected;
+};
+
+void expectError(const BadCase& c) {
+  Result<Scene> scene = parseScene(c.json, "bad.json");
+  ASSERT_FALSE(scene) << c.json;
+  EXPECT_EQ(scene.error().kind, ErrorKind::BadInput);
+  EXPECT_NE(scene.error().message.find(c.expected), std::string::npos)
+      << "expected '" << c.expected << "' in: " << scene.error().message;
+  EXPECT_EQ(scene.error().message.rfind("bad.json", 0), 0u) << scene.error().message;
+}
+
+TEST(SceneFile, ErrorsNameTheKeyPathAndValue) {
+  const std::string obj = R"("mesh": "box:0.1,0.1,0.1", "material": "steel")";
+  const BadCase cases[] = {
+      {R"({"objects": [{)" + obj + R"(, "velocty": [0,0,1]}]})", "objects[0].velocty: unknown key"},
+      {R"({"objects": [{)" + obj + R"(, "velocity": [0,"fast",1]}]})", "objects[0].velocity[1]: expected a number, got \"fast\""},
+      {R"({"objects": [{)" + obj + R"(, "velocity": [0,1]}]})", "objects[0].velocity: expected an array of 3 numbers"},
+      {R"({"objects": [{)" + obj + R"(, "velocity": [0,1e999,0]}]})", "objects[0].velocity[1]"},
+      {R"({"objects": [{)" + obj + R"(, "orientation": [2,0,0,0]}]})", "objects[0].orientation: expected a unit quaternion"},
+      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "adamantium"}]})", "objects[0].material: unknown material 'adamantium'"},
+      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": {"youngs_pa": 1e9, "poisson": 0.6, "density_kg_m3": 1000}}]})",
+       "objects[0].material: poisson = 0.6"},
+      {R"({"objects": [{"mesh": "missing.obj", "material": "steel"}]})", "objects[0].mesh: file not found"},
+      {R"({"objects": [{"material": "steel"}]})", "objects[0]: needs \"mesh\""},
+      {R"({"objects": [{"mesh": "box:1,1,1"}]})", "objects[0]: needs \"material\""},
+      {R"({"objects": [{)" + obj + R"(, "order": 3}]})", "objects[0].order: expected 1 or 2, got 3"},
+      {R"({"objects": [{)" + obj + R"(, "name": "a"}, {)" + obj + R"(, "name": "a"}]})", "objects[1].name: duplicate name"},
+      {R"({"objects": []})", "objects: the list is empty"},
+      {R"({"sample_rate": 100, "objects": [{)" + obj + R"(}]})", "sample_rate: must be 8000 to 384000 Hz, got 100"},
+      {R"({"duration": -1, "objects": [{)" + obj + R"(}]})", "duration: must be in (0, 3600] s, got -1"},
+      {R"({"listener": {"pos": [0,0,0]}, "objects": [{)" + obj + R"(}]})", "listener.pos: unknown key"},
+      {R"({"objets": []})", "objets: unknown key"},
+      {R"({"objects": "all"})", "objects: expected a list, got \"all\""},
+      {"{\"objects\": [\n {\"mesh\": \"box:1,1,1\", \"velocity\": [NaN, 0, 0]}]}", "bad.json:2:"},
+      {"[1, 2", "invalid JSON"},
+      {std::string(100, '[') + std::string(100, ']'), "nested deeper than 64"},
+  };
+  for (const BadCase& c : cases) expectError(c);
+}
+
+TEST(SceneFile, GroundCanBeRemovedOrRaised) {
+  const std::string obj = R"([{"mesh": "box:0.1,0.1,0.1", "material": "steel"}])";
+  Result<Scene> none = parseScene(R"({"ground": null, "objects": )" + obj + "}", "s.json");
+  ASSERT_TRUE(none) << none.error().message;
+  EXPECT_FALSE(none->has_ground);
+  Result<Scene> raised = parseScene(R"({"ground": {"height": 0.75, "material": "wood"}, "objects": )" + obj + "}", "s.json");
+  ASSERT_TRUE(raised) << raised.error().message;
+  EXPECT_EQ(raised->ground_height_m, 0.75);
+  EXPECT_EQ(raised->ground_material.name, "wood");
+}
+
+}  // namespace
+}  // namespace strike

@@ -53,6 +53,11 @@ Result<Material> MaterialTable::find(const std::string& name) const {
   return badInput("unknown material '" + name + "'; known materials: " + known);
 }
 
+ContactProperties MaterialTable::contactProperties(const std::string& name) const {
+  auto it = contact.find(lowerCase(name));
+  return it == contact.end() ? ContactProperties{} : it->second;
+}
+
 std::vector<std::string> MaterialTable::names() const {
   std::vector<std::string> out;
   for (const auto& entry : materials) out.push_back(entry.first);
@@ -98,13 +103,21 @@ Result<MaterialTable> parseMaterialTable(const std::string& json_text, const std
     }
     for (const auto& [key, value] : entry.items()) {
       static const char* const kKnown[] = {"youngs_pa", "poisson", "density_kg_m3", "loss_factor",
-                                           "rayleigh_stiffness", "rayleigh_mass", "source"};
+                                           "rayleigh_stiffness", "rayleigh_mass", "source",
+                                           "restitution", "friction"};
       if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return key == k; }) == std::end(kKnown))
         return badInput(where + ": unknown key '" + key + "'");
       (void)value;
     }
     Status valid = validateMaterial(m, where);
     if (!valid) return valid.error();
+    ContactProperties contact;
+    if (entry.contains("restitution") &&
+        (!number("restitution", contact.restitution) || !(contact.restitution >= 0 && contact.restitution <= 1)))
+      return badInput(where + ".restitution must be a number in [0, 1]");
+    if (entry.contains("friction") && (!number("friction", contact.friction) || !(contact.friction >= 0)))
+      return badInput(where + ".friction must be a number >= 0");
+    table.contact[m.name] = contact;
     if (entry.contains("source") && entry["source"].is_string()) table.sources[m.name] = entry["source"].get<std::string>();
     table.materials[m.name] = m;
   }

@@ -60,28 +60,81 @@ void fillSurfaceAndShapes(const TetMesh& mesh, const Eigen::MatrixXd& shapes, Mo
             static_cast<float>(shapes(3 * static_cast<Eigen::Index>(node_of_surface[v]) + a, m));
 }
 
-Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings) {
-  const auto start = std::chrono::steady_clock::now();
+namespace {
+
+Status checkSettings(const PrecomputeSettings& settings) {
   Status valid = validateMaterial(settings.material, "material");
-  if (!valid) return valid.error();
+  if (!valid) return valid;
   if (settings.order != 1 && settings.order != 2)
     return badInput("--order = " + std::to_string(settings.order) + " (must be 1 or 2)");
   if (!(settings.max_freq_hz > 0)) return badInput("--max-freq = " + std::to_string(settings.max_freq_hz) + " (must be > 0)");
   if (settings.max_modes < 1) return badInput("--max-modes = " + std::to_string(settings.max_modes) + " (must be >= 1)");
   if (!(settings.target_edge_m >= 0)) return badInput("--size = " + std::to_string(settings.target_edge_m) + " (must be > 0)");
+  return {};
+}
 
+void fillProvenance(const LoadedMesh& loaded, const PrecomputeSettings& settings, const MassProperties& mass,
+                    ModeBank& bank) {
+  const TetMesh& mesh = loaded.mesh;
+  bank.material = settings.material;
+  bank.mesh_hash = loaded.source_hash;
+  bank.mesh_source = settings.mesh_spec;
+  bank.element_order = static_cast<uint32_t>(mesh.order);
+  bank.target_edge_m = settings.target_edge_m;
+  bank.mesh_nodes = static_cast<uint32_t>(mesh.nodes.rows());
+  bank.mesh_tets = static_cast<uint32_t>(mesh.tets.rows());
+  bank.max_freq_hz = settings.max_freq_hz;
+  bank.max_modes = static_cast<uint32_t>(settings.max_modes);
+  bank.mass_kg = mass.mass_kg;
+  bank.volume_m3 = mass.volume_m3;
+  for (int a = 0; a < 3; ++a) bank.centre_m[a] = mass.centre_m[a];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) bank.inertia_kg_m2[r * 3 + c] = mass.inertia_kg_m2(r, c);
+  bank.meshing_seconds = loaded.meshing_seconds;
+  bank.tool_version = "strike " STRIKE_VERSION_STRING;
+}
+
+}  // namespace
+
+uint64_t bankCacheKey(uint64_t mesh_hash, const PrecomputeSettings& settings) {
+  // Bit-exact inputs: the key changes whenever any input to the precompute changes.
+  const Material& m = settings.material;
+  const double numbers[] = {m.youngs_pa, m.poisson, m.density_kg_m3, m.rayleigh_stiffness, m.rayleigh_mass,
+                            settings.target_edge_m, settings.max_freq_hz};
+  const uint64_t integers[] = {mesh_hash, static_cast<uint64_t>(settings.order), static_cast<uint64_t>(settings.max_modes),
+                               kBankFormatVersion};
+  uint64_t key = fnv1a64(numbers, sizeof numbers);
+  key = fnv1a64(integers, sizeof integers, key);
+  return fnv1a64(STRIKE_VERSION_STRING, sizeof STRIKE_VERSION_STRING - 1, key);
+}
+
+ModeBank massAndSurfaceBank(const LoadedMesh& loaded, const PrecomputeSettings& settings) {
+  ModeBank bank;
+  fillProvenance(loaded, settings, computeMassProperties(loaded.mesh, settings.material.density_kg_m3), bank);
+  fillSurfaceAndShapes(loaded.mesh, Eigen::MatrixXd(3 * loaded.mesh.nodes.rows(), 0), bank);
+  return bank;
+}
+
+Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings) {
+  Status valid = checkSettings(settings);
+  if (!valid) return valid.error();
   MeshOptions mesh_options;
   mesh_options.order = settings.order;
   mesh_options.target_edge_m = settings.target_edge_m;
   mesh_options.progress = settings.progress;
   Result<LoadedMesh> loaded = loadTetMesh(settings.mesh_spec, mesh_options);
   if (!loaded) return loaded.error();
-  const TetMesh& mesh = loaded->mesh;
+  return computeModeBankForMesh(*loaded, settings);
+}
 
+Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const PrecomputeSettings& settings) {
+  const auto start = std::chrono::steady_clock::now();
+  Status valid = checkSettings(settings);
+  if (!valid) return valid.error();
+  const TetMesh& mesh = loaded.mesh;
   PrecomputeResult result;
-  result.report.warnings = loaded->warnings;
+  result.report.warnings = loaded.warnings;
   ModeBank& bank = result.bank;
-  bank.meshing_seconds = loaded->meshing_seconds;
 
   const auto assembly_start = std::chrono::steady_clock::now();
   if (settings.progress) settings.progress("assemble", -1.0);
@@ -99,30 +152,16 @@ Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings) {
   Result<ModalResult> modes = solveModes(K, M, modal);
   if (!modes) return modes.error();
 
-  bank.material = settings.material;
-  bank.mesh_hash = loaded->source_hash;
-  bank.mesh_source = settings.mesh_spec;
-  bank.element_order = static_cast<uint32_t>(mesh.order);
-  bank.target_edge_m = settings.target_edge_m;
-  bank.mesh_nodes = static_cast<uint32_t>(mesh.nodes.rows());
-  bank.mesh_tets = static_cast<uint32_t>(mesh.tets.rows());
-  bank.max_freq_hz = settings.max_freq_hz;
-  bank.max_modes = static_cast<uint32_t>(settings.max_modes);
-  bank.mass_kg = mass.mass_kg;
-  bank.volume_m3 = mass.volume_m3;
-  for (int a = 0; a < 3; ++a) bank.centre_m[a] = mass.centre_m[a];
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) bank.inertia_kg_m2[r * 3 + c] = mass.inertia_kg_m2(r, c);
+  fillProvenance(loaded, settings, mass, bank);
   bank.eigenvalues.assign(modes->eigenvalues.data(), modes->eigenvalues.data() + modes->eigenvalues.size());
   fillSurfaceAndShapes(mesh, modes->shapes, bank);
   bank.factorize_seconds = modes->factorize_seconds;
   bank.lanczos_seconds = modes->lanczos_seconds;
   bank.rigid_modes_dropped = static_cast<uint32_t>(modes->rigid_modes_dropped);
   bank.above_cutoff_dropped = static_cast<uint32_t>(modes->above_cutoff_dropped);
-  bank.tool_version = "strike " STRIKE_VERSION_STRING;
   result.report.capped_by_max_modes = modes->capped_by_max_modes;
   result.report.operator_applications = modes->operator_applications;
-  bank.total_seconds = secondsSince(start);
+  bank.total_seconds = loaded.meshing_seconds + secondsSince(start);
 
   const std::string problem = bank.checkConsistency();
   if (!problem.empty()) return internalError("the computed mode bank is inconsistent: " + problem);

@@ -11,10 +11,20 @@
 
 namespace strike {
 
+/// Rigid-body contact coefficients (for the simulator only).
+struct ContactProperties {
+  double restitution = 0.5;
+  double friction = 0.5;
+};
+
 struct MaterialTable {
   std::map<std::string, Material> materials;  ///< by lower-case name
   std::map<std::string, std::string> sources; ///< where each entry's numbers come from
+  std::map<std::string, ContactProperties> contact;  ///< by lower-case name
   double fit_band_low_hz = 500.0, fit_band_high_hz = 5000.0;
+
+  /// The named material's contact coefficients, or the defaults for custom materials.
+  ContactProperties contactProperties(const std::string& name) const;
 
   /// The named material (case-insensitive), or an error listing the known names.
   Result<Material> find(const std::string& name) const;

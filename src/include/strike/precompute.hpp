@@ -37,6 +37,16 @@ struct PrecomputeResult {
 
 /// Runs the precompute. Errors name the mesh, the material field or the solver failure.
 Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings);
+/// The same from a mesh already loaded (settings.mesh_spec is recorded, not read again).
+Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const PrecomputeSettings& settings);
+
+/// A bank with no modes yet: mass properties and surface of the mesh, for the simulator, so a
+/// scene can be simulated before deciding which objects need an eigen-solve.
+ModeBank massAndSurfaceBank(const LoadedMesh& loaded, const PrecomputeSettings& settings);
+
+/// Cache key of the bank that `settings` would compute from a mesh whose source hashes to
+/// mesh_hash: every input that changes the result goes in.
+uint64_t bankCacheKey(uint64_t mesh_hash, const PrecomputeSettings& settings);
 
 /// Restricts a full mode-shape matrix (3N by #modes) to the surface of `mesh` and fills the
 /// bank's surface (positions, area-weighted outward normals, triangles, node index) and shapes.

@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: MIT
+// `strike render`: a scene to sound, in two phases so nothing is computed that is not heard.
+//   1. simulate: mass properties and surfaces (from cached or given banks, or from the meshes
+//      without an eigen-solve), Bullet simulation, contact events;
+//   2. sound: mode banks only for objects struck hard enough to be heard (cache, or compute),
+//      contact impulses projected onto modes, oscillator bank, mix.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "strike/audio.hpp"
+#include "strike/progress.hpp"
+#include "strike/scene.hpp"
+#include "strike/sim.hpp"
+
+namespace strike {
+
+struct RenderSettings {
+  double sample_rate_hz = 0.0;   ///< 0: the scene's
+  double duration_s = 0.0;       ///< 0: the scene's
+  std::string cache_dir;         ///< where banks are cached by content hash; empty: no cache
+  double gain = 1.0;             ///< output scale; 1.0 full scale = 1 Pa at the listener
+  ProgressFn progress;
+};
+
+struct RenderReport {
+  size_t objects = 0, objects_struck = 0, objects_sounded = 0;
+  size_t objects_inaudible = 0;  ///< struck, but too softly to hear: no eigen-solve
+  size_t banks_given = 0, banks_cached = 0, banks_computed = 0, banks_shared = 0;
+  size_t events = 0, impacts = 0, sustained_contacts = 0;
+  uint64_t modes_total = 0, modes_out_of_band = 0, mode_samples = 0, max_active_modes = 0;
+  double peak = 0.0;
+  size_t clipped_samples = 0;
+  double load_seconds = 0, simulate_seconds = 0, precompute_seconds = 0, synthesize_seconds = 0, total_seconds = 0;
+  double precompute_saved_seconds = 0;  ///< eigen-solve time the cache answered (as recorded in the banks)
+};
+
+struct RenderResult {
+  AudioBuffer audio;
+  std::vector<ContactEvent> events;
+  std::vector<std::string> body_names;
+  RenderReport report;
+};
+
+Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& settings);
+
+/// One row per contact event: time, bodies, points, impulses, speeds (see the header row).
+Status writeEventsCsv(const std::string& path, const RenderResult& result);
+
+/// Default cache folder: $STRIKE_CACHE_DIR, else $XDG_CACHE_HOME/strike, else ~/.cache/strike.
+std::string defaultCacheDir();
+
+}  // namespace strike

@@ -1,0 +1,122 @@
+// SPDX-License-Identifier: MIT
+// `strike render SCENE.json -o OUT.wav`: the main job.
+#include <cmath>
+#include <cstdio>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "progress_reporter.hpp"
+#include "strike/audio.hpp"
+#include "strike/render.hpp"
+#include "strike/scene.hpp"
+
+namespace strike::cli {
+namespace {
+
+CommandSpec renderSpec() {
+  CommandSpec spec;
+  spec.usage = "strike render SCENE.json -o OUT.wav [--rate HZ] [--duration S] [--events EVENTS.csv] [options]";
+  spec.summary =
+      "Renders a collision scene to sound in two phases. First the rigid bodies are simulated with Bullet\n"
+      "(0.5 ms steps, continuous collision detection) and every contact is recorded. Then mode banks are\n"
+      "loaded from the cache or computed, only for objects struck hard enough to be heard; each contact\n"
+      "impulse is projected onto the struck body's modes (impacts as Hertz pulses, resting contact as a\n"
+      "force over the step, so it is silent when steady) and the oscillator bank renders the listener's\n"
+      "pressure: output 1.0 = 1 Pa (94 dB SPL) times --gain. The scene format is in ARCHITECTURE.md.";
+  spec.options = {
+      {"-o", "OUT.wav", "output sound file, .wav or .flac (required); written atomically"},
+      {"--rate", "HZ", "sample rate; default the scene's sample_rate (48000)"},
+      {"--duration", "S", "seconds to simulate and render; default the scene's duration"},
+      {"--events", "EVENTS.csv", "also write every contact event (time, bodies, impulse, speed, point)"},
+      {"--format", "pcm16|pcm24|float", "sample encoding; default float for .wav, pcm24 for .flac"},
+      {"--gain", "G", "multiply the output; default 1"},
+      {"--cache", "DIR", "mode bank cache folder; default $STRIKE_CACHE_DIR or ~/.cache/strike"},
+      {"--no-cache", "", "compute every bank, read and write no cache"},
+      {"--quiet", "", "no progress or summary on stderr"},
+  };
+  spec.examples =
+      "  strike render examples/scenes/bar-drop.json -o bar-drop.wav\n"
+      "  strike render examples/scenes/marbles-in-bowl.json -o marbles.wav --events events.csv --rate 96000\n";
+  spec.min_positional = 1;
+  spec.max_positional = 1;
+  return spec;
+}
+
+void printSummary(const RenderResult& result, const std::string& output, double rate, double duration) {
+  const RenderReport& r = result.report;
+  std::fprintf(stderr, "strike render: wrote %s (%.3g s at %.0f Hz)\n", output.c_str(), duration, rate);
+  std::fprintf(stderr, "  objects     %zu in the scene, %zu struck, %zu sounded, %zu too soft to hear, %zu never struck\n",
+               r.objects, r.objects_struck, r.objects_sounded, r.objects_inaudible, r.objects - r.objects_struck);
+  std::fprintf(stderr, "  banks       %zu given, %zu from the cache, %zu computed, %zu shared between identical objects\n",
+               r.banks_given, r.banks_cached, r.banks_computed, r.banks_shared);
+  std::fprintf(stderr, "  events      %zu contacts: %zu impacts, %zu sustained-contact steps\n", r.events, r.impacts,
+               r.sustained_contacts);
+  std::fprintf(stderr, "  modes       %llu in the banks, %llu out of the audible band, at most %llu ringing at once\n",
+               static_cast<unsigned long long>(r.modes_total), static_cast<unsigned long long>(r.modes_out_of_band),
+               static_cast<unsigned long long>(r.max_active_modes));
+  std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS)%s\n", r.peak, 20.0 * std::log10(std::max(r.peak, 1e-30)),
+               r.clipped_samples ? (", CLIPPING: " + std::to_string(r.clipped_samples) + " samples at or above full scale; lower --gain").c_str() : "");
+  std::fprintf(stderr, "  time        load %.2f s, simulate %.2f s, modes %.2f s, synthesize %.2f s, total %.2f s (%.1fx real time)\n",
+               r.load_seconds, r.simulate_seconds, r.precompute_seconds, r.synthesize_seconds, r.total_seconds,
+               r.total_seconds > 0 ? duration / r.total_seconds : 0.0);
+  if (r.precompute_saved_seconds > 0)
+    std::fprintf(stderr, "  saved       %.2f s of eigen-solves answered by the cache\n", r.precompute_saved_seconds);
+}
+
+}  // namespace
+
+int runRender(const std::vector<std::string>& raw_args) {
+  const CommandSpec spec = renderSpec();
+  if (wantsHelp(raw_args)) {
+    std::fputs(helpText(spec).c_str(), stdout);
+    return 0;
+  }
+  Result<ParsedArgs> parsed = parseArgs(spec, raw_args);
+  if (!parsed) return reportError("render", parsed.error());
+  const ParsedArgs& args = *parsed;
+  if (!args.has("-o")) return reportError("render", badInput("missing -o OUT.wav (where to write the sound)"));
+  Result<Scene> scene = loadScene(args.positional[0]);
+  if (!scene) return reportError("render", scene.error());
+
+  RenderSettings settings;
+  Result<double> rate = args.number("--rate", 0.0);
+  Result<double> duration = args.number("--duration", 0.0);
+  Result<double> gain = args.number("--gain", 1.0);
+  for (const Result<double>* r : {&rate, &duration, &gain})
+    if (!*r) return reportError("render", r->error());
+  if (args.has("--rate") && !(*rate >= 8000 && *rate <= 384000))
+    return reportError("render", badInput("--rate = " + args.text("--rate") + " (must be 8000 to 384000 Hz)"));
+  if (args.has("--duration") && !(*duration > 0 && *duration <= 3600))
+    return reportError("render", badInput("--duration = " + args.text("--duration") + " (must be in (0, 3600] s)"));
+  if (!(*gain > 0)) return reportError("render", badInput("--gain = " + args.text("--gain") + " (must be > 0)"));
+  settings.sample_rate_hz = *rate;
+  settings.duration_s = *duration;
+  settings.gain = *gain;
+  settings.cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
+
+  const std::string output = args.text("-o");
+  const bool flac = output.size() >= 5 && output.compare(output.size() - 5, 5, ".flac") == 0;
+  const std::string format = args.text("--format", flac ? "pcm24" : "float");
+  SampleEncoding encoding;
+  if (format == "pcm16") encoding = SampleEncoding::Pcm16;
+  else if (format == "pcm24") encoding = SampleEncoding::Pcm24;
+  else if (format == "float") encoding = SampleEncoding::Float32;
+  else return reportError("render", badInput("--format = '" + format + "' (expected pcm16, pcm24 or float)"));
+
+  const bool quiet = args.has("--quiet");
+  ProgressReporter progress(quiet);
+  settings.progress = progress.callback();
+  Result<RenderResult> result = renderScene(*scene, settings);
+  progress.finish();
+  if (!result) return reportError("render", result.error());
+  Status written = writeAudio(output, result->audio, encoding);
+  if (!written) return reportError("render", written.error());
+  if (args.has("--events")) {
+    Status events = writeEventsCsv(args.text("--events"), *result);
+    if (!events) return reportError("render", events.error());
+  }
+  if (!quiet) printSummary(*result, output, result->audio.sample_rate_hz, result->audio.frames() / result->audio.sample_rate_hz);
+  return 0;
+}
+
+}  // namespace strike::cli

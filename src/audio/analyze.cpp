@@ -1,1 +1,359 @@
 // SPDX-License-Identifier: MIT
+// Level statistics, spectral peaks and per-peak decay rates (target strike_fftw).
+#include <fftw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <mutex>
+
+#include "fftw_lock.hpp"
+#include "strike/audio.hpp"
+
+namespace strike {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kNepersPerDb = 0.11512925464970229;  // ln(10) / 20
+
+struct Mono {
+  std::vector<double> x;
+  size_t onset = 0;
+  double peak = 0.0;
+};
+
+/// Statistics over all channels, and the mean of the channels with non-finite samples as 0.
+Mono mixdown(const AudioBuffer& audio, AudioAnalysis& analysis) {
+  Mono mono;
+  const size_t channels = static_cast<size_t>(audio.channels);
+  const size_t frames = audio.frames();
+  mono.x.assign(frames, 0.0);
+  double sum_squares = 0.0;
+  for (size_t f = 0; f < frames; ++f) {
+    double sum = 0.0;
+    for (size_t c = 0; c < channels; ++c) {
+      const double s = audio.samples[f * channels + c];
+      if (!std::isfinite(s)) {
+        ++analysis.non_finite_samples;
+        continue;
+      }
+      const double a = std::fabs(s);
+      analysis.peak_amplitude = std::max(analysis.peak_amplitude, a);
+      if (a >= 1.0) ++analysis.clipped_samples;
+      sum_squares += s * s;
+      sum += s;
+    }
+    mono.x[f] = sum / static_cast<double>(channels);
+    mono.peak = std::max(mono.peak, std::fabs(mono.x[f]));
+  }
+  const size_t count = frames * channels;
+  analysis.rms = count > 0 ? std::sqrt(sum_squares / static_cast<double>(count)) : 0.0;
+  // The onset: first sample above -60 dB of the peak. Frames for the decay fit start here, so
+  // none straddles the start of the sound (which would bend the log-envelope line).
+  const double threshold = 1e-3 * mono.peak;
+  while (mono.onset < frames && !(std::fabs(mono.x[mono.onset]) > threshold)) ++mono.onset;
+  return mono;
+}
+
+size_t nextPowerOfTwo(size_t n) {
+  size_t p = 1;
+  while (p < n) p <<= 1;
+  return p;
+}
+
+/// |X_k| scaled so that a stationary sinusoid of amplitude a peaks at a (2 |X| / sum w).
+struct Spectrum {
+  std::vector<double> amplitude;
+  double bin_hz = 0.0;
+};
+
+Spectrum wholeSpectrum(const Mono& mono, SpectrumWindow window, double rate_hz) {
+  const size_t length = mono.x.size() - mono.onset;
+  // Zero-padding by at least 2 keeps the quadratic interpolation's bias small (SASP, "Bias of
+  // Parabolic Peak Interpolation"); above 2^24 points padding only to N bounds the memory.
+  size_t size = nextPowerOfTwo(2 * length);
+  if (size > (size_t{1} << 24)) size = nextPowerOfTwo(length);
+  double* in = fftw_alloc_real(size);
+  fftw_complex* out = fftw_alloc_complex(size / 2 + 1);
+  fftw_plan plan;
+  {
+    std::lock_guard<std::mutex> lock(detail::fftwPlannerMutex());
+    plan = fftw_plan_dft_r2c_1d(static_cast<int>(size), in, out, FFTW_ESTIMATE);
+  }
+  double window_sum = 0.0;
+  const double n_total = static_cast<double>(length);
+  for (size_t n = 0; n < size; ++n) {
+    double w = 0.0;
+    if (n < length) {
+      const double t = static_cast<double>(n);
+      if (window == SpectrumWindow::Hann) {
+        const double s = std::sin(kPi * (t + 0.5) / n_total);
+        w = s * s;
+      } else {
+        const double c = std::cos(0.5 * kPi * t / n_total);
+        w = c * c;
+      }
+      window_sum += w;
+      in[n] = w * mono.x[mono.onset + n];
+    } else {
+      in[n] = 0.0;
+    }
+  }
+  fftw_execute(plan);
+  Spectrum spectrum;
+  spectrum.bin_hz = rate_hz / static_cast<double>(size);
+  spectrum.amplitude.resize(size / 2 + 1);
+  const double scale = window_sum > 0.0 ? 2.0 / window_sum : 0.0;
+  for (size_t k = 0; k <= size / 2; ++k) spectrum.amplitude[k] = scale * std::hypot(out[k][0], out[k][1]);
+  {
+    std::lock_guard<std::mutex> lock(detail::fftwPlannerMutex());
+    fftw_destroy_plan(plan);
+  }
+  fftw_free(in);
+  fftw_free(out);
+  return spectrum;
+}
+
+struct Candidate {
+  double freq_hz = 0.0;
+  double amplitude = 0.0;
+  double half_width_hz = 0.0;  ///< half width at -3 dB, for the first guess of the decay
+};
+
+/// Quadratic interpolation of log|X| through bins k-1, k, k+1 (Smith, SASP, "Quadratic
+/// Interpolation of Spectral Peaks"): offset p = (a - c) / (2 (a - 2b + c)) bins, log peak
+/// b - (a - c) p / 4. On log magnitude the fit is exact for a Gaussian main lobe and close for
+/// Hann-like lobes.
+Candidate interpolatePeak(const Spectrum& spectrum, size_t k) {
+  const double a = std::log(spectrum.amplitude[k - 1]);
+  const double b = std::log(spectrum.amplitude[k]);
+  const double c = std::log(spectrum.amplitude[k + 1]);
+  const double denominator = a - 2.0 * b + c;
+  const double p = denominator < 0.0 ? std::clamp(0.5 * (a - c) / denominator, -0.5, 0.5) : 0.0;
+  Candidate candidate;
+  candidate.freq_hz = (static_cast<double>(k) + p) * spectrum.bin_hz;
+  candidate.amplitude = std::exp(b - 0.25 * (a - c) * p);
+  // -3 dB half width: walk out on both sides and interpolate linearly.
+  const double half_power = candidate.amplitude / std::sqrt(2.0);
+  auto edge = [&](int direction) {
+    size_t j = k;
+    const size_t last = spectrum.amplitude.size() - 1;
+    while (j > 0 && j < last && spectrum.amplitude[j] > half_power) j = direction > 0 ? j + 1 : j - 1;
+    const size_t inner = direction > 0 ? j - 1 : j + 1;
+    const double y0 = spectrum.amplitude[inner];
+    const double y1 = spectrum.amplitude[j];
+    const double frac = y0 != y1 ? std::clamp((y0 - half_power) / (y0 - y1), 0.0, 1.0) : 0.0;
+    return std::fabs((static_cast<double>(inner) + direction * frac) - static_cast<double>(k) - p);
+  };
+  candidate.half_width_hz = 0.5 * (edge(+1) + edge(-1)) * spectrum.bin_hz;
+  return candidate;
+}
+
+/// Blackman-Harris 4-term window: -92 dB sidelobes, main lobe +-4 bins (Harris, "On the use of
+/// windows for harmonic analysis with the discrete Fourier transform", Proc. IEEE 66(1), 1978).
+double blackmanHarris(size_t n, size_t length) {
+  const double x = 2.0 * kPi * (static_cast<double>(n) + 0.5) / static_cast<double>(length);
+  return 0.35875 - 0.48829 * std::cos(x) + 0.14128 * std::cos(2.0 * x) - 0.01168 * std::cos(3.0 * x);
+}
+
+struct DecayFit {
+  double decay_per_s = -1.0;  ///< < 0: too few usable frames
+  double freq_hz = 0.0;       ///< from the phase slope of the same frames
+};
+
+/// Decay rate from one frame length: log|Y_m| over frame starts s_m = onset + m hop, where
+/// Y_m = sum_n w(n) x(s_m + n) e^{-j 2 pi f0 n / fs}. For x = A e^{-d t} cos(2 pi f t + phi),
+/// Y_m = (A/2) e^{(-d + j 2 pi f) s_m / fs} * (a constant of the frame) + (what leaks in), so
+/// log|Y_m| is a line of slope -d and arg Y_m a line of slope 2 pi f, for any frame length and
+/// any f0 within the main lobe. The frame length decides only what else leaks in. The phase
+/// slope refines the frequency: unlike the whole-signal peak it is not pulled by the
+/// negative-frequency image of a wide (fast-decaying, low) line, which the window rejects.
+DecayFit fitDecayWithFrame(const Mono& mono, double rate_hz, double freq_hz, double decay_guess, size_t frame) {
+  const size_t available = mono.x.size() - mono.onset;
+  if (frame < 16 || frame >= available) return {};
+  // Sample the envelope finely enough for ~48 points over a 60 dB fall (or over the signal).
+  const double signal_s = static_cast<double>(available - frame) / rate_hz;
+  const double fit_s = decay_guess > 0.0 ? std::min(60.0 * kNepersPerDb / decay_guess, signal_s) : signal_s;
+  const size_t hop = std::max<size_t>(1, std::min(frame / 4, static_cast<size_t>(fit_s * rate_hz / 48.0)));
+
+  std::vector<double> wc(frame), ws(frame);
+  const double omega = 2.0 * kPi * freq_hz / rate_hz;
+  for (size_t n = 0; n < frame; ++n) {
+    const double w = blackmanHarris(n, frame);
+    wc[n] = w * std::cos(omega * static_cast<double>(n));
+    ws[n] = w * std::sin(omega * static_cast<double>(n));
+  }
+  std::vector<double> times_s, logs, phases;
+  double log_max = -std::numeric_limits<double>::infinity();
+  size_t m_max = 0;
+  for (size_t start = mono.onset; start + frame <= mono.x.size(); start += hop) {
+    const double* x = mono.x.data() + start;
+    double re = 0.0, im = 0.0;
+    for (size_t n = 0; n < frame; ++n) {
+      re += wc[n] * x[n];
+      im += ws[n] * x[n];
+    }
+    const double magnitude = std::hypot(re, im);
+    // Y_m = re - j im. Phase relative to the demodulation frequency, unwrapped frame to frame:
+    // the residual advances (f - f0) 2 pi hop / fs per frame, far below pi.
+    const double offset = std::atan2(-im, re) - omega * static_cast<double>(start - mono.onset);
+    if (phases.empty()) {
+      phases.push_back(std::remainder(offset, 2.0 * kPi));
+    } else {
+      phases.push_back(phases.back() + std::remainder(offset - phases.back(), 2.0 * kPi));
+    }
+    const double log_magnitude = magnitude > 0.0 ? std::log(magnitude) : -745.0;
+    times_s.push_back(static_cast<double>(start - mono.onset) / rate_hz);
+    logs.push_back(log_magnitude);
+    if (log_magnitude > log_max) {
+      log_max = log_magnitude;
+      m_max = logs.size() - 1;
+    }
+    // 120 dB down: the rest is float rounding or the noise floor; stop computing.
+    if (logs.size() > m_max + 4 && log_magnitude < log_max - 120.0 * kNepersPerDb) break;
+  }
+  if (logs.size() < m_max + 4) return {};
+  // Noise floor: median of the last quarter of the frames. Fit from the loudest frame down to
+  // 10 dB above that floor, at most 60 dB; if the whole record falls less than 16 dB (a slow
+  // decay in a short file), the floor is the signal itself and every frame is used.
+  std::vector<double> tail(logs.end() - static_cast<std::ptrdiff_t>(std::max<size_t>(1, logs.size() / 4)), logs.end());
+  std::nth_element(tail.begin(), tail.begin() + static_cast<std::ptrdiff_t>(tail.size() / 2), tail.end());
+  const double floor_log = tail[tail.size() / 2];
+  double range = std::min(60.0 * kNepersPerDb, log_max - floor_log - 10.0 * kNepersPerDb);
+  size_t m_end = logs.size();
+  if (log_max - floor_log >= 16.0 * kNepersPerDb) {
+    m_end = m_max + 1;
+    while (m_end < logs.size() && logs[m_end] >= log_max - range) ++m_end;
+  }
+  const size_t count = m_end - m_max;
+  if (count < 4) return {};
+  double mean_t = 0.0, mean_y = 0.0, mean_p = 0.0;
+  for (size_t m = m_max; m < m_end; ++m) {
+    mean_t += times_s[m];
+    mean_y += logs[m];
+    mean_p += phases[m];
+  }
+  mean_t /= static_cast<double>(count);
+  mean_y /= static_cast<double>(count);
+  mean_p /= static_cast<double>(count);
+  double stt = 0.0, sty = 0.0, stp = 0.0;
+  for (size_t m = m_max; m < m_end; ++m) {
+    stt += (times_s[m] - mean_t) * (times_s[m] - mean_t);
+    sty += (times_s[m] - mean_t) * (logs[m] - mean_y);
+    stp += (times_s[m] - mean_t) * (phases[m] - mean_p);
+  }
+  if (!(stt > 0.0)) return {};
+  DecayFit fit;
+  fit.decay_per_s = std::max(0.0, -sty / stt);  // a rising envelope is reported as no decay
+  fit.freq_hz = freq_hz + stp / stt / (2.0 * kPi);
+  return fit;
+}
+
+/// Frame length: long enough to put the nearest other peak (df Hz away) and the peak's own
+/// negative-frequency image beyond the Blackman-Harris main lobe (4 bins; 5/df s leaves a
+/// margin), short enough (<= 8/d s) that a fast-decaying mode is not buried under the window's
+/// rise while a slower neighbour fills the frame. Slow decays: up to half of the signal.
+size_t frameLengthFor(double decay_per_s, double freq_hz, double nearest_df_hz, double rate_hz, size_t available) {
+  const double image_s = 2.5 / freq_hz;
+  const double separation_s = nearest_df_hz > 0.0 ? 5.0 / nearest_df_hz : 0.0;
+  const double infinity = std::numeric_limits<double>::infinity();
+  const double low_s = decay_per_s > 0.0 ? 2.0 / decay_per_s : infinity;
+  const double high_s = decay_per_s > 0.0 ? 8.0 / decay_per_s : infinity;
+  const double length_s = std::max(image_s, std::min(std::max(low_s, separation_s), high_s));
+  const double max_frame = static_cast<double>(available / 2);
+  return static_cast<size_t>(std::clamp(std::round(length_s * rate_hz), 16.0, std::max(16.0, max_frame)));
+}
+
+DecayFit fitDecay(const Mono& mono, double rate_hz, const Candidate& peak, double nearest_df_hz) {
+  const size_t available = mono.x.size() - mono.onset;
+  // First guess from the spectral -3 dB half width: a Lorentzian line has HWHM = d / (2 pi).
+  double decay = 2.0 * kPi * peak.half_width_hz;
+  size_t frame = frameLengthFor(decay, peak.freq_hz, nearest_df_hz, rate_hz, available);
+  DecayFit fitted;
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    const DecayFit fit = fitDecayWithFrame(mono, rate_hz, peak.freq_hz, decay, frame);
+    if (fit.decay_per_s < 0.0) break;
+    fitted = fit;
+    decay = fit.decay_per_s;
+    const size_t next = frameLengthFor(decay, peak.freq_hz, nearest_df_hz, rate_hz, available);
+    const double ratio = static_cast<double>(next) / static_cast<double>(frame);
+    if (ratio > 0.8 && ratio < 1.25) break;
+    frame = next;
+  }
+  return fitted;
+}
+
+}  // namespace
+
+AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& options) {
+  AudioAnalysis analysis;
+  analysis.sample_rate_hz = audio.sample_rate_hz;
+  if (audio.channels < 1 || !(audio.sample_rate_hz > 0.0)) return analysis;
+  analysis.duration_s = static_cast<double>(audio.frames()) / audio.sample_rate_hz;
+  const Mono mono = mixdown(audio, analysis);
+  analysis.onset_s = static_cast<double>(mono.onset) / audio.sample_rate_hz;
+  const size_t length = mono.x.size() - mono.onset;
+  if (!(mono.peak > 0.0) || length < 16 || options.max_peaks <= 0) return analysis;
+
+  const Spectrum spectrum = wholeSpectrum(mono, options.window, audio.sample_rate_hz);
+  std::vector<Candidate> candidates;
+  for (size_t k = 1; k + 1 < spectrum.amplitude.size(); ++k) {
+    const double* a = spectrum.amplitude.data();
+    if (a[k] > a[k - 1] && a[k] >= a[k + 1] && a[k - 1] > 0.0 && a[k + 1] > 0.0)
+      candidates.push_back(interpolatePeak(spectrum, k));
+  }
+  if (candidates.empty()) return analysis;
+  // Strongest first; equal levels by frequency, so the order is deterministic.
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return a.amplitude != b.amplitude ? a.amplitude > b.amplitude : a.freq_hz < b.freq_hz;
+  });
+  const double strongest = candidates.front().amplitude;
+  const double floor_amplitude = strongest * std::pow(10.0, options.floor_db / 20.0);
+  const double bin_hz = audio.sample_rate_hz / static_cast<double>(length);  // of the unpadded DFT
+  const double min_separation_hz = options.min_separation_bins * bin_hz;
+  std::vector<Candidate> accepted;
+  for (const Candidate& c : candidates) {
+    if (c.amplitude < floor_amplitude) break;
+    const bool separate = std::all_of(accepted.begin(), accepted.end(), [&](const Candidate& a) {
+      const double df_hz = std::fabs(a.freq_hz - c.freq_hz);
+      if (df_hz < min_separation_hz) return false;
+      if (options.window != SpectrumWindow::Hann) return true;  // its leakage is a monotone tail
+      // Hann sidelobes: |W(b)| = |sin(pi b) / (pi b (1 - b^2))| at b bins; a candidate below
+      // twice the sidelobe envelope of a stronger peak may be that sidelobe (Harris 1978).
+      const double b = df_hz / bin_hz;
+      return b >= 1.5 && c.amplitude > 2.0 * a.amplitude / (kPi * b * (b * b - 1.0));
+    });
+    if (separate) accepted.push_back(c);
+  }
+
+  const size_t reported = std::min(accepted.size(), static_cast<size_t>(options.max_peaks));
+  for (size_t i = 0; i < reported; ++i) {
+    const Candidate& c = accepted[i];
+    SpectralPeak peak;
+    peak.freq_hz = c.freq_hz;
+    peak.level_dbfs = 20.0 * std::log10(c.amplitude);
+    peak.level_db = 20.0 * std::log10(c.amplitude / strongest);
+    if (options.fit_decay) {
+      // Neighbours include peaks above the floor that are not reported: they still leak.
+      double nearest_df_hz = 0.0;
+      for (size_t j = 0; j < accepted.size(); ++j) {
+        if (j == i) continue;
+        const double df = std::fabs(accepted[j].freq_hz - c.freq_hz);
+        if (nearest_df_hz == 0.0 || df < nearest_df_hz) nearest_df_hz = df;
+      }
+      const DecayFit fit = fitDecay(mono, audio.sample_rate_hz, c, nearest_df_hz);
+      peak.decay_per_s = fit.decay_per_s;
+      // Take the phase-slope frequency when it lies within the line's own -3 dB half width
+      // (a wide line's spectral peak is pulled by up to about that much) and nearer to this
+      // peak than to any other, so it cannot have locked onto a neighbour.
+      const double shift_hz = std::fabs(fit.freq_hz - c.freq_hz);
+      if (fit.decay_per_s >= 0.0 && shift_hz < std::max(0.5 * min_separation_hz, c.half_width_hz) &&
+          (nearest_df_hz == 0.0 || shift_hz < 0.5 * nearest_df_hz))
+        peak.freq_hz = fit.freq_hz;
+    }
+    analysis.peaks.push_back(peak);
+  }
+  return analysis;
+}
+
+}  // namespace strike

@@ -1,1 +1,180 @@
 // SPDX-License-Identifier: MIT
+// tetrahedralize(): a closed triangle surface -> a quality Tet4 mesh through TetGen's library
+// API. This file links TetGen (AGPL-3.0); the strike_tetgen target is used by the command-line
+// tool only, never by the runtime library (see README, licences).
+//
+// TetGen reports failure by throwing an int (its terminatetetgen() in TETLIBRARY mode) and may
+// loop or crash on surfaces that are open or self-intersecting, so the surface is checked first
+// and everything TetGen throws is caught here.
+#include <tetgen.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <new>
+#include <sstream>
+#include <string>
+
+#include "strike/mesh.hpp"
+
+namespace strike {
+
+namespace {
+
+constexpr double kMaxEstimatedTets = 5e6;  // refuse requests that could not be solved anyway
+// Default resolution: about this many "regular tet volumes" in the body. TetGen's quality
+// refinement produces roughly 2-4x more tets than volume / maxvolume, so this lands typical
+// objects in the low thousands of tets.
+constexpr double kDefaultRegularTets = 1500.0;
+
+std::string num(double v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v;
+  return s.str();
+}
+
+std::string tetgenErrorText(int code) {
+  switch (code) {
+    case 1: return "out of memory";
+    case 2: return "internal error (please report it with the input mesh)";
+    case 3: return "the surface intersects itself";
+    case 4: return "the surface has a very small feature (tiny edge or face) compared to its size";
+    case 5: return "two facets of the surface are very close to each other or overlap";
+    case 10: return "the input is invalid";
+    default: return "TetGen error code " + std::to_string(code);
+  }
+}
+
+// TetGen prints diagnostics on stdout even with -Q; stdout is reserved for data (the CLI's
+// JSON), so its output is routed to stderr while it runs.
+class StdoutToStderr {
+ public:
+  StdoutToStderr() {
+    std::fflush(stdout);
+    saved_ = dup(1);
+    if (saved_ >= 0) dup2(2, 1);
+  }
+  ~StdoutToStderr() {
+    std::fflush(stdout);
+    if (saved_ >= 0) {
+      dup2(saved_, 1);
+      close(saved_);
+    }
+  }
+  StdoutToStderr(const StdoutToStderr&) = delete;
+  StdoutToStderr& operator=(const StdoutToStderr&) = delete;
+
+ private:
+  int saved_ = -1;
+};
+
+}  // namespace
+
+Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& options, const std::string& source) {
+  if (options.order != 1 && options.order != 2) {
+    return badInput(source + ": error: element order " + std::to_string(options.order) + ", expected 1 or 2");
+  }
+  if (!std::isfinite(options.target_edge_m) || options.target_edge_m < 0.0) {
+    return badInput(source + ": error: target edge length " + num(options.target_edge_m) + " m, expected >= 0 (0 = automatic)");
+  }
+  // Below ~1.1 TetGen's refinement may never terminate; above ~10 the bound does nothing.
+  if (!(options.radius_edge_ratio >= 1.1 && options.radius_edge_ratio <= 10.0)) {
+    return badInput(source + ": error: radius-edge ratio " + num(options.radius_edge_ratio) + ", expected 1.1 .. 10");
+  }
+  if (Status s = checkClosedSurface(surface, source); !s) return s.error();
+
+  double volume = 0.0;
+  for (Eigen::Index f = 0; f < surface.F.rows(); ++f) {
+    const Eigen::Vector3d a = surface.V.row(surface.F(f, 0)), b = surface.V.row(surface.F(f, 1)),
+                          c = surface.V.row(surface.F(f, 2));
+    volume += a.dot(b.cross(c)) / 6.0;
+  }
+  volume = std::abs(volume);  // TetGen does not care about the winding
+  const double extent = (surface.V.colwise().maxCoeff() - surface.V.colwise().minCoeff()).norm();
+  if (!(volume > 1e-12 * extent * extent * extent)) {
+    return badInput(source + ": error: the closed surface encloses volume " + num(volume) + " m^3, expected a solid");
+  }
+  const double regular_tet = 1.0 / (6.0 * std::sqrt(2.0));  // volume of a regular tet of edge 1
+  double max_volume = 0.0;
+  if (options.target_edge_m > 0.0) {
+    max_volume = regular_tet * std::pow(options.target_edge_m, 3);
+  } else {
+    max_volume = volume / kDefaultRegularTets;
+  }
+  if (volume / max_volume > kMaxEstimatedTets) {
+    return badInput(source + ": error: target edge " + num(options.target_edge_m) + " m would give more than " +
+                    num(kMaxEstimatedTets) + " tets for volume " + num(volume) + " m^3; use a larger --size");
+  }
+
+  tetgenio in, out;
+  in.firstnumber = 0;
+  in.numberofpoints = static_cast<int>(surface.V.rows());
+  in.pointlist = new REAL[static_cast<size_t>(3 * surface.V.rows())];
+  for (Eigen::Index i = 0; i < surface.V.rows(); ++i) {
+    for (int c = 0; c < 3; ++c) in.pointlist[3 * i + c] = surface.V(i, c);
+  }
+  in.numberoffacets = static_cast<int>(surface.F.rows());
+  in.facetlist = new tetgenio::facet[static_cast<size_t>(surface.F.rows())];
+  for (Eigen::Index f = 0; f < surface.F.rows(); ++f) {
+    tetgenio::facet& facet = in.facetlist[f];
+    tetgenio::init(&facet);
+    facet.numberofpolygons = 1;
+    facet.polygonlist = new tetgenio::polygon[1];
+    tetgenio::init(&facet.polygonlist[0]);
+    facet.polygonlist[0].numberofvertices = 3;
+    facet.polygonlist[0].vertexlist = new int[3];
+    for (int c = 0; c < 3; ++c) facet.polygonlist[0].vertexlist[c] = surface.F(f, c);
+  }
+
+  // Switches: p (piecewise linear complex), q (quality, radius-edge ratio), a (max volume),
+  // Q (quiet). The numbers are set as fields rather than printed into the switch string, so
+  // that no formatting of small numbers (1e-9) can be misread by TetGen's parser.
+  tetgenbehavior behavior;
+  char switches[] = "pqQ";
+  const std::string shown = "pq" + num(options.radius_edge_ratio) + "a" + num(max_volume) + "Q";
+  if (!behavior.parse_commandline(switches)) return internalError("TetGen rejected the switches " + shown);
+  behavior.quality = 1;
+  behavior.minratio = options.radius_edge_ratio;
+  behavior.fixedvolume = 1;
+  behavior.maxvolume = max_volume;
+
+  if (options.progress) options.progress("tetrahedralize", 0.0);
+  try {
+    StdoutToStderr redirect;
+    ::tetrahedralize(&behavior, &in, &out);
+  } catch (int code) {
+    return badInput(source + ": error: TetGen could not mesh the surface (-" + shown + "): " + tetgenErrorText(code));
+  } catch (const std::bad_alloc&) {
+    return internalError(source + ": error: out of memory in TetGen (-" + shown + ")");
+  } catch (const std::exception& e) {
+    return internalError(source + ": error: TetGen failed (-" + shown + "): " + e.what());
+  } catch (...) {
+    return internalError(source + ": error: TetGen failed with an unknown exception (-" + shown + ")");
+  }
+  if (options.progress) options.progress("tetrahedralize", 1.0);
+
+  if (out.numberoftetrahedra <= 0 || out.numberofcorners != 4 || out.numberofpoints <= 0) {
+    return badInput(source + ": error: TetGen produced " + std::to_string(out.numberoftetrahedra) +
+                    " tetrahedra from a closed surface of " + std::to_string(surface.F.rows()) + " triangles (-" + shown + ")");
+  }
+  TetMesh mesh;
+  mesh.order = 1;
+  mesh.nodes.resize(out.numberofpoints, 3);
+  for (int i = 0; i < out.numberofpoints; ++i) {
+    for (int c = 0; c < 3; ++c) mesh.nodes(i, c) = out.pointlist[3 * i + c];
+  }
+  mesh.tets.resize(out.numberoftetrahedra, 4);
+  const int base = out.firstnumber;
+  for (int t = 0; t < out.numberoftetrahedra; ++t) {
+    for (int c = 0; c < 4; ++c) mesh.tets(t, c) = out.tetrahedronlist[4 * t + c] - base;
+  }
+  std::vector<MeshWarning> ignored;
+  if (Status s = validateAndRepair(mesh, source, &ignored); !s) return s.error();
+  if (options.order == 2) mesh = promoteToTet10(mesh);
+  return mesh;
+}
+
+}  // namespace strike

@@ -73,14 +73,21 @@ Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double tar
 
 /// Surface readers: Wavefront .obj (v/f, polygons fan-triangulated), .stl (ASCII and binary),
 /// .ply (ASCII and binary little/big endian, vertex x y z and face vertex_indices).
-Result<SurfaceMesh> readObj(const std::string& path);
-Result<SurfaceMesh> readStl(const std::string& path);
-Result<SurfaceMesh> readPly(const std::string& path);
+/// Readers return the triangles as stored (they do not check closedness; see
+/// checkClosedSurface). STL vertices are welded (exactly equal coordinates become one vertex);
+/// triangles that collapse to a line or point after welding are dropped, with a warning.
+/// `warnings` may be null.
+Result<SurfaceMesh> readObj(const std::string& path, std::vector<MeshWarning>* warnings = nullptr);
+Result<SurfaceMesh> readStl(const std::string& path, std::vector<MeshWarning>* warnings = nullptr);
+Result<SurfaceMesh> readPly(const std::string& path, std::vector<MeshWarning>* warnings = nullptr);
 /// Dispatch on the extension (.obj .stl .ply, case-insensitive).
-Result<SurfaceMesh> readSurfaceMesh(const std::string& path);
+Result<SurfaceMesh> readSurfaceMesh(const std::string& path, std::vector<MeshWarning>* warnings = nullptr);
 
 /// Tet mesh readers: Gmsh .msh 2.2 and 4.1 ASCII (element types 4 = Tet4, 11 = Tet10; other
 /// elements ignored), TetGen .node + .ele (path may name either file or the common stem).
+/// The result has the file's element order (Tet10 mid-edge nodes are put in Gmsh order; a
+/// TetGen -o2 .ele lists them as edges (2,3) (0,3) (0,1) (1,2) (1,3) (0,2) and is reordered).
+/// They check syntax, counts and index ranges but not geometry: call validateAndRepair().
 Result<TetMesh> readGmsh(const std::string& path, std::vector<MeshWarning>* warnings);
 Result<TetMesh> readTetgen(const std::string& path, std::vector<MeshWarning>* warnings);
 

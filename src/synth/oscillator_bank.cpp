@@ -1,1 +1,556 @@
 // SPDX-License-Identifier: MIT
+// The oscillator bank: every mode of every struck object advanced exactly and summed.
+//
+// Modes (mass-normalized, Rayleigh damping): q'' + c q' + lambda q = g f(t), c = a1 lambda + a2.
+//
+// Ringing modes (omega_d = sqrt(lambda - c^2/4) > 0.1 c/2) use the complex form of van den Doel &
+// Pai (1998): with pole p = -c/2 + i omega_d and y' = p y + f(t),  q = g Im(y) / omega_d  and
+//   q'' = g Im(p^2 y) / omega_d  +  g f(t).
+// The second term is the feedthrough of the force pulse itself. It is NOT in the output: it is
+// band-unlimited (a contact of 0.1 ms puts energy far above Nyquist, an ideal impulse is a Dirac),
+// while its audible part is already carried by the modes that are kept. The output weight is
+// folded into the state, yhat = b y with b = -i p^2 R / omega_d, so the output is Re(yhat) and a
+// sample costs one complex multiply and one add per mode: yhat[n+1] = e^{p h} yhat[n].
+//
+// Non-ringing modes (over-damped, critically damped, or omega_d <= 0.1 c/2, where 1/omega_d
+// weights would amplify float rounding) are few, decay within a few periods and are rendered in
+// double as a 2x2 real system in scaled coordinates x = (omega0 q, q'), output R (-lambda q - c q')
+// (the same acceleration without feedthrough). Their transition exp(A h) comes from a matrix
+// exponential, which is continuous through critical damping and has no 1/(r1 - r2) cancellation.
+//
+// Contact pulse. The half-sine force f(u) = (pi/(2 tau)) sin(pi u / tau) on [t0, t0 + tau] is
+// integrated exactly: for ringing modes in closed form (two geometric sequences, modal_math.cpp),
+// for the others by exponentiating the pulse-augmented 4x4 system. By linearity the pulse is
+// split into (a) its transient, the exact output at the samples inside [t0, t0 + tau), computed
+// once when the impact is added, and (b) an exact injection of the state at the first sample at
+// or after t0 + tau, done sample-accurately in render(). Both are continuous in t0 and tau, and
+// tau -> 0 gives the ideal impulse.
+//
+// Precision. Float SoA state is what makes the bank fast, but a float pole e^{p h} is off by up
+// to ~4e-8 relative, which over 10 s at 192 kHz is a ~1e-1 rad phase error. Each ringing mode
+// therefore keeps a double anchor advanced once per kSynthAnchorBlock samples by the exact block
+// transition e^{p B h} (computed directly, not by powering); the float state restarts from it
+// every block, so the float error is that of at most B = 128 steps (< ~5e-6 of the amplitude).
+// Blocks are a fixed grid from sample 0, so output does not depend on render() call sizes.
+// settings.double_precision replaces all of this by a plain double recurrence (reference path).
+//
+// Leaving out what is not heard [Raghuvanshi & Lin 2006]: modes outside the band are never
+// synthesized; an impact's contribution to a mode below the audibility threshold is dropped; a
+// mode whose |yhat| is below the threshold at a block end goes to sleep (swap-removed from the
+// active arrays). Denormals are flushed (MXCSR FTZ/DAZ) during render().
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <new>
+
+#include "kernels.hpp"
+#include "modal_math.hpp"
+#include "strike/synth.hpp"
+
+#if defined(STRIKE_SYNTH_X86)
+#include <xmmintrin.h>
+#endif
+
+namespace strike {
+namespace {
+
+using detail::Complex;
+constexpr size_t kBlock = kSynthAnchorBlock;
+// Below ~-600 dB nothing is audible whatever the threshold; also keeps doubles out of denormals.
+constexpr double kThresholdFloor = 1e-30;
+
+size_t roundUp(size_t n, size_t m) { return (n + m - 1) / m * m; }
+
+// A fixed-size, 64-byte aligned, zero-initialized array that can only grow (outside render()).
+template <typename T>
+class AlignedBuffer {
+ public:
+  AlignedBuffer() = default;
+  AlignedBuffer(const AlignedBuffer&) = delete;
+  AlignedBuffer& operator=(const AlignedBuffer&) = delete;
+  ~AlignedBuffer() { release(); }
+  void grow(size_t n) {
+    if (n <= size_) return;
+    T* p = static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{64}));
+    std::fill(p, p + n, T{});
+    if (size_ > 0) std::copy(data_, data_ + size_, p);
+    release();
+    data_ = p;
+    size_ = n;
+  }
+  T* data() { return data_; }
+  T& operator[](size_t i) { return data_[i]; }
+  size_t size() const { return size_; }
+
+ private:
+  void release() {
+    if (data_) ::operator delete(data_, std::align_val_t{64});
+    data_ = nullptr;
+    size_ = 0;
+  }
+  T* data_ = nullptr;
+  size_t size_ = 0;
+};
+
+enum class ModeKind : uint8_t { OutOfBand, Ringing, Damped };
+
+struct ModeInfo {
+  ModeKind kind = ModeKind::OutOfBand;
+  double radiation = 0.0;  // R: output per unit modal acceleration
+  double omega0 = 0.0;     // sqrt(lambda), rad/s
+  double damping_c = 0.0;  // c, 1/s
+  // Ringing: pole p, e^{p h}, e^{p B h}, and the output weight b = -i p^2 R / omega_d.
+  Complex pole, step, block_step, out_weight;
+  // Damped: 2x2 per-sample transition in scaled coordinates, row-major.
+  double phi[4] = {0, 0, 0, 0};
+  int32_t slot = -1;  // index in the active set of its kind, -1 when asleep
+};
+
+struct ObjectInfo {
+  uint32_t first_mode = 0;
+  uint32_t mode_count = 0;
+  double delay_s = 0.0;
+};
+
+struct ModeHit {
+  uint32_t mode;
+  Complex value;  // ringing: yhat added at the injection sample; damped: (omega0 q, q') added
+};
+
+struct Impact {
+  uint64_t start_sample = 0;  // first sample at or after t0
+  uint64_t end_sample = 0;    // injection: first sample at or after t0 + tau
+  std::vector<ModeHit> hits;
+  std::vector<double> transient;  // output at samples [start_sample, end_sample)
+  bool injected = false;
+};
+
+class DenormalGuard {
+ public:
+#if defined(STRIKE_SYNTH_X86)
+  // FTZ (bit 15) and DAZ (bit 6): decaying states must never hit the slow denormal path.
+  DenormalGuard() : csr_(_mm_getcsr()) { _mm_setcsr(csr_ | 0x8040u); }
+  ~DenormalGuard() { _mm_setcsr(csr_); }
+
+ private:
+  unsigned csr_;
+#else
+  DenormalGuard() = default;
+#endif
+};
+
+detail::KernelTable chooseKernels(SimdLevel level) {
+#if defined(STRIKE_SYNTH_X86)
+  const bool has_avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                          __builtin_cpu_supports("avx512vl");
+  const bool has_avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  if ((level == SimdLevel::Auto || level == SimdLevel::Avx512) && has_avx512) return detail::avx512Kernels();
+  if (level != SimdLevel::Scalar && has_avx2) return detail::avx2Kernels();
+#else
+  (void)level;
+#endif
+  return detail::scalarKernels();
+}
+
+}  // namespace
+
+struct OscillatorBank::Impl {
+  SynthSettings settings;
+  double fs = 48000.0, h = 1.0 / 48000.0;
+  double threshold = kThresholdFloor;
+  bool use_double = false;
+  detail::KernelTable kernels{};
+
+  std::vector<ObjectInfo> objects;
+  std::vector<ModeInfo> modes;
+  size_t ringing_total = 0, damped_total = 0;
+
+  // Active ringing modes, SoA by slot. Float path: st/co + double anchor (anc), block transition
+  // (pb) and the block's injections carried to the block end (inj). Double path: state in anc,
+  // coefficient in dco.
+  size_t n_active = 0;
+  AlignedBuffer<float> st_re, st_im, co_re, co_im;
+  AlignedBuffer<double> anc_re, anc_im, pb_re, pb_im, inj_re, inj_im, dco_re, dco_im, mag2;
+  AlignedBuffer<uint32_t> slot_mode;
+
+  // Active damped modes: mode index and (omega0 q, q').
+  std::vector<uint32_t> damped_mode;
+  std::vector<double> damped_x;
+
+  AlignedBuffer<float> acc;  // kBlock x lanes partial sums
+  std::vector<double> mix;   // kBlock output samples being assembled
+
+  std::vector<Impact> impacts;  // sorted by start_sample; [0, cursor) finished
+  size_t cursor = 0;
+  uint64_t pos = 0;  // next sample to render
+  SynthStats stats;
+
+  explicit Impl(const SynthSettings& s) : settings(s) {
+    fs = (s.sample_rate_hz > 0.0 && std::isfinite(s.sample_rate_hz)) ? s.sample_rate_hz : 48000.0;
+    settings.sample_rate_hz = fs;
+    h = 1.0 / fs;
+    threshold = std::isfinite(s.audibility_threshold) ? std::max(s.audibility_threshold, kThresholdFloor)
+                                                      : kThresholdFloor;
+    use_double = s.double_precision;
+    kernels = chooseKernels(s.simd);
+    acc.grow(kBlock * detail::kKernelMaxLanes);
+    mix.assign(kBlock, 0.0);
+  }
+
+  // --- setup (allocates) ------------------------------------------------------------------
+
+  uint32_t addObject(const ModalObjectDesc& desc) {
+    ObjectInfo obj;
+    obj.first_mode = static_cast<uint32_t>(modes.size());
+    obj.mode_count = static_cast<uint32_t>(desc.eigenvalues.size());
+    obj.delay_s = (desc.delay_s >= 0.0 && std::isfinite(desc.delay_s)) ? desc.delay_s : 0.0;
+    const double f_max = std::min(settings.max_freq_hz, 0.45 * fs);
+    for (size_t i = 0; i < desc.eigenvalues.size(); ++i) {
+      ModeInfo m;
+      const double r = desc.radiation_weight.empty() ? 1.0
+                       : i < desc.radiation_weight.size() ? desc.radiation_weight[i]
+                                                          : 0.0;
+      m.radiation = std::isfinite(r) ? r : 0.0;
+      const double lambda = desc.eigenvalues[i];
+      ++stats.modes_total;
+      const double f0 = (lambda > 0.0 && std::isfinite(lambda)) ? std::sqrt(lambda) / (2.0 * M_PI) : -1.0;
+      if (!(f0 >= settings.min_freq_hz && f0 <= f_max && f0 > 0.0)) {
+        ++stats.modes_out_of_band;
+        modes.push_back(m);
+        continue;
+      }
+      double c = rayleighDamping(desc.rayleigh_stiffness, desc.rayleigh_mass, lambda);
+      if (!(c > 0.0) || !std::isfinite(c)) c = 0.0;  // negative damping (growth) is not physical here
+      const double sigma = 0.5 * c, omega0 = std::sqrt(lambda);
+      m.omega0 = omega0;
+      m.damping_c = c;
+      // omega_d^2 = lambda - sigma^2 as a product: no cancellation near critical damping.
+      const double nu = (omega0 - sigma) * (omega0 + sigma);
+      if (nu > 0.01 * sigma * sigma) {
+        const double omega_d = std::sqrt(nu);
+        m.kind = ModeKind::Ringing;
+        m.pole = Complex(-sigma, omega_d);
+        m.step = std::exp(m.pole * h);
+        m.block_step = std::exp(m.pole * (static_cast<double>(kBlock) * h));
+        m.out_weight = Complex(0.0, -1.0) * m.pole * m.pole * (m.radiation / omega_d);
+        ++ringing_total;
+      } else {
+        m.kind = ModeKind::Damped;
+        const detail::Mat4 e = detail::expm4(detail::augmentedMatrix(omega0, c, 0.0), h);
+        m.phi[0] = e[0], m.phi[1] = e[1], m.phi[2] = e[4], m.phi[3] = e[5];
+        ++damped_total;
+      }
+      modes.push_back(m);
+    }
+    // Capacity for every mode being active at once: render() never allocates.
+    const size_t cap = roundUp(ringing_total, detail::kKernelSlotAlign) + detail::kKernelSlotAlign;
+    for (auto* b : {&st_re, &st_im, &co_re, &co_im}) b->grow(cap);
+    for (auto* b : {&anc_re, &anc_im, &pb_re, &pb_im, &inj_re, &inj_im, &dco_re, &dco_im, &mag2}) b->grow(cap);
+    slot_mode.grow(cap);
+    damped_mode.reserve(damped_total);
+    damped_x.reserve(2 * damped_total);
+    objects.push_back(obj);
+    return static_cast<uint32_t>(objects.size() - 1);
+  }
+
+  void addImpact(const ImpactDesc& desc) {
+    if (desc.object >= objects.size()) return;
+    ++stats.impacts;
+    if (cursor > 0) {  // drop finished impacts here, never in render()
+      impacts.erase(impacts.begin(), impacts.begin() + static_cast<std::ptrdiff_t>(cursor));
+      cursor = 0;
+    }
+    const ObjectInfo& obj = objects[desc.object];
+    const double now = static_cast<double>(pos);
+    double t0 = (desc.time_s + obj.delay_s) * fs;  // in samples
+    if (!(t0 >= now)) t0 = now;                    // late (or NaN): start now
+    double tau = desc.duration_s * fs;             // in samples
+    if (!(tau > 0.0) || !std::isfinite(tau)) tau = 0.0;
+    // Below 1e-9 samples a pulse is an impulse at its centroid to ~1e-18 relative.
+    const bool ideal = tau < 1e-9;
+    if (ideal) t0 += 0.5 * tau, tau = 0.0;
+    // A sample counts as "at or after" an instant up to 1e-7 samples of rounding; the formulas
+    // below are analytic, so evaluating them a hair before the instant is harmless.
+    Impact im;
+    im.start_sample = static_cast<uint64_t>(std::ceil(t0 - 1e-7));
+    im.end_sample = ideal ? im.start_sample : static_cast<uint64_t>(std::ceil(t0 + tau - 1e-7));
+    im.start_sample = std::max<uint64_t>(im.start_sample, pos);
+    im.end_sample = std::max(im.end_sample, im.start_sample);
+    im.transient.assign(im.end_sample - im.start_sample, 0.0);
+    const double tau_s = tau * h;
+    const double after_end_s = (static_cast<double>(im.end_sample) - (t0 + tau)) * h;
+    const double first_u_s = (static_cast<double>(im.start_sample) - t0) * h;
+    const double pulse_omega = ideal ? 0.0 : M_PI / tau_s;
+
+    for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
+      const double g = desc.modal_impulse[j];
+      if (g == 0.0 || !std::isfinite(g)) continue;
+      const uint32_t mi = obj.first_mode + j;
+      const ModeInfo& m = modes[mi];
+      if (m.kind == ModeKind::Ringing) {
+        const Complex y_end = ideal ? Complex(1.0, 0.0) : detail::halfSineResponse(m.pole, tau_s, tau_s);
+        const Complex bg = g * m.out_weight;
+        const Complex v = bg * std::exp(m.pole * after_end_s) * y_end;
+        if (!(std::abs(v) >= threshold)) continue;
+        im.hits.push_back({mi, v});
+        if (im.transient.empty()) continue;
+        // Transient: y(U) = K (E(i Om, p, U) - E(-i Om, p, U)) / 2i at U = first_u + n h, with
+        // E(a, p, U + h) = e^{ph} E(a, p, U) + e^{aU} E(a, p, h): exact, stable recurrences.
+        const Complex ia(0.0, pulse_omega);
+        Complex ep = detail::expDividedDifference(ia, m.pole, first_u_s);
+        Complex em = detail::expDividedDifference(-ia, m.pole, first_u_s);
+        const Complex hp = detail::expDividedDifference(ia, m.pole, h);
+        const Complex hm = detail::expDividedDifference(-ia, m.pole, h);
+        Complex rot_p = std::exp(ia * first_u_s), rot_m = std::conj(rot_p);
+        const Complex turn_p = std::exp(ia * h), turn_m = std::conj(turn_p);
+        const Complex k = bg * (M_PI / (2.0 * tau_s)) / Complex(0.0, 2.0);
+        for (double& out : im.transient) {
+          out += (k * (ep - em)).real();
+          ep = m.step * ep + rot_p * hp;
+          em = m.step * em + rot_m * hm;
+          rot_p *= turn_p;
+          rot_m *= turn_m;
+        }
+      } else if (m.kind == ModeKind::Damped) {
+        const detail::Mat4 a = detail::augmentedMatrix(m.omega0, m.damping_c, pulse_omega);
+        const std::array<double, 4> x0{0.0, 0.0, 0.0, ideal ? 0.0 : M_PI / (2.0 * tau_s)};
+        std::array<double, 4> x_end{0.0, 1.0, 0.0, 0.0};
+        if (!ideal) x_end = detail::mul4(detail::expm4(a, tau_s), x0);
+        x_end[2] = x_end[3] = 0.0;  // the pulse is over
+        const std::array<double, 4> x_inj =
+            detail::mul4(detail::expm4(detail::augmentedMatrix(m.omega0, m.damping_c, 0.0), after_end_s), x_end);
+        const Complex v(g * x_inj[0], g * x_inj[1]);
+        if (!(dampedAmplitude(m, v.real(), v.imag()) >= threshold)) continue;
+        im.hits.push_back({mi, v});
+        if (im.transient.empty()) continue;
+        const detail::Mat4 step = detail::expm4(a, h);
+        std::array<double, 4> x = detail::mul4(detail::expm4(a, first_u_s), x0);
+        const double w = g * m.radiation;
+        for (double& out : im.transient) {
+          out += w * (-m.omega0 * x[0] - m.damping_c * x[1]);
+          x = detail::mul4(step, x);
+        }
+      }
+    }
+    if (im.hits.empty()) {
+      ++stats.impacts_inaudible;
+      return;
+    }
+    auto at = std::upper_bound(impacts.begin(), impacts.end(), im.start_sample,
+                               [](uint64_t s, const Impact& other) { return s < other.start_sample; });
+    impacts.insert(at, std::move(im));
+  }
+
+  static double dampedAmplitude(const ModeInfo& m, double x1, double v) {
+    return std::fabs(m.radiation) * (m.omega0 * std::fabs(x1) + m.damping_c * std::fabs(v));
+  }
+
+  // --- render (no allocation, no exceptions) ----------------------------------------------
+
+  void activateRinging(uint32_t mode) {
+    const size_t i = n_active++;
+    const ModeInfo& m = modes[mode];
+    slot_mode[i] = mode;
+    co_re[i] = static_cast<float>(m.step.real());
+    co_im[i] = static_cast<float>(m.step.imag());
+    st_re[i] = st_im[i] = 0.0f;
+    anc_re[i] = anc_im[i] = inj_re[i] = inj_im[i] = 0.0;
+    pb_re[i] = m.block_step.real();
+    pb_im[i] = m.block_step.imag();
+    dco_re[i] = m.step.real();
+    dco_im[i] = m.step.imag();
+    modes[mode].slot = static_cast<int32_t>(i);
+    ++stats.mode_starts;
+  }
+
+  void removeRinging(size_t i) {
+    const size_t last = n_active - 1;
+    modes[slot_mode[i]].slot = -1;
+    if (i != last) {
+      st_re[i] = st_re[last], st_im[i] = st_im[last], co_re[i] = co_re[last], co_im[i] = co_im[last];
+      anc_re[i] = anc_re[last], anc_im[i] = anc_im[last], pb_re[i] = pb_re[last], pb_im[i] = pb_im[last];
+      inj_re[i] = inj_re[last], inj_im[i] = inj_im[last], dco_re[i] = dco_re[last], dco_im[i] = dco_im[last];
+      mag2[i] = mag2[last];
+      slot_mode[i] = slot_mode[last];
+      modes[slot_mode[i]].slot = static_cast<int32_t>(i);
+    }
+    // Padding slots must stay zero: the kernels run over whole groups.
+    st_re[last] = st_im[last] = co_re[last] = co_im[last] = 0.0f;
+    anc_re[last] = anc_im[last] = pb_re[last] = pb_im[last] = 0.0;
+    inj_re[last] = inj_im[last] = dco_re[last] = dco_im[last] = mag2[last] = 0.0;
+    --n_active;
+  }
+
+  void removeDamped(size_t i) {
+    const size_t last = damped_mode.size() - 1;
+    modes[damped_mode[i]].slot = -1;
+    if (i != last) {
+      damped_mode[i] = damped_mode[last];
+      damped_x[2 * i] = damped_x[2 * last];
+      damped_x[2 * i + 1] = damped_x[2 * last + 1];
+      modes[damped_mode[i]].slot = static_cast<int32_t>(i);
+    }
+    damped_mode.pop_back();  // never reallocates
+    damped_x.pop_back();
+    damped_x.pop_back();
+  }
+
+  void inject(const Impact& im, size_t local) {
+    for (const ModeHit& hit : im.hits) {
+      ModeInfo& m = modes[hit.mode];
+      if (m.kind == ModeKind::Ringing) {
+        if (m.slot < 0) activateRinging(hit.mode);
+        const size_t i = static_cast<size_t>(m.slot);
+        if (use_double) {
+          anc_re[i] += hit.value.real();
+          anc_im[i] += hit.value.imag();
+        } else {
+          st_re[i] += static_cast<float>(hit.value.real());
+          st_im[i] += static_cast<float>(hit.value.imag());
+          // Carried to the block end exactly: the anchor never sees float rounding.
+          const Complex carried = hit.value * std::exp(m.pole * (static_cast<double>(kBlock - local) * h));
+          inj_re[i] += carried.real();
+          inj_im[i] += carried.imag();
+        }
+      } else {
+        if (m.slot < 0) {
+          m.slot = static_cast<int32_t>(damped_mode.size());
+          damped_mode.push_back(hit.mode);  // capacity reserved in addObject
+          damped_x.push_back(0.0);
+          damped_x.push_back(0.0);
+          ++stats.mode_starts;
+        }
+        const size_t i = static_cast<size_t>(m.slot);
+        damped_x[2 * i] += hit.value.real();
+        damped_x[2 * i + 1] += hit.value.imag();
+      }
+    }
+    const uint64_t active = n_active + damped_mode.size();
+    stats.max_active_modes = std::max(stats.max_active_modes, active);
+  }
+
+  // Advance every active mode over local samples [a, b), accumulating into acc (float path) or
+  // mix (double path, damped modes).
+  void advance(size_t a, size_t b) {
+    if (a >= b) return;
+    if (n_active > 0) {
+      if (use_double) {
+        for (size_t i = 0; i < n_active; ++i) {
+          double yr = anc_re[i], yi = anc_im[i];
+          const double pr = dco_re[i], pi = dco_im[i];
+          for (size_t n = a; n < b; ++n) {
+            mix[n] += yr;
+            const double nr = pr * yr - pi * yi;
+            yi = pr * yi + pi * yr;
+            yr = nr;
+          }
+          anc_re[i] = yr;
+          anc_im[i] = yi;
+        }
+      } else {
+        kernels.advance(co_re.data(), co_im.data(), st_re.data(), st_im.data(),
+                        roundUp(n_active, detail::kKernelSlotAlign), acc.data(), a, b);
+      }
+    }
+    for (size_t r = 0; r < damped_mode.size(); ++r) {
+      const ModeInfo& m = modes[damped_mode[r]];
+      double x1 = damped_x[2 * r], v = damped_x[2 * r + 1];
+      for (size_t n = a; n < b; ++n) {
+        mix[n] += m.radiation * (-m.omega0 * x1 - m.damping_c * v);
+        const double n1 = m.phi[0] * x1 + m.phi[1] * v;
+        v = m.phi[2] * x1 + m.phi[3] * v;
+        x1 = n1;
+      }
+      damped_x[2 * r] = x1;
+      damped_x[2 * r + 1] = v;
+    }
+    stats.mode_samples += static_cast<uint64_t>(n_active + damped_mode.size()) * (b - a);
+  }
+
+  // Render local samples [s0, s1) of the block starting at block_start into mix[s0, s1).
+  void renderSegment(uint64_t block_start, size_t s0, size_t s1) {
+    std::fill(mix.begin() + static_cast<std::ptrdiff_t>(s0), mix.begin() + static_cast<std::ptrdiff_t>(s1), 0.0);
+    const size_t lanes = kernels.lanes;
+    if (!use_double) std::fill(acc.data() + s0 * lanes, acc.data() + s1 * lanes, 0.0f);
+    const uint64_t seg_begin = block_start + s0, seg_end = block_start + s1;
+
+    // Pulse transients (precomputed, exact) overlapping this segment.
+    for (size_t k = cursor; k < impacts.size() && impacts[k].start_sample < seg_end; ++k) {
+      const Impact& im = impacts[k];
+      const uint64_t from = std::max(im.start_sample, seg_begin), to = std::min(im.end_sample, seg_end);
+      for (uint64_t n = from; n < to; ++n) mix[n - block_start] += im.transient[n - im.start_sample];
+    }
+
+    // Sample-accurate injections: split the sample loop at each injection sample.
+    size_t a = s0;
+    while (a < s1) {
+      const uint64_t abs_a = block_start + a;
+      uint64_t next = seg_end;
+      for (size_t k = cursor; k < impacts.size() && impacts[k].start_sample < seg_end; ++k) {
+        Impact& im = impacts[k];
+        if (im.injected) continue;
+        if (im.end_sample <= abs_a) {
+          inject(im, a);
+          im.injected = true;
+        } else {
+          next = std::min(next, im.end_sample);
+        }
+      }
+      const size_t b = static_cast<size_t>(next - block_start);
+      advance(a, b);
+      a = b;
+    }
+    while (cursor < impacts.size() && impacts[cursor].injected) ++cursor;
+    if (!use_double) kernels.reduce(acc.data(), s0, s1, mix.data() + s0);
+  }
+
+  void endBlock() {
+    if (use_double) {
+      for (size_t i = 0; i < n_active; ++i) mag2[i] = anc_re[i] * anc_re[i] + anc_im[i] * anc_im[i];
+    } else if (n_active > 0) {
+      kernels.anchor(pb_re.data(), pb_im.data(), anc_re.data(), anc_im.data(), inj_re.data(), inj_im.data(),
+                     st_re.data(), st_im.data(), mag2.data(), n_active);
+    }
+    const double threshold2 = threshold * threshold;
+    for (size_t i = 0; i < n_active;) {
+      if (mag2[i] < threshold2) removeRinging(i);  // the moved-in slot is checked next
+      else ++i;
+    }
+    for (size_t r = 0; r < damped_mode.size();) {
+      if (dampedAmplitude(modes[damped_mode[r]], damped_x[2 * r], damped_x[2 * r + 1]) < threshold) removeDamped(r);
+      else ++r;
+    }
+  }
+
+  void render(float* out, size_t frames) {
+    DenormalGuard guard;
+    size_t done = 0;
+    while (done < frames) {
+      const uint64_t block_start = pos - pos % kBlock;
+      const size_t s0 = static_cast<size_t>(pos - block_start);
+      const size_t s1 = std::min(kBlock, s0 + (frames - done));
+      renderSegment(block_start, s0, s1);
+      for (size_t n = s0; n < s1; ++n) out[done + n - s0] = static_cast<float>(mix[n]);
+      done += s1 - s0;
+      pos = block_start + s1;
+      if (s1 == kBlock) endBlock();
+    }
+    stats.active_modes = n_active + damped_mode.size();
+  }
+};
+
+OscillatorBank::OscillatorBank(const SynthSettings& settings) : impl_(std::make_unique<Impl>(settings)) {}
+OscillatorBank::~OscillatorBank() = default;
+OscillatorBank::OscillatorBank(OscillatorBank&&) noexcept = default;
+OscillatorBank& OscillatorBank::operator=(OscillatorBank&&) noexcept = default;
+
+uint32_t OscillatorBank::addObject(const ModalObjectDesc& object) { return impl_->addObject(object); }
+void OscillatorBank::addImpact(const ImpactDesc& impact) { impl_->addImpact(impact); }
+void OscillatorBank::render(float* out, size_t frames) {
+  if (out && frames > 0) impl_->render(out, frames);
+}
+double OscillatorBank::time() const { return static_cast<double>(impl_->pos) / impl_->fs; }
+SynthStats OscillatorBank::stats() const { return impl_->stats; }
+const char* OscillatorBank::simdName() const { return impl_->use_double ? "double" : impl_->kernels.name; }
+
+}  // namespace strike

@@ -18,6 +18,10 @@
 
 namespace strike {
 
+/// Which oscillator kernel render() uses. Auto picks the widest the CPU supports at run time; a
+/// level the CPU lacks falls back to the next narrower one (see OscillatorBank::simdName()).
+enum class SimdLevel { Auto, Scalar, Avx2, Avx512 };
+
 struct SynthSettings {
   double sample_rate_hz = 48000.0;
   double min_freq_hz = 20.0;        ///< modes below are not synthesized
@@ -26,7 +30,13 @@ struct SynthSettings {
   /// a ringing mode goes to sleep. Default ~ -120 dB re full scale 1.0.
   double audibility_threshold = 1e-6;
   bool double_precision = false;    ///< reference path: double state, no SIMD (for accuracy studies)
+  SimdLevel simd = SimdLevel::Auto; ///< float path only; for tests and benchmarks
 };
+
+/// Samples between re-anchorings of the float oscillator state to its double-precision anchor
+/// (oscillator_bank.cpp). Blocks lie on a fixed grid from sample 0, so the output does not depend
+/// on how many frames each render() call asks for.
+constexpr size_t kSynthAnchorBlock = 128;
 
 /// The modes of one sounding object as the synth needs them.
 struct ModalObjectDesc {
@@ -34,7 +44,9 @@ struct ModalObjectDesc {
   double rayleigh_stiffness = 0.0;       ///< a1, s
   double rayleigh_mass = 0.0;            ///< a2, 1/s
   /// Per mode: output units per unit modal acceleration (m/s^2 * sqrt(kg)). Output sample =
-  /// sum_i radiation_weight_i * q_i''(t - delay). Build it with radiationWeights().
+  /// sum_i radiation_weight_i * q_i''(t - delay), where q'' excludes the feedthrough g_i f(t) of
+  /// the force pulse itself (see oscillator_bank.cpp). Build it with radiationWeights(). Empty
+  /// means 1 for every mode (output = modal acceleration); a shorter vector means 0 for the rest.
   std::vector<double> radiation_weight;
   double delay_s = 0.0;                  ///< propagation delay to the listener
 };
@@ -56,6 +68,7 @@ struct SynthStats {
   uint64_t mode_starts = 0;         ///< a sleeping mode woken by an impact
   uint64_t mode_samples = 0;        ///< work done: active modes x samples rendered
   uint64_t max_active_modes = 0;
+  uint64_t active_modes = 0;        ///< ringing now (after the last completed render call)
 };
 
 class OscillatorBank {
@@ -76,6 +89,8 @@ class OscillatorBank {
   /// Time of the next sample to be rendered, s.
   double time() const;
   SynthStats stats() const;
+  /// The kernel in use: "scalar", "avx2", "avx512" or "double".
+  const char* simdName() const;
 
  private:
   struct Impl;

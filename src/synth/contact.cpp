@@ -1,0 +1,134 @@
+// SPDX-License-Identifier: MIT
+// Contact: where an impulse lands on the surface (modal projection, O'Brien et al. 2002;
+// van den Doel & Pai 1998) and how long it lasts (Hertz theory, Johnson 1985).
+#include <cmath>
+#include <limits>
+
+#include "strike/synth.hpp"
+
+namespace strike {
+namespace {
+
+struct Barycentric {
+  double w[3];
+  double dist2;
+};
+
+// Closest point of triangle (a, b, c) to p, as barycentric weights (Ericson, Real-Time Collision
+// Detection, 2005, 5.1.5): every Voronoi region of the triangle handled, so degenerate (zero-area)
+// triangles give a point on an edge instead of NaN.
+Barycentric closestOnTriangle(const double* p, const double* a, const double* b, const double* c) {
+  auto sub = [](const double* u, const double* v, double* out) {
+    for (int i = 0; i < 3; ++i) out[i] = u[i] - v[i];
+  };
+  auto dot = [](const double* u, const double* v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+  double ab[3], ac[3], ap[3], bp[3], cp[3];
+  sub(b, a, ab);
+  sub(c, a, ac);
+  sub(p, a, ap);
+  Barycentric r{{1.0, 0.0, 0.0}, 0.0};
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) {
+    r.w[0] = 1, r.w[1] = 0, r.w[2] = 0;
+  } else {
+    sub(p, b, bp);
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    sub(p, c, cp);
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+    if (d3 >= 0.0 && d4 <= d3) {
+      r.w[0] = 0, r.w[1] = 1, r.w[2] = 0;
+    } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+      const double v = d1 / (d1 - d3);
+      r.w[0] = 1 - v, r.w[1] = v, r.w[2] = 0;
+    } else if (d6 >= 0.0 && d5 <= d6) {
+      r.w[0] = 0, r.w[1] = 0, r.w[2] = 1;
+    } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+      const double w = d2 / (d2 - d6);
+      r.w[0] = 1 - w, r.w[1] = 0, r.w[2] = w;
+    } else if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+      const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+      r.w[0] = 0, r.w[1] = 1 - w, r.w[2] = w;
+    } else {
+      const double denom = 1.0 / (va + vb + vc);
+      const double v = vb * denom, w = vc * denom;
+      r.w[0] = 1 - v - w, r.w[1] = v, r.w[2] = w;
+    }
+  }
+  double d2sum = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const double q = r.w[0] * a[i] + r.w[1] * b[i] + r.w[2] * c[i];
+    d2sum += (q - p[i]) * (q - p[i]);
+  }
+  r.dist2 = d2sum;
+  return r;
+}
+
+}  // namespace
+
+std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]) {
+  std::vector<double> g(bank.modeCount(), 0.0);
+  if (vertex >= bank.surfaceVertexCount() || bank.shapes.size() < bank.modeCount() * bank.surfaceVertexCount() * 3)
+    return g;
+  for (size_t m = 0; m < bank.modeCount(); ++m) {
+    const float* phi = bank.shapeAt(m, vertex);
+    g[m] = phi[0] * impulse[0] + phi[1] * impulse[1] + phi[2] * impulse[2];
+  }
+  return g;
+}
+
+std::vector<double> projectImpulse(const ModeBank& bank, const double point[3], const double impulse[3]) {
+  const size_t nv = bank.surfaceVertexCount();
+  std::vector<double> g(bank.modeCount(), 0.0);
+  if (nv == 0 || bank.shapes.size() < bank.modeCount() * nv * 3) return g;
+  // Brute force over triangles: a strike is projected once per contact event, and banks have a
+  // few thousand surface triangles at most.
+  const double* pos = bank.surface_positions.data();
+  double best = std::numeric_limits<double>::infinity();
+  uint32_t best_v[3] = {0, 0, 0};
+  double best_w[3] = {1.0, 0.0, 0.0};
+  for (size_t t = 0; t + 2 < bank.surface_triangles.size(); t += 3) {
+    const uint32_t* tri = &bank.surface_triangles[t];
+    if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) continue;
+    const Barycentric b = closestOnTriangle(point, pos + 3 * tri[0], pos + 3 * tri[1], pos + 3 * tri[2]);
+    if (b.dist2 < best) {
+      best = b.dist2;
+      for (int i = 0; i < 3; ++i) best_v[i] = tri[i], best_w[i] = b.w[i];
+    }
+  }
+  if (!(best < std::numeric_limits<double>::infinity())) {
+    // No triangles: nearest vertex.
+    for (size_t v = 0; v < nv; ++v) {
+      double d2 = 0.0;
+      for (int i = 0; i < 3; ++i) d2 += (pos[3 * v + i] - point[i]) * (pos[3 * v + i] - point[i]);
+      if (d2 < best) best = d2, best_v[0] = static_cast<uint32_t>(v);
+    }
+    return projectImpulseAtVertex(bank, best_v[0], impulse);
+  }
+  for (size_t m = 0; m < bank.modeCount(); ++m) {
+    double s = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const float* phi = bank.shapeAt(m, best_v[k]);
+      s += best_w[k] * (phi[0] * impulse[0] + phi[1] * impulse[1] + phi[2] * impulse[2]);
+    }
+    g[m] = s;
+  }
+  return g;
+}
+
+double hertzContactDuration(double youngs1_pa, double poisson1, double radius1_m, double mass1_kg,
+                            double youngs2_pa, double poisson2, double radius2_m, double mass2_kg,
+                            double normal_speed_m_s) {
+  // Johnson 1985, eq. 11.24: duration of an elastic Hertzian impact, t = 2.868 (m*^2/(R* E*^2 v))^(1/5).
+  // 1/x of an infinite radius or mass is 0 (a half-space, or an immovable body).
+  const double inv_e = (1.0 - poisson1 * poisson1) / youngs1_pa + (1.0 - poisson2 * poisson2) / youngs2_pa;
+  const double inv_r = 1.0 / radius1_m + 1.0 / radius2_m;
+  const double inv_m = 1.0 / mass1_kg + 1.0 / mass2_kg;
+  if (!(inv_e > 0.0) || !(inv_r > 0.0) || !(inv_m > 0.0) || !(normal_speed_m_s > 0.0) ||
+      !std::isfinite(inv_e) || !std::isfinite(inv_r) || !std::isfinite(inv_m) || !std::isfinite(normal_speed_m_s))
+    return 0.0;  // no contact, or nonsense input: the caller gets an ideal impulse
+  const double m_star = 1.0 / inv_m, r_star = 1.0 / inv_r, e_star = 1.0 / inv_e;
+  return 2.868 * std::pow(m_star * m_star / (r_star * e_star * e_star * normal_speed_m_s), 0.2);
+}
+
+}  // namespace strike

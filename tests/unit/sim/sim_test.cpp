@@ -1,0 +1,501 @@
+// SPDX-License-Identifier: MIT
+// Tests of the Bullet world and contact events (strike_bullet). Bodies are built by hand: boxes
+// (8 vertices, 12 triangles, exact mass properties), an icosahedron and an open-top tray.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "strike/sim.hpp"
+
+namespace strike {
+namespace {
+
+using Vec3 = std::array<double, 3>;
+using Mat3 = std::array<double, 9>;  // row-major
+
+constexpr double kG = 9.81;
+
+Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
+Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+Vec3 mul(const Mat3& m, const Vec3& v) {
+  return {m[0] * v[0] + m[1] * v[1] + m[2] * v[2], m[3] * v[0] + m[4] * v[1] + m[5] * v[2],
+          m[6] * v[0] + m[7] * v[1] + m[8] * v[2]};
+}
+Vec3 mulT(const Mat3& m, const Vec3& v) {
+  return {m[0] * v[0] + m[3] * v[1] + m[6] * v[2], m[1] * v[0] + m[4] * v[1] + m[7] * v[2],
+          m[2] * v[0] + m[5] * v[1] + m[8] * v[2]};
+}
+Mat3 identity() { return {1, 0, 0, 0, 1, 0, 0, 0, 1}; }
+
+/// Rotation matrix of angle about a (not necessarily unit) axis (Rodrigues).
+Mat3 rotation(Vec3 axis, double angle) {
+  const double n = std::sqrt(dot(axis, axis));
+  for (double& a : axis) a /= n;
+  const double c = std::cos(angle), s = std::sin(angle), t = 1 - c;
+  const double x = axis[0], y = axis[1], z = axis[2];
+  return {t * x * x + c,     t * x * y - s * z, t * x * z + s * y,  //
+          t * x * y + s * z, t * y * y + c,     t * y * z - s * x,  //
+          t * x * z - s * y, t * y * z + s * x, t * z * z + c};
+}
+std::array<double, 4> quaternion(Vec3 axis, double angle) {
+  const double n = std::sqrt(dot(axis, axis));
+  const double s = std::sin(angle / 2) / n;
+  return {std::cos(angle / 2), axis[0] * s, axis[1] * s, axis[2] * s};
+}
+
+/// Orient every triangle of a convex mesh outwards (normal away from `inside`).
+void orientOutward(SimBodyDesc& body, const Vec3& inside) {
+  auto vertex = [&](uint32_t i) {
+    return Vec3{body.surface_positions[3 * i], body.surface_positions[3 * i + 1], body.surface_positions[3 * i + 2]};
+  };
+  for (size_t t = 0; t < body.surface_triangles.size(); t += 3) {
+    const Vec3 a = vertex(body.surface_triangles[t]), b = vertex(body.surface_triangles[t + 1]),
+               c = vertex(body.surface_triangles[t + 2]);
+    if (dot(cross(sub(b, a), sub(c, a)), sub(a, inside)) < 0) {
+      std::swap(body.surface_triangles[t + 1], body.surface_triangles[t + 2]);
+    }
+  }
+}
+
+/// A solid box of size l with its centre at `offset` and its edges along the columns of `axes`,
+/// all in the mesh frame; exact mass properties for uniform density.
+SimBodyDesc makeBox(const std::string& name, Vec3 l, double mass_kg, Vec3 offset = {0, 0, 0},
+                    Mat3 axes = identity()) {
+  SimBodyDesc body;
+  body.name = name;
+  for (int v = 0; v < 8; ++v) {
+    const Vec3 local{(v & 1 ? 0.5 : -0.5) * l[0], (v & 2 ? 0.5 : -0.5) * l[1], (v & 4 ? 0.5 : -0.5) * l[2]};
+    const Vec3 p = add(offset, mul(axes, local));
+    body.surface_positions.insert(body.surface_positions.end(), p.begin(), p.end());
+  }
+  const uint32_t quads[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+  for (const auto& q : quads) {
+    body.surface_triangles.insert(body.surface_triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+  }
+  orientOutward(body, offset);
+  body.mass_kg = mass_kg;
+  body.centre_m = offset;
+  const Vec3 d{mass_kg / 12 * (l[1] * l[1] + l[2] * l[2]), mass_kg / 12 * (l[0] * l[0] + l[2] * l[2]),
+               mass_kg / 12 * (l[0] * l[0] + l[1] * l[1])};
+  // I_mesh = A diag(d) A^T
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      double s = 0;
+      for (int k = 0; k < 3; ++k) s += axes[3 * r + k] * d[k] * axes[3 * c + k];
+      body.inertia_kg_m2[3 * r + c] = s;
+    }
+  }
+  return body;
+}
+
+/// Icosahedron of circumradius r centred at the mesh origin, with a solid sphere's inertia.
+SimBodyDesc makeBall(const std::string& name, double r, double mass_kg) {
+  SimBodyDesc body;
+  body.name = name;
+  const double phi = (1 + std::sqrt(5.0)) / 2, s = r / std::sqrt(1 + phi * phi);
+  const double v[12][3] = {{-1, phi, 0}, {1, phi, 0}, {-1, -phi, 0}, {1, -phi, 0}, {0, -1, phi}, {0, 1, phi},
+                           {0, -1, -phi}, {0, 1, -phi}, {phi, 0, -1}, {phi, 0, 1}, {-phi, 0, -1}, {-phi, 0, 1}};
+  for (const auto& p : v) body.surface_positions.insert(body.surface_positions.end(), {s * p[0], s * p[1], s * p[2]});
+  body.surface_triangles = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7,
+                            6, 7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10,
+                            8, 6, 7, 9, 8, 1};
+  orientOutward(body, {0, 0, 0});
+  body.mass_kg = mass_kg;
+  const double i = 0.4 * mass_kg * r * r;
+  body.inertia_kg_m2 = {i, 0, 0, 0, i, 0, 0, 0, i};
+  return body;
+}
+
+/// An open-top tray: outer a x a x h, walls and floor t thick, mesh origin at the centre of its
+/// bottom face. A closed, watertight 16-vertex / 28-triangle surface (CCW from outside).
+SimBodyDesc makeTray(const std::string& name, double a, double h, double t, double density) {
+  SimBodyDesc body;
+  body.name = name;
+  const double o = a / 2, b = a / 2 - t;
+  const double pts[16][3] = {{-o, -o, 0}, {o, -o, 0}, {o, o, 0}, {-o, o, 0},  // outer bottom
+                             {-o, -o, h}, {o, -o, h}, {o, o, h}, {-o, o, h},  // outer rim
+                             {-b, -b, h}, {b, -b, h}, {b, b, h}, {-b, b, h},  // inner rim
+                             {-b, -b, t}, {b, -b, t}, {b, b, t}, {-b, b, t}}; // inner floor
+  for (const auto& p : pts) body.surface_positions.insert(body.surface_positions.end(), {p[0], p[1], p[2]});
+  const uint32_t quads[14][4] = {{0, 3, 2, 1},                                              // bottom
+                                 {0, 1, 5, 4},     {1, 2, 6, 5},   {2, 3, 7, 6},   {3, 0, 4, 7},      // outer walls
+                                 {4, 5, 9, 8},     {5, 6, 10, 9},  {6, 7, 11, 10}, {7, 4, 8, 11},     // rim
+                                 {12, 8, 9, 13},   {13, 9, 10, 14}, {14, 10, 11, 15}, {15, 11, 8, 12},  // inner walls
+                                 {12, 13, 14, 15}};                                         // floor
+  for (const auto& q : quads) {
+    body.surface_triangles.insert(body.surface_triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+  }
+  // Mass properties: the solid outer box minus the cavity, by the parallel-axis theorem.
+  struct Part {
+    double m;
+    Vec3 c, l;
+  };
+  const Part outer{density * a * a * h, {0, 0, h / 2}, {a, a, h}};
+  const Part cavity{-density * (2 * b) * (2 * b) * (h - t), {0, 0, (h + t) / 2}, {2 * b, 2 * b, h - t}};
+  const double m = outer.m + cavity.m;
+  const Vec3 com{0, 0, (outer.m * outer.c[2] + cavity.m * cavity.c[2]) / m};
+  Mat3 inertia{};
+  for (const Part& p : {outer, cavity}) {
+    const Vec3 d = sub(p.c, com);
+    const Vec3 own{p.m / 12 * (p.l[1] * p.l[1] + p.l[2] * p.l[2]), p.m / 12 * (p.l[0] * p.l[0] + p.l[2] * p.l[2]),
+                   p.m / 12 * (p.l[0] * p.l[0] + p.l[1] * p.l[1])};
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        inertia[3 * r + c] += (r == c ? own[r] + p.m * dot(d, d) : 0.0) - p.m * d[r] * d[c];
+      }
+    }
+  }
+  body.mass_kg = m;
+  body.centre_m = com;
+  body.inertia_kg_m2 = inertia;
+  return body;
+}
+
+SimSettings settingsFor(double duration_s) {
+  SimSettings s;
+  s.duration_s = duration_s;
+  s.gravity_m_s2 = {0, 0, -kG};
+  return s;
+}
+
+SimResult run(const std::vector<SimBodyDesc>& bodies, const SimSettings& settings, const char* label) {
+  Result<SimResult> r = simulate(bodies, settings);
+  EXPECT_TRUE(r.ok()) << label << ": " << r.error().message;
+  if (!r.ok()) return {};
+  std::printf("[ scene    ] %-28s %6llu substeps, %6zu events, %.3f s wall\n", label,
+              static_cast<unsigned long long>(r->substeps), r->events.size(), r->simulate_seconds);
+  return std::move(r).value();
+}
+
+/// Energy may only go down: never above its initial value by more than 1% of |E0| (plus a
+/// microjoule floor for scenes whose energy is near zero).
+void expectNoEnergyGain(const SimResult& r, const char* label) {
+  ASSERT_FALSE(r.energy_trace_j.empty());
+  const double e0 = r.energy_trace_j.front();
+  const double e_max = *std::max_element(r.energy_trace_j.begin(), r.energy_trace_j.end());
+  EXPECT_LE(e_max, e0 + 0.01 * std::abs(e0) + 1e-6) << label << ": E0 = " << e0 << " J";
+  for (double e : r.energy_trace_j) ASSERT_TRUE(std::isfinite(e)) << label;
+}
+
+TEST(SimFreeFall, HitsTheGroundOnTimeWithTheRightSpeed) {
+  const double h = 1.0, lz = 0.02;
+  SimBodyDesc box = makeBox("box", {0.04, 0.03, lz}, 0.1);
+  box.position_m = {0, 0, h + lz / 2};  // bottom face 1 m above the ground
+  SimSettings settings = settingsFor(0.6);
+  std::vector<double> fractions;
+  settings.progress = [&](std::string_view phase, double f) {
+    EXPECT_EQ(phase, "simulate");
+    fractions.push_back(f);
+  };
+  const SimResult r = run({box}, settings, "free fall 1 m");
+  ASSERT_FALSE(r.events.empty());
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+  EXPECT_EQ(r.substeps, 600u);
+  EXPECT_EQ(r.energy_trace_j.size(), 601u);
+  EXPECT_EQ(r.shape_used[0], SimBodyDesc::Shape::ConvexHull);
+
+  const ContactEvent& first = r.events.front();
+  const double t_hit = std::sqrt(2 * h / kG);
+  EXPECT_NEAR(first.time_s, t_hit, 2 * settings.substep_s);
+  EXPECT_NEAR(first.normal_speed_m_s, std::sqrt(2 * kG * h), 0.02 * std::sqrt(2 * kG * h));
+  EXPECT_TRUE(first.new_contact);
+  EXPECT_EQ(first.body_a, 0u);
+  EXPECT_EQ(first.body_b, kGroundBody);
+  EXPECT_NEAR(first.normal_world[2], 1.0, 1e-9);
+  // The box is not rotated, so its mesh frame is the world's: the impulse points up.
+  EXPECT_GT(first.impulse_on_a_mesh[2], 0.0);
+  EXPECT_NEAR(first.impulse_on_a_mesh[2], first.normal_impulse_n_s, 1e-12);
+  EXPECT_NEAR(first.impulse_on_b_mesh[2], -first.normal_impulse_n_s, 1e-12);
+  EXPECT_NEAR(first.point_world[2], 0.0, 1e-3);
+  // Every first-substep event of the impact is new; the impacts sum to about m (1 + e) v.
+  double total_z = 0.0;
+  for (const ContactEvent& e : r.events) {
+    if (e.time_s <= first.time_s + 5e-3) total_z += e.impulse_on_a_mesh[2];
+  }
+  EXPECT_GT(total_z, 0.1 * std::sqrt(2 * kG * h));  // at least m v: the box is stopped
+  expectNoEnergyGain(r, "free fall");
+}
+
+TEST(SimResting, ConstantForceAndNoNewContacts) {
+  const double m = 1.0, dt = 1e-3;
+  SimBodyDesc box = makeBox("block", {0.1, 0.1, 0.05}, m);
+  box.position_m = {0, 0, 0.025};
+  const SimResult r = run({box}, settingsFor(1.0), "resting box");
+  const double t_settled = 0.2;
+  std::map<long, double> per_step;
+  for (const ContactEvent& e : r.events) {
+    if (e.time_s < t_settled) continue;
+    EXPECT_FALSE(e.new_contact) << "at t = " << e.time_s;
+    EXPECT_EQ(e.body_b, kGroundBody);
+    per_step[std::lround(e.time_s / dt)] += e.normal_impulse_n_s;
+  }
+  EXPECT_EQ(per_step.size(), 800u);  // a contact force in every substep
+  for (const auto& [step, sum] : per_step) {
+    EXPECT_NEAR(sum, m * kG * dt, 0.01 * m * kG * dt) << "step " << step;
+  }
+  EXPECT_NEAR(r.final_position_m[0][2], 0.025, 1e-3);
+  expectNoEnergyGain(r, "resting");
+}
+
+TEST(SimResting, SleepingBodyIsQuiet) {
+  SimBodyDesc box = makeBox("block", {0.1, 0.1, 0.05}, 1.0);
+  box.position_m = {0, 0, 0.03};  // a 5 mm drop, then rest
+  const SimResult r = run({box}, settingsFor(4.0), "settling box, 4 s");
+  ASSERT_FALSE(r.events.empty());
+  EXPECT_LT(r.events.back().time_s, 3.5) << "a resting body should fall asleep and stop reporting";
+}
+
+TEST(SimMeshFrame, PointsLieOnTheBoxSurfaceInMeshCoordinates) {
+  const Vec3 l{0.06, 0.04, 0.02}, offset{0.1, -0.05, 0.2};
+  const Mat3 axes = rotation({1, 1, 0}, 0.5);  // box axes in the mesh frame: inertia not diagonal
+  SimBodyDesc box = makeBox("tilted", l, 0.2, offset, axes);
+  const Vec3 axis{0.3, -0.5, 0.8};
+  const double angle = 0.7;
+  box.orientation_wxyz = quaternion(axis, angle);
+  const Mat3 world_from_mesh = rotation(axis, angle);
+  box.position_m = sub({0, 0, 0.3}, mul(world_from_mesh, offset));  // centre 0.3 m up
+  const SimResult r = run({box}, settingsFor(1.0), "tilted off-centre box");
+  ASSERT_FALSE(r.events.empty());
+  const double tolerance = 2 * r.collision_margin_m[0] + 1e-6;
+  int count = 0;
+  for (const ContactEvent& e : r.events) {
+    ASSERT_EQ(e.body_b, kGroundBody);
+    // In the box's own axes the point must be inside the box and on one of its faces.
+    const Vec3 local = mulT(axes, sub(e.point_a_mesh, offset));
+    double gap = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_LE(std::abs(local[k]), l[k] / 2 + tolerance) << "t = " << e.time_s;
+      gap = std::min(gap, l[k] / 2 - std::abs(local[k]));
+    }
+    EXPECT_LE(gap, tolerance) << "t = " << e.time_s << ": point is " << gap << " m inside the surface";
+    // The mesh-frame impulse, rotated back to the world, has the normal impulse along +z (the
+    // box has not turned yet on its first substep of contact); its length is frame-free.
+    const double n = e.normal_impulse_n_s, f = e.friction_impulse_n_s;
+    EXPECT_NEAR(std::sqrt(dot(e.impulse_on_a_mesh, e.impulse_on_a_mesh)), std::sqrt(n * n + f * f), 1e-9 * (n + f));
+    if (e.time_s == r.events.front().time_s) {
+      const Vec3 j_world = mul(world_from_mesh, e.impulse_on_a_mesh);
+      EXPECT_NEAR(j_world[2], n, 1e-9 * n);
+      EXPECT_TRUE(e.new_contact);
+    }
+    ++count;
+  }
+  EXPECT_GT(count, 10);
+  expectNoEnergyGain(r, "tilted box");
+}
+
+TEST(SimEnergy, HeavyBoxOnLightBox) {
+  SimBodyDesc light = makeBox("light", {0.1, 0.1, 0.05}, 0.1);
+  light.position_m = {0, 0, 0.025};
+  SimBodyDesc heavy = makeBox("heavy", {0.1, 0.1, 0.05}, 100.0);
+  heavy.position_m = {0.01, 0, 0.05 + 0.025 + 0.2};
+  const SimResult r = run({light, heavy}, settingsFor(1.5), "heavy on light (1000:1)");
+  expectNoEnergyGain(r, "heavy on light");
+  EXPECT_GT(r.final_position_m[0][2], 0.0);
+  EXPECT_GT(r.final_position_m[1][2], r.final_position_m[0][2] + 0.04) << "heavy box sank into the light one";
+  bool pair_contact = false;
+  for (const ContactEvent& e : r.events) pair_contact |= (e.body_a == 0 && e.body_b == 1);
+  EXPECT_TRUE(pair_contact);
+}
+
+TEST(SimEnergy, StackAtRestStaysAtRest) {
+  std::vector<SimBodyDesc> stack;
+  for (int k = 0; k < 4; ++k) {
+    SimBodyDesc box = makeBox("stack" + std::to_string(k), {0.1, 0.1, 0.05}, 1.0);
+    box.position_m = {0, 0, 0.025 + 0.05 * k};
+    stack.push_back(box);
+  }
+  const SimResult r = run(stack, settingsFor(2.0), "stack of 4");
+  expectNoEnergyGain(r, "stack");
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_NEAR(r.final_position_m[size_t(k)][2], 0.025 + 0.05 * k, 2e-3) << "box " << k;
+    EXPECT_NEAR(r.final_position_m[size_t(k)][0], 0.0, 2e-3) << "box " << k;
+  }
+}
+
+class SimTunnelling : public ::testing::TestWithParam<double> {};
+
+TEST_P(SimTunnelling, FastBoxHitsTheGround) {
+  const double speed = GetParam();
+  SimBodyDesc box = makeBox("pellet", {0.02, 0.02, 0.02}, 0.008);
+  box.position_m = {0, 0, 0.5};
+  box.velocity_m_s = {0, 0, -speed};
+  SimSettings settings = settingsFor(0.3);
+  const SimResult r = run({box}, settings, speed > 60 ? "pellet at 100 m/s" : "pellet at 50 m/s");
+  ASSERT_FALSE(r.events.empty());
+  const double impact = std::sqrt(speed * speed + 2 * kG * 0.49);
+  double best = 0.0;
+  for (const ContactEvent& e : r.events) {
+    EXPECT_EQ(e.body_b, kGroundBody);
+    best = std::max(best, e.normal_speed_m_s);
+  }
+  EXPECT_NEAR(best, impact, 0.03 * impact);
+  EXPECT_TRUE(r.events.front().new_contact);
+  EXPECT_NEAR(r.events.front().normal_speed_m_s, impact, 0.03 * impact);
+  EXPECT_GT(r.final_position_m[0][2], 0.0) << "tunnelled through the ground";
+  expectNoEnergyGain(r, "pellet");
+}
+
+INSTANTIATE_TEST_SUITE_P(Speeds, SimTunnelling, ::testing::Values(50.0, 100.0));
+
+void expectBallInTray(bool tray_static) {
+  SimBodyDesc tray = makeTray("tray", 0.2, 0.06, 0.01, 1000.0);
+  tray.is_static = tray_static;
+  SimBodyDesc ball = makeBall("ball", 0.02, 0.05);
+  ball.position_m = {0.02, -0.01, 0.3};
+  ball.restitution = 0.3;
+  const SimResult r = run({tray, ball}, settingsFor(1.5), tray_static ? "ball into static tray" : "ball into GImpact tray");
+  EXPECT_EQ(r.shape_used[0], SimBodyDesc::Shape::Concave);
+  EXPECT_EQ(r.shape_used[1], SimBodyDesc::Shape::ConvexHull);
+  const Vec3 t = r.final_position_m[0], b = r.final_position_m[1];
+  EXPECT_NEAR(t[2], 0.0, 2e-3) << "tray left the ground";
+  EXPECT_LT(std::abs(b[0] - t[0]), 0.09);
+  EXPECT_LT(std::abs(b[1] - t[1]), 0.09);
+  EXPECT_GT(b[2], t[2] + 0.01) << "ball is below the tray's floor";
+  EXPECT_LT(b[2], t[2] + 0.06) << "ball is not inside the tray";
+  int pair_events = 0;
+  bool pair_new = false;
+  for (const ContactEvent& e : r.events) {
+    if (e.body_a == 0 && e.body_b == 1) {
+      ++pair_events;
+      pair_new |= e.new_contact;
+    }
+  }
+  EXPECT_GT(pair_events, 0);
+  EXPECT_TRUE(pair_new);
+  if (!tray_static) expectNoEnergyGain(r, "tray");
+}
+
+TEST(SimConcave, BallLandsInsideDynamicTray) { expectBallInTray(false); }
+TEST(SimConcave, BallLandsInsideStaticTray) { expectBallInTray(true); }
+
+TEST(SimShape, AutoPicksHullForConvexAndConcaveForTray) {
+  SimBodyDesc box = makeBox("box", {0.1, 0.05, 0.02}, 0.5);
+  box.position_m = {0, 0, 0.5};
+  SimBodyDesc tray = makeTray("tray", 0.2, 0.06, 0.01, 1000.0);
+  tray.position_m = {1, 0, 0};
+  const SimResult r = run({box, tray}, settingsFor(0.01), "shape choice");
+  EXPECT_EQ(r.shape_used[0], SimBodyDesc::Shape::ConvexHull);
+  EXPECT_EQ(r.shape_used[1], SimBodyDesc::Shape::Concave);
+  EXPECT_GT(r.collision_margin_m[0], 0.0);
+  EXPECT_LE(r.collision_margin_m[0], 0.02 * 0.02 + 1e-12);  // 2% of the thinnest extent
+}
+
+std::vector<SimBodyDesc> busyScene() {
+  std::vector<SimBodyDesc> bodies;
+  for (int k = 0; k < 3; ++k) {
+    SimBodyDesc box = makeBox("stack" + std::to_string(k), {0.1, 0.1, 0.05}, 1.0);
+    box.position_m = {0, 0, 0.025 + 0.05 * k};
+    bodies.push_back(box);
+  }
+  SimBodyDesc thrown = makeBox("thrown", {0.06, 0.04, 0.02}, 0.2, {0.01, 0, 0}, rotation({0, 1, 1}, 0.3));
+  thrown.orientation_wxyz = quaternion({1, 2, 3}, 0.8);
+  thrown.position_m = {-0.3, 0.02, 0.25};
+  thrown.velocity_m_s = {3, 0, 0};
+  thrown.angular_velocity_rad_s = {0, 5, 2};
+  bodies.push_back(thrown);
+  return bodies;
+}
+
+TEST(SimDeterminism, TwoRunsGiveIdenticalEvents) {
+  const auto bodies = busyScene();
+  const SimResult a = run(bodies, settingsFor(1.0), "busy scene, run 1");
+  const SimResult b = run(bodies, settingsFor(1.0), "busy scene, run 2");
+  ASSERT_EQ(a.events.size(), b.events.size());
+  ASSERT_GT(a.events.size(), 100u);
+  for (size_t k = 0; k < a.events.size(); ++k) {
+    const ContactEvent& x = a.events[k];
+    const ContactEvent& y = b.events[k];
+    ASSERT_TRUE(x.time_s == y.time_s && x.body_a == y.body_a && x.body_b == y.body_b &&
+                x.point_a_mesh == y.point_a_mesh && x.point_b_mesh == y.point_b_mesh &&
+                x.impulse_on_a_mesh == y.impulse_on_a_mesh && x.impulse_on_b_mesh == y.impulse_on_b_mesh &&
+                x.point_world == y.point_world && x.normal_world == y.normal_world &&
+                x.normal_impulse_n_s == y.normal_impulse_n_s && x.friction_impulse_n_s == y.friction_impulse_n_s &&
+                x.normal_speed_m_s == y.normal_speed_m_s && x.new_contact == y.new_contact)
+        << "event " << k << " differs";
+    if (k > 0) {
+      ASSERT_LE(a.events[k - 1].time_s, x.time_s) << "events out of time order";
+    }
+  }
+  EXPECT_EQ(a.energy_trace_j, b.energy_trace_j);
+  EXPECT_EQ(a.final_position_m, b.final_position_m);
+  // The impulses on a and b are equal and opposite (compare in the world for a ground contact).
+  for (const ContactEvent& e : a.events) {
+    EXPECT_GE(e.normal_speed_m_s, 0.0);
+    EXPECT_NEAR(std::sqrt(dot(e.normal_world, e.normal_world)), 1.0, 1e-9);
+  }
+}
+
+TEST(SimBadInput, ErrorsNameTheBodyFieldAndValue) {
+  SimBodyDesc box = makeBox("cube", {0.05, 0.05, 0.05}, 0.1);
+  box.position_m = {0, 0, 0.5};
+  {
+    SimBodyDesc bad = box;
+    bad.velocity_m_s[1] = std::nan("");
+    auto r = simulate({box, bad}, settingsFor(0.1));
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.error().kind, ErrorKind::BadInput);
+    EXPECT_NE(r.error().message.find("body 1 \"cube\""), std::string::npos) << r.error().message;
+    EXPECT_NE(r.error().message.find("velocity_m_s[1] = nan"), std::string::npos) << r.error().message;
+  }
+  {
+    SimBodyDesc bad = box;
+    bad.name = "weightless";
+    bad.mass_kg = 0.0;
+    auto r = simulate({bad}, settingsFor(0.1));
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.error().kind, ErrorKind::BadInput);
+    EXPECT_NE(r.error().message.find("body 0 \"weightless\""), std::string::npos) << r.error().message;
+    EXPECT_NE(r.error().message.find("mass_kg = 0"), std::string::npos) << r.error().message;
+  }
+  {
+    SimSettings settings = settingsFor(0.1);
+    settings.substep_s = 2e-3;
+    auto r = simulate({box}, settings);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("substep_s = 0.002"), std::string::npos) << r.error().message;
+  }
+  {
+    SimBodyDesc bad = box;
+    bad.orientation_wxyz = {1, 0.1, 0, 0};
+    auto r = simulate({bad}, settingsFor(0.1));
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("orientation_wxyz"), std::string::npos) << r.error().message;
+    bad.orientation_wxyz = {1.0004, 0, 0, 0};  // close enough: normalized
+    EXPECT_TRUE(simulate({bad}, settingsFor(0.01)).ok());
+  }
+  {
+    SimBodyDesc bad = box;
+    bad.surface_triangles.clear();
+    auto r = simulate({bad}, settingsFor(0.1));
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("empty geometry"), std::string::npos) << r.error().message;
+  }
+  {
+    SimSettings settings = settingsFor(0.0);
+    auto r = simulate({box}, settings);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("duration_s = 0"), std::string::npos) << r.error().message;
+  }
+  {
+    SimBodyDesc bad = box;
+    bad.inertia_kg_m2[4] = std::numeric_limits<double>::infinity();
+    auto r = simulate({bad}, settingsFor(0.1));
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("inertia_kg_m2[4] = inf"), std::string::npos) << r.error().message;
+  }
+}
+
+}  // namespace
+}  // namespace strike

@@ -1,1 +1,598 @@
 // SPDX-License-Identifier: MIT
+// Lowest elastic modes of a free solid: K x = lambda M x by shift-invert Lanczos.
+//
+// The operator is OP = (K - sigma M)^{-1} M with a NEGATIVE shift sigma, so K - sigma M is
+// symmetric positive definite even though a free body's K is singular (6 rigid modes), and a
+// supernodal Cholesky (CHOLMOD) can factor it without pivoting. ARPACK's implicitly restarted
+// Lanczos (Lehoucq, Sorensen & Yang, "ARPACK Users' Guide", SIAM 1998, sec. 3.2.3, mode 3)
+// finds the largest |mu| of OP, mu = 1 / (lambda - sigma), i.e. the lambdas nearest sigma: the
+// rigid modes and then the lowest elastic modes (Ericsson & Ruhe, Math. Comp. 35, 1980).
+//
+// Pipeline:
+//  1. sigma from the problem's own scale (diag K / diag M), so units never matter;
+//  2. one CHOLMOD supernodal factorization (METIS ordering), reused for every solve;
+//  3. ARPACK with a loose tolerance in chunks; chunks after the first work on the operator
+//     deflated against the modes already found (M-orthogonal projection), which is how the
+//     solve grows when the first request did not reach the cut-off;
+//  4. a block refinement: one multi-right-hand-side solve Y = OP X of all kept vectors at once
+//     (BLAS 3 in CHOLMOD, the factor is streamed from memory once instead of once per vector)
+//     followed by Rayleigh-Ritz on [X Y] ... the subspace-iteration step of Bathe & Wilson,
+//     "Numerical Methods in Finite Element Analysis" (1976), ch. 10; it restores full accuracy
+//     and exact M-orthonormality, and the residuals are verified afterwards.
+#include <arpack/arpack.h>
+#include <cholmod.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <new>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "strike/modal.hpp"
+
+namespace strike {
+
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double>;
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Stage sizes (measured on box meshes, tests/bench/modal): ARPACK's single-vector solves are
+// memory bound, so it handles only the first few modes; block solves of 32 right-hand sides
+// cost ~1/3 as much per vector as single ones.
+constexpr int kArpackModes = 20;
+constexpr int kBlockSize = 32;
+
+constexpr double kTwoPi = 6.283185307179586476925286766559;
+
+/// RAII owner of a CHOLMOD workspace and factor of an SPD matrix.
+class CholmodSolver {
+ public:
+  CholmodSolver() {
+    cholmod_start(&common_);
+    common_.print = 0;  // we report errors ourselves, on stderr, through Status
+    common_.supernodal = CHOLMOD_SUPERNODAL;
+  }
+  ~CholmodSolver() {
+    if (factor_ != nullptr) cholmod_free_factor(&factor_, &common_);
+    if (x_ != nullptr) cholmod_free_dense(&x_, &common_);
+    if (y_ != nullptr) cholmod_free_dense(&y_, &common_);
+    if (e_ != nullptr) cholmod_free_dense(&e_, &common_);
+    cholmod_finish(&common_);
+  }
+  CholmodSolver(const CholmodSolver&) = delete;
+  CholmodSolver& operator=(const CholmodSolver&) = delete;
+
+  /// Factors A (both triangles stored; CHOLMOD reads the lower one).
+  Status factorize(const SpMat& A) {
+    cholmod_sparse view{};
+    view.nrow = static_cast<size_t>(A.rows());
+    view.ncol = static_cast<size_t>(A.cols());
+    view.nzmax = static_cast<size_t>(A.nonZeros());
+    view.p = const_cast<int*>(A.outerIndexPtr());
+    view.i = const_cast<int*>(A.innerIndexPtr());
+    view.x = const_cast<double*>(A.valuePtr());
+    view.stype = -1;
+    view.itype = CHOLMOD_INT;
+    view.xtype = CHOLMOD_REAL;
+    view.dtype = CHOLMOD_DOUBLE;
+    view.sorted = 1;
+    view.packed = 1;
+    // METIS nested dissection gives less fill than AMD on 3D solid meshes (George, SIAM J.
+    // Numer. Anal. 10, 1973); the factor's size is what every solve streams from memory.
+    common_.nmethods = 1;
+    common_.method[0].ordering = CHOLMOD_METIS;
+    common_.postorder = 1;
+    factor_ = cholmod_analyze(&view, &common_);
+    if (factor_ == nullptr) return internalError("eigensolver: CHOLMOD analysis failed (status " + std::to_string(common_.status) + ")");
+    const int ok = cholmod_factorize(&view, factor_, &common_);
+    if (common_.status == CHOLMOD_NOT_POSDEF || factor_->minor < factor_->n) {
+      std::ostringstream s;
+      s << "eigensolver: K - sigma M is not positive definite (pivot " << factor_->minor << " of "
+        << factor_->n << "): the mass matrix is singular or the mesh has degenerate or inverted elements";
+      return internalError(s.str());
+    }
+    if (!ok || common_.status < CHOLMOD_OK) {
+      if (common_.status == CHOLMOD_OUT_OF_MEMORY) throw std::bad_alloc();
+      return internalError("eigensolver: CHOLMOD factorization failed (status " + std::to_string(common_.status) + ")");
+    }
+    return {};
+  }
+
+  double factorNonZeros() const { return common_.lnz; }
+  double solve_seconds = 0.0;
+
+  /// x = A^{-1} b for ncols right-hand sides stored column-major with leading dimension n.
+  bool solve(const double* b, double* x, int ncols) {
+    cholmod_dense rhs{};
+    rhs.nrow = factor_->n;
+    rhs.ncol = static_cast<size_t>(ncols);
+    rhs.nzmax = rhs.nrow * rhs.ncol;
+    rhs.d = rhs.nrow;
+    rhs.x = const_cast<double*>(b);
+    rhs.xtype = CHOLMOD_REAL;
+    rhs.dtype = CHOLMOD_DOUBLE;
+    const auto t0 = Clock::now();
+    if (!cholmod_solve2(CHOLMOD_A, factor_, &rhs, nullptr, &x_, nullptr, &y_, &e_, &common_)) return false;
+    std::memcpy(x, x_->x, sizeof(double) * rhs.nzmax);
+    solve_seconds += secondsSince(t0);
+    return true;
+  }
+
+ private:
+  cholmod_common common_{};
+  cholmod_factor* factor_ = nullptr;
+  cholmod_dense* x_ = nullptr;
+  cholmod_dense* y_ = nullptr;
+  cholmod_dense* e_ = nullptr;
+};
+
+/// Eigenpairs found so far (M-orthonormal columns), used to deflate later Lanczos chunks.
+struct Found {
+  std::vector<double> lambdas;
+  Eigen::MatrixXd vectors;   // n x k
+  Eigen::MatrixXd m_vectors; // M * vectors
+};
+
+std::string arpackMessage(const char* routine, a_int info) {
+  std::ostringstream s;
+  s << "eigensolver: ARPACK " << routine << " failed with info = " << info;
+  switch (info) {
+    case 3: s << " (no shifts could be applied; ncv too small)"; break;
+    case -8: s << " (LAPACK tridiagonal eigenvalue error)"; break;
+    case -9: s << " (starting vector is zero)"; break;
+    case -9999: s << " (could not build a Lanczos factorization)"; break;
+    case -14: s << " (no eigenvalue converged to the requested accuracy)"; break;
+    default: break;
+  }
+  return s.str();
+}
+
+struct Context {
+  const SpMat& K;
+  const SpMat& M;
+  CholmodSolver& solver;
+  double sigma;
+  const ModalSettings& settings;
+  int applications = 0;
+};
+
+/// One ARPACK run for `nev` eigenpairs of OP deflated against `found`; appends the converged
+/// pairs to `found`. Returns the number appended.
+Result<int> lanczosChunk(Context& ctx, Found& found, int nev, double tol, uint64_t seed,
+                         double progress_base, double progress_span) {
+  const a_int n = static_cast<a_int>(ctx.K.rows());
+  const int locked = static_cast<int>(found.lambdas.size());
+  const a_int max_ncv = n - locked;
+  if (nev >= max_ncv) nev = static_cast<int>(max_ncv) - 1;
+  if (nev <= 0) return 0;
+  // ncv ~ 1.6 nev: fewer restarts than nev + 20, less reorthogonalization than 2 nev
+  // (measured on box meshes; see tests/bench/modal).
+  double ncv_factor = std::getenv("STRIKE_NCV") ? std::atof(std::getenv("STRIKE_NCV")) : 1.6;
+  if (std::getenv("STRIKE_TOL")) tol = std::atof(std::getenv("STRIKE_TOL"));
+  a_int ncv = std::min<a_int>(max_ncv, std::max<a_int>(nev + 24, static_cast<a_int>(ncv_factor * nev)));
+  const a_int lworkl = ncv * (ncv + 8);
+  std::vector<double> resid(static_cast<size_t>(n));
+  std::vector<double> v(static_cast<size_t>(n) * static_cast<size_t>(ncv));
+  std::vector<double> workd(3 * static_cast<size_t>(n));
+  std::vector<double> workl(static_cast<size_t>(lworkl));
+  a_int iparam[11] = {};
+  a_int ipntr[11] = {};
+  iparam[0] = 1;      // exact shifts
+  iparam[2] = 300;    // max restarts
+  iparam[6] = 3;      // shift-invert mode
+
+  // Deterministic start vector (ARPACK's own random start depends on how often it was called
+  // before in this process), projected away from the modes already found.
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (double& r : resid) r = uniform(rng);
+  Eigen::Map<Eigen::VectorXd> resid_vec(resid.data(), n);
+  auto deflate = [&](Eigen::Map<Eigen::VectorXd>& y) {
+    if (locked > 0) y.noalias() -= found.vectors * (found.m_vectors.transpose() * y);
+  };
+  deflate(resid_vec);
+
+  Eigen::VectorXd mx(n);
+  a_int ido = 0;
+  a_int info = 1;  // use resid as the start vector
+  const int expected_applications = static_cast<int>(ncv + 2 * (ncv - nev));
+  int chunk_applications = 0;
+  while (true) {
+    dsaupd_c(&ido, "G", n, "LM", nev, tol, resid.data(), ncv, v.data(), n, iparam, ipntr,
+             workd.data(), workl.data(), lworkl, &info);
+    if (ido == -1 || ido == 1) {
+      const double* x = workd.data() + ipntr[0] - 1;
+      double* y = workd.data() + ipntr[1] - 1;
+      const double* bx = nullptr;
+      if (ido == 1) {
+        bx = workd.data() + ipntr[2] - 1;
+      } else {
+        mx.noalias() = ctx.M * Eigen::Map<const Eigen::VectorXd>(x, n);
+        bx = mx.data();
+      }
+      if (!ctx.solver.solve(bx, y, 1)) return internalError("eigensolver: CHOLMOD solve failed");
+      Eigen::Map<Eigen::VectorXd> y_vec(y, n);
+      deflate(y_vec);
+      ++ctx.applications;
+      ++chunk_applications;
+      if (ctx.settings.progress && chunk_applications % 16 == 0) {
+        const double f = std::min(0.95, static_cast<double>(chunk_applications) / expected_applications);
+        ctx.settings.progress("lanczos", progress_base + progress_span * f);
+      }
+    } else if (ido == 2) {
+      Eigen::Map<Eigen::VectorXd>(workd.data() + ipntr[1] - 1, n).noalias() =
+          ctx.M * Eigen::Map<const Eigen::VectorXd>(workd.data() + ipntr[0] - 1, n);
+    } else {
+      break;
+    }
+  }
+  if (info < 0 || info == 3) return internalError(arpackMessage("dsaupd", info));
+  const a_int nconv = iparam[4];
+  if (nconv <= 0) return 0;
+
+  std::vector<a_int> select(static_cast<size_t>(ncv), 1);
+  std::vector<double> d(static_cast<size_t>(nev));
+  Eigen::MatrixXd z(n, nev);
+  a_int einfo = 0;
+  dseupd_c(1, "A", select.data(), d.data(), z.data(), n, ctx.sigma, "G", n, "LM", nev, tol,
+           resid.data(), ncv, v.data(), n, iparam, ipntr, workd.data(), workl.data(), lworkl, &einfo);
+  if (einfo != 0) return internalError(arpackMessage("dseupd", einfo));
+  const int got = static_cast<int>(std::min<a_int>(iparam[4], nev));
+  const int total = locked + got;
+  found.vectors.conservativeResize(n, total);
+  found.m_vectors.conservativeResize(n, total);
+  for (int k = 0; k < got; ++k) {
+    found.lambdas.push_back(d[static_cast<size_t>(k)]);
+    found.vectors.col(locked + k) = z.col(k);
+    found.m_vectors.col(locked + k) = ctx.M * z.col(k);
+  }
+  return got;
+}
+
+
+/// Block shift-invert Lanczos on OP deflated against `found` (Grimes, Lewis & Simon, "A
+/// shifted block Lanczos algorithm for solving sparse symmetric generalized eigenproblems",
+/// SIAM J. Matrix Anal. Appl. 15, 1994). Each step applies OP to a whole block with one
+/// multi-right-hand-side CHOLMOD solve (BLAS 3: the factor is read once per block, not once
+/// per vector), orthogonalizes fully in the M inner product, and M-orthonormalizes the block
+/// by Cholesky QR applied twice. Ritz pairs come from the block tridiagonal projection T;
+/// the residual of Ritz pair (theta, Q s) is ||B_j s_last|| (Parlett, "The Symmetric
+/// Eigenvalue Problem", 1998, sec. 13.2). Converged pairs are appended to `found`.
+/// `enough(lambdas_converged_in_order)` says when to stop. Returns the number appended.
+Result<int> blockLanczos(Context& ctx, Found& found, int block, int max_basis, double tol, uint64_t seed,
+                         const std::function<bool(const std::vector<double>&)>& enough) {
+  const Eigen::Index n = ctx.K.rows();
+  const Eigen::Index locked = static_cast<Eigen::Index>(found.lambdas.size());
+  const Eigen::Index b = block;
+  const Eigen::Index max_steps = std::max<Eigen::Index>(2, max_basis / b);
+  Eigen::MatrixXd Q(n, (max_steps + 1) * b);
+  Eigen::MatrixXd MQ(n, (max_steps + 1) * b);
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero((max_steps + 1) * b, (max_steps + 1) * b);
+
+  auto deflate = [&](Eigen::MatrixXd& W) {
+    if (locked > 0) W.noalias() -= found.vectors * (found.m_vectors.transpose() * W);
+  };
+  // M-orthonormalizes W in place (CholQR2); MW is updated alongside. R accumulates the
+  // triangular factor so that W_in = W_out R. Returns false on (numerical) rank deficiency.
+  auto orthonormalize = [&](Eigen::MatrixXd& W, Eigen::MatrixXd& MW, Eigen::MatrixXd& R) {
+    R = Eigen::MatrixXd::Identity(b, b);
+    for (int pass = 0; pass < 2; ++pass) {
+      Eigen::MatrixXd G = W.transpose() * MW;
+      G = 0.5 * (G + G.transpose()).eval();
+      Eigen::LLT<Eigen::MatrixXd> llt(G);
+      if (llt.info() != Eigen::Success) return false;
+      const Eigen::MatrixXd U = llt.matrixU();
+      if (U.diagonal().minCoeff() <= 1e-10 * U.diagonal().maxCoeff()) return false;
+      const Eigen::MatrixXd Uinv = U.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(b, b));
+      W = W * Uinv;
+      MW = MW * Uinv;
+      R = (U * R).eval();
+    }
+    return true;
+  };
+
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  Eigen::MatrixXd W(n, b);
+  for (Eigen::Index j = 0; j < b; ++j) {
+    for (Eigen::Index i = 0; i < n; ++i) W(i, j) = uniform(rng);
+  }
+  deflate(W);
+  Eigen::MatrixXd MW = ctx.M * W;
+  Eigen::MatrixXd R;
+  if (!orthonormalize(W, MW, R)) return internalError("eigensolver: block Lanczos could not start (degenerate start block)");
+  Q.leftCols(b) = W;
+  MQ.leftCols(b) = MW;
+
+  Eigen::Index steps = 0;
+  std::vector<double> converged;
+  Eigen::MatrixXd S;
+  Eigen::Index num_converged = 0;
+  for (Eigen::Index j = 0; j < max_steps; ++j) {
+    const Eigen::Index k = (j + 1) * b;  // basis size after this step's block
+    if (!ctx.solver.solve(MQ.middleCols(j * b, b).data(), W.data(), static_cast<int>(b))) {
+      return internalError("eigensolver: CHOLMOD block solve failed");
+    }
+    ctx.applications += static_cast<int>(b);
+    deflate(W);
+    // Full reorthogonalization, twice (Kahan-Parlett "twice is enough").
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(k, b);
+    for (int pass = 0; pass < 2; ++pass) {
+      const Eigen::MatrixXd h = MQ.leftCols(k).transpose() * W;
+      W.noalias() -= Q.leftCols(k) * h;
+      H += h;
+    }
+    T.block(0, j * b, k, b) = H;
+    MW.noalias() = ctx.M * W;
+    const bool ok = orthonormalize(W, MW, R);
+    steps = j + 1;
+    if (ok) {
+      Q.middleCols(k, b) = W;
+      MQ.middleCols(k, b) = MW;
+      T.block(k, j * b, b, b) = R;
+    } else {
+      R = Eigen::MatrixXd::Zero(b, b);  // invariant subspace found: residuals are exact zeros
+    }
+    // Ritz pairs of the k x k projection (symmetrized: full reorthogonalization keeps the
+    // entries above the block tridiagonal at round-off level).
+    Eigen::MatrixXd Tk = T.topLeftCorner(k, k);
+    Tk = 0.5 * (Tk + Tk.transpose()).eval();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Tk);
+    if (es.info() != Eigen::Success) return internalError("eigensolver: block Lanczos projection eigen-solve failed");
+    // Largest theta first = smallest lambda first.
+    converged.clear();
+    num_converged = 0;
+    for (Eigen::Index i = k - 1; i >= 0; --i) {
+      const double theta = es.eigenvalues()[i];
+      const double residual = (R * es.eigenvectors().block(k - b, i, b, 1)).norm();
+      if (!(theta > 0.0) || residual > tol * theta) break;
+      converged.push_back(ctx.sigma + 1.0 / theta);
+      ++num_converged;
+    }
+    if (ctx.settings.progress) ctx.settings.progress("lanczos", std::min(0.95, static_cast<double>(k) / max_basis));
+    if (!ok || enough(converged) || j + 1 == max_steps) {
+      S = es.eigenvectors().rightCols(num_converged).rowwise().reverse();
+      break;
+    }
+  }
+  const Eigen::Index kb = steps * b;
+  if (num_converged == 0) return 0;
+  const Eigen::Index total = locked + num_converged;
+  found.vectors.conservativeResize(n, total);
+  found.m_vectors.conservativeResize(n, total);
+  found.vectors.rightCols(num_converged).noalias() = Q.leftCols(kb) * S;
+  found.m_vectors.rightCols(num_converged).noalias() = MQ.leftCols(kb) * S;
+  for (double l : converged) found.lambdas.push_back(l);
+  return static_cast<int>(num_converged);
+}
+
+/// Shift from the problem's own scale: median of diag(K)/diag(M) is ~ (c/h)^2, the squared
+/// angular frequency of one element, whatever the units or material. A tiny fraction of it
+/// keeps K - sigma M well conditioned (cond ~ lambda_max / |sigma| ~ 1e5) while staying far
+/// below the wanted eigenvalues, where the shift would slow Lanczos convergence down.
+double chooseShift(const SpMat& K, const SpMat& M, double lambda_cut) {
+  std::vector<double> ratio;
+  ratio.reserve(static_cast<size_t>(K.rows()));
+  const Eigen::VectorXd dk = K.diagonal();
+  const Eigen::VectorXd dm = M.diagonal();
+  for (Eigen::Index i = 0; i < K.rows(); ++i) {
+    if (dk[i] > 0.0 && dm[i] > 0.0) ratio.push_back(dk[i] / dm[i]);
+  }
+  if (ratio.empty()) return -1.0;
+  std::nth_element(ratio.begin(), ratio.begin() + static_cast<std::ptrdiff_t>(ratio.size() / 2), ratio.end());
+  const double scale = ratio[ratio.size() / 2];
+  double shift = 1e-4 * scale;
+  if (std::isfinite(lambda_cut)) shift = std::min(shift, 0.05 * lambda_cut);
+  shift = std::max(shift, 1e-9 * scale);
+  return -shift;
+}
+
+Result<ModalResult> solveDense(const SpMat& K, const SpMat& M, ModalResult out, Eigen::VectorXd& lambdas,
+                               Eigen::MatrixXd& vectors) {
+  const Eigen::MatrixXd Kd(K);
+  const Eigen::MatrixXd Md(M);
+  if (Eigen::LLT<Eigen::MatrixXd>(Md).info() != Eigen::Success) return internalError("eigensolver: the mass matrix is not positive definite");
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Kd, Md);
+  if (es.info() != Eigen::Success) return internalError("eigensolver: dense generalized eigen-solve failed (is M positive definite?)");
+  lambdas = es.eigenvalues();
+  vectors = es.eigenvectors();
+  return out;
+}
+
+Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSettings& settings) {
+  const Eigen::Index n = K.rows();
+  if (n == 0 || K.cols() != n || M.rows() != n || M.cols() != n) {
+    std::ostringstream s;
+    s << "eigensolver: K (" << K.rows() << "x" << K.cols() << ") and M (" << M.rows() << "x"
+      << M.cols() << ") must be square, non-empty and of the same size";
+    return badInput(s.str());
+  }
+  if (!(settings.max_freq_hz > 0.0)) return badInput("eigensolver: max_freq_hz must be > 0, got " + std::to_string(settings.max_freq_hz));
+  if (settings.max_modes <= 0) return badInput("eigensolver: max_modes must be > 0, got " + std::to_string(settings.max_modes));
+  if (!(settings.rigid_freq_hz >= 0.0)) return badInput("eigensolver: rigid_freq_hz must be >= 0, got " + std::to_string(settings.rigid_freq_hz));
+
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double m_ii = M.coeff(i, i);
+    const double k_ii = K.coeff(i, i);
+    if (!(m_ii > 0.0) || !std::isfinite(m_ii) || !std::isfinite(k_ii)) {
+      std::ostringstream s;
+      s << "eigensolver: the mass matrix must be positive definite and K, M finite; degree of freedom "
+        << i << " has M = " << m_ii << ", K = " << k_ii << " (is the density positive and the mesh valid?)";
+      return internalError(s.str());
+    }
+  }
+  const double lambda_cut = std::pow(kTwoPi * settings.max_freq_hz, 2);
+  const double lambda_rigid = std::pow(kTwoPi * settings.rigid_freq_hz, 2);
+  ModalResult out;
+  out.sigma = chooseShift(K, M, lambda_cut);
+  // A rigid mode's computed eigenvalue is round-off, ~eps * |sigma| * cond: count anything
+  // below a tiny fraction of the shift as rigid too, whatever rigid_freq_hz says.
+  const double lambda_zero = std::max(lambda_rigid, 1e-6 * std::abs(out.sigma));
+
+  Eigen::VectorXd all_lambdas;
+  Eigen::MatrixXd all_vectors;
+  std::unique_ptr<CholmodSolver> solver;
+  if (n <= 600) {
+    // Tiny problems (a few cells): LAPACK on dense matrices is exact and faster than setting
+    // up Lanczos, and ARPACK needs ncv < n anyway.
+    auto dense = solveDense(K, M, out, all_lambdas, all_vectors);
+    if (!dense) return dense.error();
+  } else {
+    solver = std::make_unique<CholmodSolver>();
+    const auto t_factor = Clock::now();
+    if (settings.progress) settings.progress("factorize", 0.0);
+    SpMat A = K - out.sigma * M;
+    Status st = solver->factorize(A);
+    if (!st) return st.error();
+    A = SpMat();
+    out.factorize_seconds = secondsSince(t_factor);
+    if (settings.progress) settings.progress("factorize", 1.0);
+
+    const auto t_lanczos = Clock::now();
+    Context ctx{K, M, *solver, out.sigma, settings};
+    Found found;
+    // Stage 1, ARPACK: the rigid modes and the lowest elastic ones, to full accuracy. Small
+    // requests end here. Stage 2, block Lanczos on the operator deflated against stage 1,
+    // finds the rest until the cut-off or the cap is passed.
+    auto status = [&](const std::vector<double>& extra, int& elastic_below, double& top) {
+      elastic_below = 0;
+      top = -INFINITY;
+      for (const std::vector<double>* list : {static_cast<const std::vector<double>*>(&found.lambdas), &extra}) {
+        for (double l : *list) {
+          top = std::max(top, l);
+          if (std::abs(l) > lambda_zero && l <= lambda_cut) ++elastic_below;
+        }
+      }
+      return top > lambda_cut || elastic_below > settings.max_modes;
+    };
+    const bool arpack_only = settings.method == ModalMethod::ArpackOnly;
+    const int wanted_total = settings.max_modes + 7;
+    int chunk = arpack_only ? std::min(wanted_total, 400) : std::min(wanted_total, kArpackModes);
+    bool done = false;
+    for (int round = 0; round < 64 && !done; ++round) {
+      auto got = lanczosChunk(ctx, found, chunk, 1e-10, 0x5eed0000ULL + static_cast<uint64_t>(round),
+                              0.0, 1.0);
+      if (!got) return got.error();
+      int elastic_below = 0;
+      double top = 0.0;
+      done = status({}, elastic_below, top);
+      const bool exhausted = static_cast<Eigen::Index>(found.lambdas.size()) + 2 >= n;
+      if (*got == 0 || exhausted) done = true;
+      if (!arpack_only) break;
+      chunk = std::min(std::max(chunk, 16), settings.max_modes + 7 - elastic_below);
+    }
+    for (int round = 0; !done && !arpack_only && round < 16; ++round) {
+      int elastic_below = 0;
+      double top = 0.0;
+      status({}, elastic_below, top);
+      const int needed = settings.max_modes + 1 - elastic_below;
+      const Eigen::Index room = n - static_cast<Eigen::Index>(found.lambdas.size()) - 1;
+      const int block = static_cast<int>(std::min<Eigen::Index>(room / 3, kBlockSize));
+      if (block < 1) break;
+      const int max_basis = static_cast<int>(std::min<Eigen::Index>(room, std::max(3 * needed, 4 * block) + 2 * block));
+      auto got = blockLanczos(ctx, found, block, max_basis, 1e-9, 0xb10c0000ULL + static_cast<uint64_t>(round),
+                              [&](const std::vector<double>& extra) {
+                                int e = 0;
+                                double t = 0.0;
+                                return status(extra, e, t);
+                              });
+      if (!got) return got.error();
+      done = status({}, elastic_below, top) || *got == 0;
+    }
+    out.lanczos_seconds = secondsSince(t_lanczos);
+    if (std::getenv("STRIKE_MODAL_DEBUG")) {
+      std::fprintf(stderr, "debug: nnz(L) %.3g, solve time %.3f s in %d solves\n", solver->factorNonZeros(), solver->solve_seconds, ctx.applications);
+      Eigen::MatrixXd B = Eigen::MatrixXd::Random(n, 100), Xb(n, 100);
+      for (int nb : {1}) {
+        auto tb = Clock::now();
+        solver->solve(B.data(), Xb.data(), nb);
+        std::fprintf(stderr, "debug: block %d: %.4f s (%.4f per rhs)\n", nb, secondsSince(tb), secondsSince(tb) / nb);
+      }
+    }
+    out.operator_applications = ctx.applications;
+    all_lambdas = Eigen::Map<Eigen::VectorXd>(found.lambdas.data(), static_cast<Eigen::Index>(found.lambdas.size()));
+    all_vectors = std::move(found.vectors);
+  }
+
+  // Classify: rigid, kept elastic (ascending, capped), above the cut-off.
+  std::vector<int> order(static_cast<size_t>(all_lambdas.size()));
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return all_lambdas[a] < all_lambdas[b]; });
+  std::vector<int> kept;
+  for (int i : order) {
+    const double l = all_lambdas[i];
+    if (std::abs(l) <= lambda_zero) {
+      ++out.rigid_modes_dropped;
+    } else if (l > lambda_cut) {
+      ++out.above_cutoff_dropped;
+    } else if (static_cast<int>(kept.size()) < settings.max_modes) {
+      kept.push_back(i);
+    } else {
+      out.capped_by_max_modes = true;
+    }
+  }
+
+  const auto t_refine = Clock::now();
+  const Eigen::Index p = static_cast<Eigen::Index>(kept.size());
+  Eigen::MatrixXd X(n, p);
+  for (Eigen::Index k = 0; k < p; ++k) X.col(k) = all_vectors.col(kept[static_cast<size_t>(k)]);
+  all_vectors = Eigen::MatrixXd();
+  if (p > 0) {
+    // Rayleigh-Ritz on the kept vectors: exact M-orthonormality and ascending order.
+    Eigen::MatrixXd KX = K * X;
+    Eigen::MatrixXd MX = M * X;
+    Eigen::MatrixXd Kr = X.transpose() * KX;
+    Eigen::MatrixXd Mr = X.transpose() * MX;
+    Kr = 0.5 * (Kr + Kr.transpose()).eval();
+    Mr = 0.5 * (Mr + Mr.transpose()).eval();
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> rr(Kr, Mr);
+    if (rr.info() != Eigen::Success) return internalError("eigensolver: Rayleigh-Ritz failed: the computed modes are not independent");
+    const Eigen::MatrixXd& Q = rr.eigenvectors();
+    out.eigenvalues = rr.eigenvalues();
+    out.shapes.noalias() = X * Q;
+    KX = KX * Q;
+    MX = MX * Q;
+    for (Eigen::Index k = 0; k < p; ++k) {
+      const double l = out.eigenvalues[k];
+      const double r = (KX.col(k) - l * MX.col(k)).norm() / (std::abs(l) * MX.col(k).norm());
+      out.max_relative_residual = std::max(out.max_relative_residual, r);
+    }
+  } else {
+    out.eigenvalues.resize(0);
+    out.shapes.resize(n, 0);
+  }
+  out.refine_seconds = secondsSince(t_refine);
+  if (settings.progress) settings.progress("lanczos", 1.0);
+  return out;
+}
+
+}  // namespace
+
+Result<ModalResult> solveModes(const SpMat& K, const SpMat& M, const ModalSettings& settings) {
+  // No exception escapes the core: allocation failures (Eigen, std::vector) and anything a
+  // third-party library throws become Errors here.
+  try {
+    return solveModesImpl(K, M, settings);
+  } catch (const std::bad_alloc&) {
+    return internalError("eigensolver: out of memory (" + std::to_string(K.rows()) + " degrees of freedom)");
+  } catch (const std::exception& e) {
+    return internalError(std::string("eigensolver: ") + e.what());
+  }
+}
+
+}  // namespace strike

@@ -12,12 +12,22 @@
 
 namespace strike {
 
+/// How the Lanczos work is split (both use one CHOLMOD factorization of K - sigma M).
+enum class ModalMethod {
+  /// ARPACK finds the rigid modes and the lowest elastic ones; block shift-invert Lanczos
+  /// (multi-right-hand-side solves) finds the rest. The fast default.
+  Hybrid,
+  /// ARPACK alone, single-vector solves: the reference the hybrid is checked against.
+  ArpackOnly,
+};
+
 struct ModalSettings {
   double max_freq_hz = 20000.0;  ///< keep every elastic mode with sqrt(lambda)/2pi <= this
   int max_modes = 200;           ///< but at most this many (lowest first)
   /// Modes with sqrt(|lambda|)/2pi below this are rigid-body modes (a free solid has 6).
   double rigid_freq_hz = 1.0;
   ProgressFn progress;           ///< optional
+  ModalMethod method = ModalMethod::Hybrid;
 };
 
 struct ModalResult {
@@ -28,7 +38,12 @@ struct ModalResult {
   bool capped_by_max_modes = false;  ///< true when more modes lie below max_freq_hz
   double factorize_seconds = 0.0;
   double lanczos_seconds = 0.0;
-  int operator_applications = 0; ///< solves with the factorization
+  int operator_applications = 0; ///< solves with the factorization (a block of k counts k)
+  /// Largest relative residual ||K x - lambda M x|| / (lambda ||M x||) of a kept mode: the
+  /// error estimate that precompute reports (eigenvalue error is about its square).
+  double max_relative_residual = 0.0;
+  double sigma = 0.0;            ///< the shift used (rad^2/s^2, negative)
+  double refine_seconds = 0.0;   ///< block refinement and Rayleigh-Ritz after Lanczos
 };
 
 Result<ModalResult> solveModes(const Eigen::SparseMatrix<double>& K,

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>  // cross()
+
 #include "strike/mesh.hpp"
 
 namespace strike {
@@ -63,7 +65,7 @@ Result<SurfaceMesh> makeSphereSurface(double radius, double target_edge_m) {
                             {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
                             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   const double ico_edge = 2.0 / std::sqrt(phi * phi + 1.0);  // on the unit sphere: 1.0515
-  int k = 8;  // default: 1280 triangles, edge ~ r / 7.6
+  int k = 7;  // default: 980 triangles, edge ~ r / 6.7
   if (target_edge_m > 0.0) {
     const double want = std::ceil(ico_edge * radius / target_edge_m);
     if (!(want <= kMaxSubdivision)) {
@@ -145,7 +147,10 @@ Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double tar
 
   // Axis along z, centred at the origin. n segments around; rows along the side; concentric
   // rings on the caps, each with about as many segments as its circumference needs.
-  int n = 48;
+  // Default: the edge a TetGen default mesh would use for this volume (see tetgen_mesher.cpp),
+  // with 24..64 segments around so the circle stays round.
+  double length_edge = std::cbrt(6.0 * std::sqrt(2.0) * kPi * radius * radius * height / 600.0);
+  int n = std::clamp(static_cast<int>(std::ceil(2.0 * kPi * radius / length_edge)), 24, 64);
   if (target_edge_m > 0.0) {
     const double want = std::ceil(2.0 * kPi * radius / target_edge_m);
     if (!(want <= kMaxSegments)) {
@@ -153,9 +158,10 @@ Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double tar
     }
     n = std::max(8, static_cast<int>(want));
   }
-  const double edge = 2.0 * kPi * radius / n;
+  if (target_edge_m > 0.0) length_edge = 2.0 * kPi * radius / n;
+  const double edge = std::max(2.0 * kPi * radius / n, length_edge);
   const double rows_want = std::round(height / edge);
-  const double rings_want = std::round(radius / edge);
+  const double rings_want = std::round(radius / (2.0 * kPi * radius / n));
   if (!(rows_want <= kMaxSegments) || !(rings_want <= kMaxSegments)) {
     return badInput("cylinder: R = " + num(radius) + ", H = " + num(height) + " with edge " + num(edge) +
                     " m gives too many triangles");

@@ -547,7 +547,7 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
                                                                                   : cursor.remaining() / plySize(p.type));
           if (!(count_value >= 0) || count_value != std::floor(count_value) || count_value > max_items) {
             return badInput(location() + e.name + " " + std::to_string(i) + " list " + p.name + " has count " + num(count_value) +
-                            ", expected a non-negative integer that fits in the rest of the file");
+                            ", expected a non-negative integer that fits in the rest of the file (truncated file?)");
           }
           const int64_t count = static_cast<int64_t>(count_value);
           if (static_cast<int>(k) == index_prop) polygon.clear();
@@ -628,8 +628,11 @@ Result<SurfaceMesh> readStl(const std::string& path, std::vector<MeshWarning>* w
                        (static_cast<uint64_t>(p[82]) << 16) | (static_cast<uint64_t>(p[83]) << 24);
     if (84 + 50 * n == b.size()) return parseBinaryStl(b, path, warnings);
   }
+  // ASCII only if it also looks like text: binary STL almost always holds NUL bytes (the
+  // attribute word, the zero bytes of 0.0f and 1.0f), text never does.
   const size_t first = b.find_first_not_of(" \t\r\n");
-  if (first != std::string::npos && b.compare(first, 5, "solid") == 0) return parseAsciiStl(b, path, warnings);
+  const bool is_text = b.find('\0') == std::string::npos;
+  if (first != std::string::npos && b.compare(first, 5, "solid") == 0 && is_text) return parseAsciiStl(b, path, warnings);
   if (b.size() < 84) {
     return badInput(path + ": error: file is " + std::to_string(b.size()) +
                     " bytes: too short for a binary STL (84-byte header) and does not start with \"solid\"");

@@ -17,6 +17,8 @@
 #include <sstream>
 #include <string>
 
+#include <Eigen/Geometry>  // cross()
+
 #include "strike/mesh.hpp"
 
 namespace strike {
@@ -27,7 +29,7 @@ constexpr double kMaxEstimatedTets = 5e6;  // refuse requests that could not be 
 // Default resolution: about this many "regular tet volumes" in the body. TetGen's quality
 // refinement produces roughly 2-4x more tets than volume / maxvolume, so this lands typical
 // objects in the low thousands of tets.
-constexpr double kDefaultRegularTets = 1500.0;
+constexpr double kDefaultRegularTets = 600.0;
 
 std::string num(double v) {
   std::ostringstream s;
@@ -142,6 +144,34 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
   behavior.maxvolume = max_volume;
 
   if (options.progress) options.progress("tetrahedralize", 0.0);
+  // TetGen meshing a self-intersecting surface can crash (it segfaults on two overlapping
+  // cubes), so its own intersection test (-d) runs first; it lists the offending faces.
+  {
+    tetgenio diagnosis;
+    tetgenbehavior detect;
+    char detect_switches[] = "pdQ";
+    if (!detect.parse_commandline(detect_switches)) return internalError("TetGen rejected the switches pdQ");
+    try {
+      StdoutToStderr redirect;
+      ::tetrahedralize(&detect, &in, &diagnosis);
+    } catch (int code) {
+      return badInput(source + ": error: TetGen could not check the surface (-pdQ): " + tetgenErrorText(code));
+    } catch (...) {
+      return internalError(source + ": error: TetGen failed while checking the surface for self-intersections");
+    }
+    if (diagnosis.numberoftrifaces > 0 && diagnosis.trifacelist) {
+      std::string where;
+      for (int c = 0; c < 3; ++c) {
+        const int v = diagnosis.trifacelist[c] - diagnosis.firstnumber;
+        if (v < 0 || v >= in.numberofpoints) continue;
+        where += (c ? ", " : "") + std::to_string(v) + " (" + num(in.pointlist[3 * v]) + ", " + num(in.pointlist[3 * v + 1]) +
+                 ", " + num(in.pointlist[3 * v + 2]) + ")";
+      }
+      return badInput(source + ": error: the surface intersects itself: TetGen found " +
+                      std::to_string(diagnosis.numberoftrifaces) + " intersecting triangles, the first with vertices " + where +
+                      "; expected a closed surface without self-intersections");
+    }
+  }
   try {
     StdoutToStderr redirect;
     ::tetrahedralize(&behavior, &in, &out);

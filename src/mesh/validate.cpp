@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>  // cross()
+
 #include "strike/mesh.hpp"
 
 namespace strike {
@@ -188,7 +190,9 @@ Status checkClosedSurface(const SurfaceMesh& surface, const std::string& source)
     }
     const int a = surface.F(f, 0), b = surface.F(f, 1), c = surface.F(f, 2);
     const Eigen::Vector3d pa = surface.V.row(a).transpose();
-    const double area2 = (surface.V.row(b).transpose() - pa).cross(surface.V.row(c).transpose() - pa).norm();
+    const Eigen::Vector3d ab = surface.V.row(b).transpose() - pa;
+    const Eigen::Vector3d ac = surface.V.row(c).transpose() - pa;
+    const double area2 = ab.cross(ac).norm();
     if (a == b || b == c || c == a || !(area2 > 1e-14 * scale * scale)) {
       return badInput(prefix(source) + "triangle " + std::to_string(f) + " (vertices " + std::to_string(a) + " " +
                       point(surface.V, a) + ", " + std::to_string(b) + " " + point(surface.V, b) + ", " +

@@ -78,13 +78,18 @@ class OscillatorBank {
   OscillatorBank(OscillatorBank&&) noexcept;
   OscillatorBank& operator=(OscillatorBank&&) noexcept;
 
-  /// Adds an object's modes; returns its id (0, 1, ...). Not real-time safe (allocates).
+  /// Adds an object's modes; returns its id (0, 1, ...). Not real-time safe (allocates capacity
+  /// for all of its modes being active at once, so render() never has to).
   uint32_t addObject(const ModalObjectDesc& object);
   /// Schedules an impact. Impacts may be added in any order, but not before the current render
-  /// time (late ones start at the current sample). Copies modal_impulse.
+  /// time (late ones start at the current sample). Copies modal_impulse. Not real-time safe: it
+  /// integrates the pulse for every mode of the object (O(modes x pulse samples)) and allocates.
+  /// Contributions below audibility_threshold are dropped (the mode is not woken).
   void addImpact(const ImpactDesc& impact);
   /// Renders the next `frames` mono samples into out (overwrites). Sample n of the first call is
-  /// time n / sample_rate.
+  /// time n / sample_rate. Output units are those of radiation_weight (Pa at the listener with
+  /// radiationWeights()). [audio-thread] Never allocates, locks or throws; sets FTZ/DAZ in MXCSR
+  /// for the call and restores it. Output is independent of how frames are split across calls.
   void render(float* out, size_t frames);
   /// Time of the next sample to be rendered, s.
   double time() const;
@@ -107,7 +112,8 @@ std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, 
 /// Hertz contact duration of two elastic bodies meeting at normal speed v_n (m/s):
 /// tau = 2.868 (m*^2 / (R* E*^2 v_n))^(1/5), 1/E* = (1-nu1^2)/E1 + (1-nu2^2)/E2,
 /// 1/R* = 1/R1 + 1/R2, 1/m* = 1/m1 + 1/m2 (Johnson, Contact Mechanics, 1985, ch. 11).
-/// Pass infinite mass or radius for a half-space. Returns seconds.
+/// Pass infinite mass or radius for a half-space. Returns seconds; 0 (an ideal impulse) when the
+/// speed is not positive or the input is degenerate (e.g. two half-spaces, NaN).
 double hertzContactDuration(double youngs1_pa, double poisson1, double radius1_m, double mass1_kg,
                             double youngs2_pa, double poisson2, double radius2_m, double mass2_kg,
                             double normal_speed_m_s);

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <new>
 #include <random>
 
 #include "synth/synth_fixtures.hpp"
@@ -354,5 +356,43 @@ TEST(OscillatorBank, DelayShiftsTheOutput) {
   for (size_t n = 0; n + 100 < a.size(); ++n) EXPECT_NEAR(b[n + 100], a[n], 1e-5 * test::peakAbs(a));
 }
 
+}  // namespace
+}  // namespace strike
+
+// --- render() must not allocate: count global operator new calls around it. -----------------
+// Why the pragma: GCC 12 cannot see that these replacements pair malloc with free.
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+namespace {
+size_t g_allocations = 0;  // test-only instrumentation
+}  // namespace
+void* operator new(size_t size) {
+  ++g_allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, size_t) noexcept { std::free(p); }
+
+namespace strike {
+namespace {
+TEST(OscillatorBank, RenderDoesNotAllocate) {
+  std::vector<double> f(500), g(500);
+  for (size_t i = 0; i < f.size(); ++i) f[i] = 50.0 + 30.0 * i, g[i] = (i % 7) - 3.0;
+  for (bool dp : {false, true}) {
+    SynthSettings s;
+    s.double_precision = dp;
+    OscillatorBank bank(s);
+    bank.addObject(test::makeObject(f, 1e-7, 50.0, std::vector<double>(f.size(), 1e-3)));
+    bank.addObject(test::makeObject({200.0, 300.0}, 0.0, 5000.0));  // over-damped modes too
+    const size_t setup = g_allocations;
+    for (int k = 0; k < 20; ++k) bank.addImpact(ImpactDesc{static_cast<uint32_t>(k % 2), 0.01 * k, 1e-4, g.data()});
+    EXPECT_GT(g_allocations, setup) << "the counter sees addImpact's allocations";
+    std::vector<float> out(4096);
+    const size_t before = g_allocations;
+    for (int k = 0; k < 50; ++k) bank.render(out.data(), 97 + 13 * k);
+    EXPECT_EQ(g_allocations, before);
+    EXPECT_GT(bank.stats().mode_starts, 0u);
+  }
+}
 }  // namespace
 }  // namespace strike

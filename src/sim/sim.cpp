@@ -454,6 +454,12 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
 
 Status Simulation::build(const std::vector<btQuaternion>& orientations) {
   config_ = std::make_unique<btDefaultCollisionConfiguration>();
+  // A box landing flat on the ground must touch with all four corners in the same substep;
+  // the default plane-convex algorithm reports one support point per substep, and the box
+  // tips on it. Perturbed support queries find the rest of the face [Bullet
+  // btConvexPlaneCollisionAlgorithm]. Same for convex-convex pairs without polyhedral features.
+  config_->setPlaneConvexMultipointIterations(3, 3);
+  config_->setConvexConvexMultipointIterations(3, 3);
   dispatcher_ = std::make_unique<btCollisionDispatcher>(config_.get());
   broadphase_ = std::make_unique<btDbvtBroadphase>();
   solver_ = std::make_unique<btSequentialImpulseConstraintSolver>();
@@ -552,12 +558,18 @@ void Simulation::postTick() {
       const btTransform& pre_b = index[1] >= 0 ? bodies_[size_t(index[1])]->pre_transform : identity;
       btVector3 local_a = pt.m_localPointA;
       btVector3 local_b = pt.m_localPointB;
+      btVector3 point_world = 0.5 * (pre_a(local_a) + pre_b(local_b));
       if (predictive && objects[0]->getCollisionShape()->isConvex()) {
+        // Bullet's predictive point: A's centre, and B's point is the swept sphere's centre at
+        // its time of impact. The sphere's surface there lies on B; A's leading vertex lands on
+        // B's tangent plane through it, which is where the impact happens.
         const auto* convex = static_cast<const btConvexShape*>(objects[0]->getCollisionShape());
         local_a = convex->localGetSupportingVertex(pre_a.getBasis().transpose() * -normal);
-        local_b = pre_b.invXform(pre_a(local_a));
+        const btVector3 leading = pre_a(local_a);
+        const btVector3 on_b = pt.m_positionWorldOnB - normal * objects[0]->getCcdSweptSphereRadius();
+        point_world = leading - normal * normal.dot(leading - on_b);
+        local_b = pre_b.invXform(point_world);
       }
-      const btVector3 world_a = pre_a(local_a), world_b = pre_b(local_b);
       // Canonical order: the ground is always b; otherwise a is the lower index.
       bool swap = index[0] < 0 || (index[1] >= 0 && index[0] > index[1]);
       if (swap) {
@@ -570,7 +582,6 @@ void Simulation::postTick() {
       ev.time_s = time_s;
       ev.body_a = uint32_t(index[0]);
       ev.body_b = index[1] < 0 ? kGroundBody : uint32_t(index[1]);
-      const btVector3 point_world = 0.5 * (world_a + world_b);
       ev.point_world = fromBt(point_world);
       ev.normal_world = fromBt(normal);
       ev.normal_impulse_n_s = pt.m_appliedImpulse;

@@ -19,7 +19,7 @@ namespace strike {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr int kMaxSubdivision = 400;  // 20 * 400^2 = 3.2 M triangles: beyond any sane FEM mesh
+constexpr int kMaxSubdivision = 200;  // 20 * 200^2 = 800k triangles: beyond any sane FEM mesh
 constexpr int kMaxSegments = 20000;
 
 std::string num(double v) {

@@ -25,7 +25,9 @@ namespace strike {
 
 namespace {
 
-constexpr double kMaxEstimatedTets = 5e6;  // refuse requests that could not be solved anyway
+// Refuse requests that could not be solved anyway: volume / maxvolume above this means TetGen
+// would make several million tets.
+constexpr double kMaxEstimatedTets = 1e6;
 // Default resolution: about this many "regular tet volumes" in the body. TetGen's quality
 // refinement produces roughly 2-4x more tets than volume / maxvolume, so this lands typical
 // objects in the low thousands of tets.

@@ -21,6 +21,12 @@ Complex expDividedDifference(Complex a, Complex p, double u_s);
 /// y(tau) -> 1 as tau -> 0 (the ideal impulse).
 Complex halfSineResponse(Complex pole, double tau_s, double u_s);
 
+/// y(U) for the unit-area box pulse f(u) = 1 / tau on [0, tau], at 0 <= U <= tau:
+/// (1 / tau) E(0, p, U) = (e^{pU} - 1) / (p tau), without cancellation for small |p| U.
+inline Complex boxResponse(Complex pole, double tau_s, double u_s) {
+  return expDividedDifference(Complex(0.0, 0.0), pole, u_s) / tau_s;
+}
+
 /// Row-major 4x4 real matrix.
 using Mat4 = std::array<double, 16>;
 

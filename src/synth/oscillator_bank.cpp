@@ -280,7 +280,10 @@ struct OscillatorBank::Impl {
     const double tau_s = tau * h;
     const double after_end_s = (static_cast<double>(im.end_sample) - (t0 + tau)) * h;
     const double first_u_s = (static_cast<double>(im.start_sample) - t0) * h;
-    const double pulse_omega = ideal ? 0.0 : M_PI / tau_s;
+    const bool box = desc.shape == PulseShape::Box && !ideal;
+    // The augmented pulse state (f, f'/Om) rotates at Om for the half-sine and stays constant
+    // (Om = 0) for the box.
+    const double pulse_omega = ideal || box ? 0.0 : M_PI / tau_s;
 
     for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
       const double g = desc.modal_impulse[j];
@@ -288,12 +291,30 @@ struct OscillatorBank::Impl {
       const uint32_t mi = obj.first_mode + j;
       const ModeInfo& m = modes[mi];
       if (m.kind == ModeKind::Ringing) {
-        const Complex y_end = ideal ? Complex(1.0, 0.0) : detail::halfSineResponse(m.pole, tau_s, tau_s);
+        const Complex y_end = ideal ? Complex(1.0, 0.0)
+                              : box   ? detail::boxResponse(m.pole, tau_s, tau_s)
+                                      : detail::halfSineResponse(m.pole, tau_s, tau_s);
         const Complex bg = g * m.out_weight;
         const Complex v = bg * std::exp(m.pole * after_end_s) * y_end;
         if (!(std::abs(v) >= threshold)) continue;
         im.hits.push_back({mi, v});
         if (im.transient.empty()) continue;
+        if (box) {
+          // Transient of the box: y(U) = E(0, p, U) / tau, E(0, p, U + h) = e^{ph} E(0, p, U) + E(0, p, h).
+          Complex e0 = detail::expDividedDifference(Complex(0.0, 0.0), m.pole, first_u_s);
+          const Complex h0 = detail::expDividedDifference(Complex(0.0, 0.0), m.pole, h);
+          const Complex k = bg / tau_s;
+          // A box is a sustained force, so its feedthrough g R f (left out of the ringing output)
+          // is added back while it acts: a constant force then gives exactly zero acceleration
+          // once its onset has rung out, instead of a DC offset of -g R F. Point samples of the
+          // half-open box [t0, t0 + tau) tile exactly when boxes are contiguous.
+          const double feedthrough = g * m.radiation / tau_s;
+          for (double& out : im.transient) {
+            out += (k * e0).real() + feedthrough;
+            e0 = m.step * e0 + h0;
+          }
+          continue;
+        }
         // Transient: y(U) = K (E(i Om, p, U) - E(-i Om, p, U)) / 2i at U = first_u + n h, with
         // E(a, p, U + h) = e^{ph} E(a, p, U) + e^{aU} E(a, p, h): exact, stable recurrences.
         const Complex ia(0.0, pulse_omega);
@@ -313,7 +334,9 @@ struct OscillatorBank::Impl {
         }
       } else if (m.kind == ModeKind::Damped) {
         const detail::Mat4 a = detail::augmentedMatrix(m.omega0, m.damping_c, pulse_omega);
-        const std::array<double, 4> x0{0.0, 0.0, 0.0, ideal ? 0.0 : M_PI / (2.0 * tau_s)};
+        // Half-sine: f = (pi / 2 tau) sin(Om u) enters as f'/Om = pi / (2 tau) at u = 0; box: f = 1 / tau.
+        const std::array<double, 4> x0 = box ? std::array<double, 4>{0.0, 0.0, 1.0 / tau_s, 0.0}
+                                             : std::array<double, 4>{0.0, 0.0, 0.0, ideal ? 0.0 : M_PI / (2.0 * tau_s)};
         std::array<double, 4> x_end{0.0, 1.0, 0.0, 0.0};
         if (!ideal) x_end = detail::mul4(detail::expm4(a, tau_s), x0);
         x_end[2] = x_end[3] = 0.0;  // the pulse is over
@@ -327,7 +350,8 @@ struct OscillatorBank::Impl {
         std::array<double, 4> x = detail::mul4(detail::expm4(a, first_u_s), x0);
         const double w = g * m.radiation;
         for (double& out : im.transient) {
-          out += w * (-m.omega0 * x[0] - m.damping_c * x[1]);
+          // The box's feedthrough f = x[2] is part of the output while it acts (see above).
+          out += w * (-m.omega0 * x[0] - m.damping_c * x[1] + (box ? x[2] : 0.0));
           x = detail::mul4(step, x);
         }
       }

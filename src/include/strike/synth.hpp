@@ -51,13 +51,23 @@ struct ModalObjectDesc {
   double delay_s = 0.0;                  ///< propagation delay to the listener
 };
 
-/// One contact: a half-sine force pulse of `duration_s` (0 = ideal impulse) starting at
-/// `time_s`, of total impulse 1 N s, scaled per mode by modal_impulse[i] = phi_i(p) . J.
+/// The time course of a contact force of unit area.
+enum class PulseShape {
+  /// (pi / (2 tau)) sin(pi t / tau): the Hertz impact of two elastic bodies [Johnson 1985].
+  HalfSine,
+  /// 1 / tau: a steady force over a physics step. Contiguous boxes of equal impulse add up to a
+  /// constant force, which makes no sound once its onset has rung out (resting contact).
+  Box,
+};
+
+/// One contact: a force pulse of `duration_s` (0 = ideal impulse) starting at `time_s`, of total
+/// impulse 1 N s, scaled per mode by modal_impulse[i] = phi_i(p) . J.
 struct ImpactDesc {
   uint32_t object = 0;
   double time_s = 0.0;
   double duration_s = 0.0;
   const double* modal_impulse = nullptr;  ///< one per mode of the object (N s / sqrt(kg))
+  PulseShape shape = PulseShape::HalfSine;
 };
 
 struct SynthStats {

@@ -36,7 +36,7 @@ struct GaussLegendre {
 
 // Output at time t of a mode (R = g = 1) driven by the unit-area half-sine on [t0, t0 + tau]:
 // integral of h_acc(t - s) f(s) ds, composite 12-point Gauss-Legendre on 64 panels.
-double pulseReference(double lambda, double c, double t0, double tau, double t) {
+double pulseReference(double lambda, double c, double t0, double tau, double t, PulseShape shape = PulseShape::HalfSine) {
   static const GaussLegendre gl(12);
   const double b = std::min(t, t0 + tau);
   if (b <= t0) return 0.0;
@@ -47,14 +47,17 @@ double pulseReference(double lambda, double c, double t0, double tau, double t) 
     const double mid = t0 + (k + 0.5) * width;
     for (size_t i = 0; i < gl.x.size(); ++i) {
       const double s = mid + 0.5 * width * gl.x[i];
-      const double f = M_PI / (2 * tau) * std::sin(M_PI * (s - t0) / tau);
+      const double f = shape == PulseShape::Box ? 1.0 / tau : M_PI / (2 * tau) * std::sin(M_PI * (s - t0) / tau);
       sum += 0.5 * width * gl.w[i] * f * test::generalImpulseResponse(lambda, c, t - s);
     }
   }
+  // A box is a sustained force: its feedthrough f(t) is part of the output while it acts.
+  if (shape == PulseShape::Box && t >= t0 && t < t0 + tau) sum += 1.0 / tau;
   return sum;
 }
 
-std::vector<float> renderPulse(double f0, double c, double t0, double tau, bool dp, size_t frames, double rate = 48000.0) {
+std::vector<float> renderPulse(double f0, double c, double t0, double tau, bool dp, size_t frames, double rate = 48000.0,
+                               PulseShape shape = PulseShape::HalfSine) {
   SynthSettings s;
   s.sample_rate_hz = rate;
   s.double_precision = dp;
@@ -63,7 +66,7 @@ std::vector<float> renderPulse(double f0, double c, double t0, double tau, bool 
   ModalObjectDesc obj = test::makeObject({f0}, 0.0, c);
   bank.addObject(obj);
   const double g = 1.0;
-  bank.addImpact(ImpactDesc{0, t0, tau, &g});
+  bank.addImpact(ImpactDesc{0, t0, tau, &g, shape});
   return test::renderAll(bank, frames);
 }
 
@@ -92,6 +95,73 @@ TEST(ContactPulse, MatchesQuadratureOfTheConvolution) {
       }
     }
   }
+}
+
+TEST(ContactPulse, BoxPulseMatchesQuadratureOfTheConvolution) {
+  const double rate = 48000.0, h = 1.0 / rate;
+  const double modes[][2] = {{3000.0, 50.0}, {9000.0, 8000.0}, {500.0, 2 * 2 * M_PI * 500.0}, {500.0, 6 * 2 * M_PI * 500.0}};
+  for (const auto& m : modes) {
+    const double lambda = std::pow(2 * M_PI * m[0], 2);
+    for (double tau_samples : {0.3, 3.7, 24.0, 200.0}) {
+      for (bool dp : {false, true}) {
+        const double t0 = 10.25 * h, tau = tau_samples * h;
+        const std::vector<float> out = renderPulse(m[0], m[1], t0, tau, dp, 400, rate, PulseShape::Box);
+        double peak = 0, err = 0;
+        for (size_t n = 0; n < out.size(); ++n) {
+          const double ref = pulseReference(lambda, m[1], t0, tau, n * h, PulseShape::Box);
+          peak = std::max(peak, std::fabs(ref));
+          err = std::max(err, std::fabs(out[n] - ref));
+        }
+        ASSERT_GT(peak, 0.0);
+        // The box's static part (-lambda q + g f) cancels in float: a few float ulps of the peak.
+        EXPECT_LT(err / peak, dp ? 2e-7 : 5e-6) << "f0 " << m[0] << " c " << m[1] << " tau " << tau_samples;
+      }
+    }
+  }
+}
+
+// Resting contact arrives as one impulse per physics step. As contiguous boxes they are exactly a
+// constant force: the onset rings once and dies away, nothing buzzes at the step rate. Half-sines
+// of the same impulses would buzz at 2 kHz forever.
+TEST(ContactPulse, SteadyForceAsContiguousBoxesIsSilentAfterItsOnset) {
+  const double rate = 48000.0, step = 0.5e-3, force = 3.0;
+  for (PulseShape shape : {PulseShape::Box, PulseShape::HalfSine}) {
+    SynthSettings s;
+    s.sample_rate_hz = rate;
+    s.audibility_threshold = 0.0;
+    OscillatorBank bank(s);
+    bank.addObject(test::makeObject({1000.0, 4000.0, 6000.0}, 0.0, 20.0));  // decay 10/s
+    const double g[] = {force * step, force * step, force * step};
+    for (int k = 0; k < 4000; ++k) bank.addImpact(ImpactDesc{0, 0.01 + k * step, step, g, shape});
+    const std::vector<float> out = test::renderAll(bank, static_cast<size_t>(2.0 * rate));
+    const double onset = test::peakAbs(std::vector<float>(out.begin(), out.begin() + static_cast<size_t>(0.1 * rate)));
+    const double tail = test::peakAbs(std::vector<float>(out.end() - static_cast<size_t>(0.2 * rate), out.end()));
+    if (shape == PulseShape::Box)
+      // -100 dB: what is left is float32 rounding of the cancelling static parts.
+      EXPECT_LT(tail / onset, 1e-5) << "a steady force must be silent once its onset has decayed";
+    else
+      EXPECT_GT(tail / onset, 1e-2) << "half-sine trains buzz: the reason resting contact uses boxes";
+  }
+}
+
+TEST(ContactPulse, ContiguousBoxesAddUpToOneLongBox) {
+  const double rate = 48000.0, h = 1.0 / rate;
+  auto render = [&](int pieces) {
+    SynthSettings s;
+    s.sample_rate_hz = rate;
+    s.double_precision = true;
+    s.audibility_threshold = 0.0;
+    OscillatorBank bank(s);
+    bank.addObject(test::makeObject({700.0, 2500.0}, 1e-7, 5.0));
+    const double tau = 37.3 * h / pieces;
+    const double g[] = {1.0 / pieces, 1.0 / pieces};
+    for (int k = 0; k < pieces; ++k) bank.addImpact(ImpactDesc{0, 5.2 * h + k * tau, tau, g, PulseShape::Box});
+    return test::renderAll(bank, 2000);
+  };
+  const std::vector<float> one = render(1), many = render(10);
+  double err = 0;
+  for (size_t n = 0; n < one.size(); ++n) err = std::max(err, std::fabs(double(one[n]) - many[n]));
+  EXPECT_LT(err / test::peakAbs(one), 1e-6);
 }
 
 TEST(ContactPulse, ShortPulseConvergesToIdealImpulse) {

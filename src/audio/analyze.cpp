@@ -133,20 +133,31 @@ Candidate interpolatePeak(const Spectrum& spectrum, size_t k) {
   Candidate candidate;
   candidate.freq_hz = (static_cast<double>(k) + p) * spectrum.bin_hz;
   candidate.amplitude = std::exp(b - 0.25 * (a - c) * p);
-  // -3 dB half width: walk out on both sides and interpolate linearly.
+  return candidate;
+}
+
+/// -3 dB half width of a peak: walk out on both sides (stopping at a valley, which belongs to
+/// a neighbour) and interpolate linearly.
+double halfWidthHz(const Spectrum& spectrum, const Candidate& candidate) {
   const double half_power = candidate.amplitude / std::sqrt(2.0);
+  const double k_peak = candidate.freq_hz / spectrum.bin_hz;
+  const auto k = static_cast<size_t>(std::lround(k_peak));
+  const size_t last = spectrum.amplitude.size() - 1;
+  const double* a = spectrum.amplitude.data();
   auto edge = [&](int direction) {
     size_t j = k;
-    const size_t last = spectrum.amplitude.size() - 1;
-    while (j > 0 && j < last && spectrum.amplitude[j] > half_power) j = direction > 0 ? j + 1 : j - 1;
+    for (;;) {
+      const size_t next = direction > 0 ? j + 1 : j - 1;
+      if (j == 0 || j == last || a[j] <= half_power || a[next] > a[j]) break;
+      j = next;
+    }
+    if (j == k) return 0.5;
     const size_t inner = direction > 0 ? j - 1 : j + 1;
-    const double y0 = spectrum.amplitude[inner];
-    const double y1 = spectrum.amplitude[j];
-    const double frac = y0 != y1 ? std::clamp((y0 - half_power) / (y0 - y1), 0.0, 1.0) : 0.0;
-    return std::fabs((static_cast<double>(inner) + direction * frac) - static_cast<double>(k) - p);
+    const double y0 = a[inner], y1 = a[j];
+    const double frac = y0 > y1 ? std::clamp((y0 - half_power) / (y0 - y1), 0.0, 1.0) : 1.0;
+    return std::fabs(static_cast<double>(inner) + direction * frac - k_peak);
   };
-  candidate.half_width_hz = 0.5 * (edge(+1) + edge(-1)) * spectrum.bin_hz;
-  return candidate;
+  return 0.5 * (edge(+1) + edge(-1)) * spectrum.bin_hz;
 }
 
 /// Blackman-Harris 4-term window: -92 dB sidelobes, main lobe +-4 bins (Harris, "On the use of
@@ -227,39 +238,52 @@ DecayFit fitDecayWithFrame(const Mono& mono, double rate_hz, double freq_hz, dou
   }
   const size_t count = m_end - m_max;
   if (count < 4) return {};
-  double mean_t = 0.0, mean_y = 0.0, mean_p = 0.0;
+  double mean_t = 0.0, mean_y = 0.0;
   for (size_t m = m_max; m < m_end; ++m) {
     mean_t += times_s[m];
     mean_y += logs[m];
-    mean_p += phases[m];
   }
   mean_t /= static_cast<double>(count);
   mean_y /= static_cast<double>(count);
-  mean_p /= static_cast<double>(count);
-  double stt = 0.0, sty = 0.0, stp = 0.0;
+  double stt = 0.0, sty = 0.0;
   for (size_t m = m_max; m < m_end; ++m) {
     stt += (times_s[m] - mean_t) * (times_s[m] - mean_t);
     sty += (times_s[m] - mean_t) * (logs[m] - mean_y);
-    stp += (times_s[m] - mean_t) * (phases[m] - mean_p);
   }
   if (!(stt > 0.0)) return {};
+  // The phase line is weighted by |Y_m|^2: in additive noise the variance of arg Y_m grows as
+  // 1 / |Y_m|^2 (weighted least squares), so the quiet end of the range barely counts.
+  double sw = 0.0, wt = 0.0, wp = 0.0;
+  for (size_t m = m_max; m < m_end; ++m) {
+    const double w = std::exp(2.0 * (logs[m] - log_max));
+    sw += w;
+    wt += w * times_s[m];
+    wp += w * phases[m];
+  }
+  const double wmean_t = wt / sw, wmean_p = wp / sw;
+  double wstt = 0.0, wstp = 0.0;
+  for (size_t m = m_max; m < m_end; ++m) {
+    const double w = std::exp(2.0 * (logs[m] - log_max));
+    wstt += w * (times_s[m] - wmean_t) * (times_s[m] - wmean_t);
+    wstp += w * (times_s[m] - wmean_t) * (phases[m] - wmean_p);
+  }
   DecayFit fit;
   fit.decay_per_s = std::max(0.0, -sty / stt);  // a rising envelope is reported as no decay
-  fit.freq_hz = freq_hz + stp / stt / (2.0 * kPi);
+  fit.freq_hz = wstt > 0.0 ? freq_hz + wstp / wstt / (2.0 * kPi) : freq_hz;
   return fit;
 }
 
 /// Frame length: long enough to put the nearest other peak (df Hz away) and the peak's own
 /// negative-frequency image beyond the Blackman-Harris main lobe (4 bins; 5/df s leaves a
-/// margin), short enough (<= 8/d s) that a fast-decaying mode is not buried under the window's
-/// rise while a slower neighbour fills the frame. Slow decays: up to half of the signal.
+/// margin), and at least 20 ms; short enough (<= 8/d s) that a fast-decaying mode is not
+/// buried under the window's rise while a slower neighbour fills the frame; at most half of
+/// the signal. No longer than that: the line fit is exact for any length, and the cost is
+/// (frames) x (length).
 size_t frameLengthFor(double decay_per_s, double freq_hz, double nearest_df_hz, double rate_hz, size_t available) {
   const double image_s = 2.5 / freq_hz;
   const double separation_s = nearest_df_hz > 0.0 ? 5.0 / nearest_df_hz : 0.0;
-  const double infinity = std::numeric_limits<double>::infinity();
-  const double low_s = decay_per_s > 0.0 ? 2.0 / decay_per_s : infinity;
-  const double high_s = decay_per_s > 0.0 ? 8.0 / decay_per_s : infinity;
-  const double length_s = std::max(image_s, std::min(std::max(low_s, separation_s), high_s));
+  const double high_s = decay_per_s > 0.0 ? 8.0 / decay_per_s : std::numeric_limits<double>::infinity();
+  const double length_s = std::max(image_s, std::min(std::max(0.02, separation_s), high_s));
   const double max_frame = static_cast<double>(available / 2);
   return static_cast<size_t>(std::clamp(std::round(length_s * rate_hz), 16.0, std::max(16.0, max_frame)));
 }
@@ -296,10 +320,15 @@ AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& optio
   if (!(mono.peak > 0.0) || length < 16 || options.max_peaks <= 0) return analysis;
 
   const Spectrum spectrum = wholeSpectrum(mono, options.window, audio.sample_rate_hz);
+  // Local maxima within 1 dB of the floor (interpolation raises a peak by less than that);
+  // a long file has millions of ripples far below it.
+  const double* bins = spectrum.amplitude.data();
+  const double loudest_bin = *std::max_element(spectrum.amplitude.begin(), spectrum.amplitude.end());
+  const double candidate_floor = loudest_bin * std::pow(10.0, (options.floor_db - 1.0) / 20.0);
   std::vector<Candidate> candidates;
   for (size_t k = 1; k + 1 < spectrum.amplitude.size(); ++k) {
-    const double* a = spectrum.amplitude.data();
-    if (a[k] > a[k - 1] && a[k] >= a[k + 1] && a[k - 1] > 0.0 && a[k + 1] > 0.0)
+    if (bins[k] >= candidate_floor && bins[k] > bins[k - 1] && bins[k] >= bins[k + 1] && bins[k - 1] > 0.0 &&
+        bins[k + 1] > 0.0)
       candidates.push_back(interpolatePeak(spectrum, k));
   }
   if (candidates.empty()) return analysis;
@@ -312,8 +341,11 @@ AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& optio
   const double bin_hz = audio.sample_rate_hz / static_cast<double>(length);  // of the unpadded DFT
   const double min_separation_hz = options.min_separation_bins * bin_hz;
   std::vector<Candidate> accepted;
+  // Enough neighbours to choose decay frame lengths; more only costs time (a very low floor
+  // in a noisy file has thousands of candidates).
+  const size_t max_accepted = 4 * static_cast<size_t>(options.max_peaks) + 16;
   for (const Candidate& c : candidates) {
-    if (c.amplitude < floor_amplitude) break;
+    if (c.amplitude < floor_amplitude || accepted.size() >= max_accepted) break;
     const bool separate = std::all_of(accepted.begin(), accepted.end(), [&](const Candidate& a) {
       const double df_hz = std::fabs(a.freq_hz - c.freq_hz);
       if (df_hz < min_separation_hz) return false;
@@ -328,12 +360,13 @@ AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& optio
 
   const size_t reported = std::min(accepted.size(), static_cast<size_t>(options.max_peaks));
   for (size_t i = 0; i < reported; ++i) {
-    const Candidate& c = accepted[i];
+    Candidate& c = accepted[i];
     SpectralPeak peak;
     peak.freq_hz = c.freq_hz;
     peak.level_dbfs = 20.0 * std::log10(c.amplitude);
     peak.level_db = 20.0 * std::log10(c.amplitude / strongest);
     if (options.fit_decay) {
+      c.half_width_hz = halfWidthHz(spectrum, c);
       // Neighbours include peaks above the floor that are not reported: they still leak.
       double nearest_df_hz = 0.0;
       for (size_t j = 0; j < accepted.size(); ++j) {

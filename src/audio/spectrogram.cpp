@@ -45,11 +45,9 @@ const std::array<uint8_t, 5>* glyph(char c) {
       {7, 4, 7, 1, 7}, {7, 4, 7, 5, 7}, {7, 1, 1, 1, 1}, {7, 5, 7, 5, 7}, {7, 5, 7, 1, 7}};
   static const std::array<uint8_t, 5> kDot = {0, 0, 0, 0, 2};
   static const std::array<uint8_t, 5> kK = {4, 5, 6, 5, 5};
-  static const std::array<uint8_t, 5> kS = {3, 4, 2, 1, 6};
   if (c >= '0' && c <= '9') return &kDigits[c - '0'];
   if (c == '.') return &kDot;
   if (c == 'k') return &kK;
-  if (c == 's') return &kS;
   return nullptr;
 }
 
@@ -153,13 +151,15 @@ Status writeSpectrogramPng(const std::string& path, const AudioBuffer& audio, co
   }
   const double duration_s = static_cast<double>(frames) / audio.sample_rate_hz;
 
-  // STFT: one Hann frame centred on each pixel column.
+  // STFT: one frame per pixel column. Blackman-Harris (-92 dB sidelobes; Harris 1978) rather
+  // than Hann (-31 dB): the colour range is ~100 dB, and Hann's sidelobes would draw a skirt
+  // around every strong line.
   const auto n = static_cast<size_t>(options.fft_size);
   std::vector<double> window(n);
   double window_sum = 0.0;
   for (size_t i = 0; i < n; ++i) {
-    const double s = std::sin(kPi * (static_cast<double>(i) + 0.5) / static_cast<double>(n));
-    window[i] = s * s;
+    const double x = 2.0 * kPi * (static_cast<double>(i) + 0.5) / static_cast<double>(n);
+    window[i] = 0.35875 - 0.48829 * std::cos(x) + 0.14128 * std::cos(2.0 * x) - 0.01168 * std::cos(3.0 * x);
     window_sum += window[i];
   }
   double* in = fftw_alloc_real(n);
@@ -178,7 +178,10 @@ Status writeSpectrogramPng(const std::string& path, const AudioBuffer& audio, co
   double loudest_db = -std::numeric_limits<double>::infinity();
   for (int px = 0; px < plot_w; ++px) {
     const double centre_s = (px + 0.5) / plot_w * duration_s;
-    const auto start = static_cast<long long>(std::llround(centre_s * audio.sample_rate_hz)) - static_cast<long long>(n / 2);
+    // Frames are kept inside the signal: zeros past the end would cut a ringing tone off and
+    // paint a broadband stripe that is not in the sound.
+    auto start = static_cast<long long>(std::llround(centre_s * audio.sample_rate_hz)) - static_cast<long long>(n / 2);
+    start = std::max(0LL, std::min(start, static_cast<long long>(frames) - static_cast<long long>(n)));
     for (size_t i = 0; i < n; ++i) {
       const long long j = start + static_cast<long long>(i);
       in[i] = (j >= 0 && j < static_cast<long long>(frames)) ? window[i] * mono[static_cast<size_t>(j)] : 0.0;
@@ -238,7 +241,7 @@ Status writeSpectrogramPng(const std::string& path, const AudioBuffer& audio, co
       const double u = options.log_frequency ? std::log(f / bottom_hz) / std::log(top_hz / bottom_hz) : f / top_hz;
       const int y = top + plot_h - 1 - static_cast<int>(std::lround(u * (plot_h - 1)));
       for (int dx = 1; dx <= 3; ++dx) image.set(left - dx, y, ink);
-      if (last_label_y - y < 5 * kGlyphScale + 4) continue;
+      if (last_label_y - y < 5 * kGlyphScale + 4 || f == 0.0) continue;
       const std::string text = tickLabel(f, true);
       drawText(image, left - 5 - textWidth(text), std::clamp(y - 5 * kGlyphScale / 2, 0, image.height - 5 * kGlyphScale), text,
                ink);
@@ -249,7 +252,7 @@ Status writeSpectrogramPng(const std::string& path, const AudioBuffer& audio, co
       for (double t = 0.0; t <= duration_s + 1e-12; t += step) {
         const int x = left + static_cast<int>(std::lround(t / duration_s * (plot_w - 1)));
         for (int dy = 0; dy < 3; ++dy) image.set(x, top + plot_h + dy, ink);
-        const std::string text = tickLabel(t, false) + (t == 0.0 ? "s" : "");
+        const std::string text = tickLabel(t, false);
         drawText(image, std::clamp(x - textWidth(text) / 2, 0, image.width - textWidth(text)), top + plot_h + 5, text, ink);
       }
     }

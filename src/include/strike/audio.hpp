@@ -89,14 +89,25 @@ struct AudioAnalysis {
 /// Spectrum: the whole signal from the onset, windowed (AnalyzeOptions::window), zero-padded to
 /// a power of two >= 2N; local maxima of |X| above floor_db, located by quadratic interpolation
 /// of log|X| over three bins (Smith, Spectral Audio Signal Processing, "Quadratic Interpolation
-/// of Spectral Peaks"). Measured accuracy (tests/unit/audio/analyze_test.cpp): frequency within
-/// 0.01% and level within 0.05 dB for stationary tones at least 20 bins from stronger ones.
+/// of Spectral Peaks"). Peaks closer than min_separation_bins to a stronger one, and (Hann)
+/// peaks under twice a stronger peak's sidelobe envelope, are dropped.
 /// Decay: for each peak, the magnitude of a Blackman-Harris-windowed frame demodulated at the
 /// peak frequency, slid over the signal from the onset; for A e^(-dt) its log is exactly linear
 /// in the frame start with slope -d, whatever the frame length, so a least-squares line over the
-/// range above the noise floor gives d. The frame length adapts to the decay (2/d..8/d s) and to
-/// the nearest other peak (5/df s, so it falls in the -92 dB sidelobes). Measured: within 0.5%
-/// for d from 1/s to 200/s and for two equal peaks 7 Hz apart.
+/// range above the noise floor (down to 10 dB above it, at most 60 dB) gives d. The frame
+/// length adapts to the nearest other peak (5/df s, so it falls in the -92 dB sidelobes), the
+/// negative-frequency image (2.5/f s) and the decay (<= 8/d s). When the fit succeeds, freq_hz
+/// is refined from the slope of the same frames' phase (|Y|^2-weighted), which a wide line's
+/// negative-frequency image does not pull.
+/// Measured (tests/unit/audio/analyze_test.cpp, 48 kHz float signals):
+///   stationary 440 / 1234.5 / 5000 Hz at 0 / -20 / -40 dB, 1 s: frequency within 3e-6
+///   (0.006 bin), level within 0.02 dB (OnsetHalfHann) or 0.004 dB (Hann);
+///   d = 1..200 /s at 150, 1000, 7000 Hz, 2 s: d within 0.001 %, frequency within 2e-8;
+///   five struck-bar modes (d 2..180 /s): d within 0.03 %; two equal peaks 7 Hz apart
+///   (d 3 and 9 /s): within 0.03 %; white noise 74 dB below the start: within 0.7 %;
+///   16-bit quantized with silence before the onset: within 0.01 %.
+/// Cost: one FFT of 2N plus, per peak, ~50-100 frames of the chosen length (10 s of 192 kHz
+/// stereo with 30 modes: 0.35 s).
 AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& options);
 
 // ---- spectrogram picture: target strike_fftw -------------------------------------------------

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 
 #include "audio/test_util.hpp"
@@ -126,6 +127,31 @@ TEST(Analyze, DecayThroughSixteenBitQuantizationAndSilenceBeforeOnset) {
   EXPECT_NEAR(a.peaks[0].freq_hz, 880.0, 0.5);
   std::printf("    quantized d 40: fitted %.4f (%+.3f%%)\n", a.peaks[0].decay_per_s, 100.0 * (a.peaks[0].decay_per_s - 40.0) / 40.0);
   EXPECT_NEAR(a.peaks[0].decay_per_s, 40.0, 0.03 * 40.0);
+}
+
+TEST(Analyze, DecayAboveAWhiteNoiseFloor) {
+  // Noise 74 dB below the start of the tone: the fit must stop above the floor, not bend into it.
+  for (double d : {5.0, 20.0, 150.0}) {
+    AudioBuffer audio = partials({{2000.0, 0.5, d, 0.4}, {3100.0, 0.3, 2.0 * d, 0.9}}, 48000.0, 1.5);
+    uint32_t state = 99u;
+    for (float& s : audio.samples) {
+      double sum = 0.0;  // Irwin-Hall: sum of 12 uniforms - 6 is near-Gaussian with unit variance
+      for (int i = 0; i < 12; ++i) {
+        state = state * 1664525u + 1013904223u;
+        sum += static_cast<double>(state) / 4294967296.0;
+      }
+      s += static_cast<float>(1e-4 * (sum - 6.0));
+    }
+    const AudioAnalysis a = analyzeAudio(audio, AnalyzeOptions{});
+    const SpectralPeak* p1 = nearest(a, 2000.0);
+    const SpectralPeak* p2 = nearest(a, 3100.0);
+    ASSERT_TRUE(p1 && p2);
+    std::printf("    noise, d %5.1f: fitted %.4f (%+.3f%%), 2d: fitted %.4f (%+.3f%%)\n", d, p1->decay_per_s,
+                100.0 * (p1->decay_per_s - d) / d, p2->decay_per_s, 100.0 * (p2->decay_per_s - 2.0 * d) / (2.0 * d));
+    EXPECT_NEAR(p1->decay_per_s, d, 0.03 * d);
+    EXPECT_NEAR(p2->decay_per_s, 2.0 * d, 0.03 * 2.0 * d);
+    EXPECT_NEAR(p1->freq_hz, 2000.0, 0.1);
+  }
 }
 
 TEST(Analyze, LevelStatisticsAndClipping) {

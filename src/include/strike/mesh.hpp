@@ -66,7 +66,9 @@ bool isPrimitiveSpec(const std::string& spec);
 
 /// Primitives, centred at the origin, metres. Box: structured hex grid split into tets,
 /// cells about target_edge_m (0: ~8 cells along the shortest side... see the implementation).
-/// Sphere and cylinder: a closed triangle surface (for tetrahedralize()).
+/// Sphere and cylinder: a closed, outward triangle surface (for tetrahedralize()), edges about
+/// target_edge_m (0: a default), scaled so that the polyhedron encloses exactly the analytic
+/// volume (so mass is right). Sphere: geodesic icosphere. Cylinder: axis z, height H.
 Result<TetMesh> makeBox(double lx, double ly, double lz, const MeshOptions& options);
 Result<SurfaceMesh> makeSphereSurface(double radius, double target_edge_m);
 Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double target_edge_m);
@@ -110,12 +112,22 @@ Status checkClosedSurface(const SurfaceMesh& surface, const std::string& source)
 // ---- strike_tetgen (AGPL) -------------------------------------------------------------------
 
 /// Tetrahedralizes a closed surface with TetGen ("pq<ratio>a<volume>", quiet), then
-/// validates. Throws nothing; TetGen failures become Errors.
+/// validates (and promotes to Tet10 when options.order == 2). Throws nothing; TetGen failures
+/// become Errors. Before meshing, the surface must pass checkClosedSurface() and TetGen's own
+/// self-intersection test (-d), because TetGen can crash or hang on such input.
+/// Max tet volume: target_edge_m^3 / (6 sqrt 2) (a regular tet of that edge); when
+/// target_edge_m == 0, the enclosed volume / 600, which gives a few thousand tets for a compact
+/// object (more for thin-walled ones, where the surface sets the size).
 Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& options,
                                const std::string& source);
 
 /// Turns a MESH argument (a primitive spec or a file path) into a validated TetMesh of the
 /// requested order. Surface files and sphere/cylinder primitives go through tetrahedralize().
+/// Tet files keep their own order where it is higher: a Tet4 file with order 2 requested is
+/// promoted, but a Tet10 file with order 1 requested stays Tet10 (with a warning), because its
+/// mid-edge nodes may be curved geometry the user made on purpose. mesh.order tells which.
+/// Primitive specs are strict ("box:0.3,0.02,0.02": no spaces, every length finite and > 0).
+/// source_hash: FNV-1a 64 of the file bytes (.node then .ele for TetGen), or of the spec text.
 Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& options);
 
 }  // namespace strike

@@ -17,10 +17,11 @@ const char kUsage[] =
     "usage: strike COMMAND [ARGS] [--help]\n"
     "\n"
     "commands:\n"
-    "  modes MESH -o BANK.modes    precompute an object's vibration modes (FEM + ARPACK)\n"
-    "  info BANK.modes [--json]    show a mode bank: frequencies, decay, T60, mass\n"
-    "  hit BANK.modes -o OUT.wav   strike an object once and render the sound\n"
-    "  analyze AUDIO.wav [--json]  spectral peaks, levels and decay rates of a sound\n"
+    "  render SCENE.json -o OUT.wav   simulate a collision scene (Bullet) and render its sound\n"
+    "  modes MESH -o BANK.modes       precompute an object's vibration modes (FEM + ARPACK)\n"
+    "  info BANK.modes [--json]       show a mode bank: frequencies, decay, T60, mass\n"
+    "  hit BANK.modes -o OUT.wav      strike an object once and render the sound\n"
+    "  analyze AUDIO.wav [--json]     spectral peaks, levels and decay rates of a sound\n"
     "\n"
     "Run `strike COMMAND --help` for a command's options and examples. SI units everywhere.\n"
     "Exit codes: 0 success, 1 bad input (the message names the file, field and value), 2 internal error.\n";
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
   const std::string command = argv[1];
   const std::vector<std::string> args(argv + 2, argv + argc);
   try {
+    if (command == "render") return strike::cli::runRender(args);
     if (command == "modes") return strike::cli::runModes(args);
     if (command == "info") return strike::cli::runInfo(args);
     if (command == "hit") return strike::cli::runHit(args);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "strike/precompute.hpp"
 
+#include <Eigen/Geometry>
 #include <chrono>
 #include <map>
 

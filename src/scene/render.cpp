@@ -335,7 +335,7 @@ Status writeEventsCsv(const std::string& path, const RenderResult& result) {
   char line[512];
   for (const ContactEvent& e : result.events) {
     std::snprintf(line, sizeof line,
-                  ",%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n",
+                  ",%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n",
                   e.new_contact ? 1 : 0, e.normal_speed_m_s, e.normal_impulse_n_s, e.friction_impulse_n_s,
                   e.point_world[0], e.point_world[1], e.point_world[2], e.normal_world[0], e.normal_world[1],
                   e.normal_world[2], e.point_a_mesh[0], e.point_a_mesh[1], e.point_a_mesh[2], e.point_b_mesh[0],

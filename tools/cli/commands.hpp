@@ -14,6 +14,7 @@ int runModes(const std::vector<std::string>& args);
 int runInfo(const std::vector<std::string>& args);
 int runHit(const std::vector<std::string>& args);
 int runAnalyze(const std::vector<std::string>& args);
+int runRender(const std::vector<std::string>& args);
 
 /// Prints "strike <command>: error: <message>" and returns the exit code for the error's kind.
 int reportError(const std::string& command, const Error& error);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Contact: where an impulse lands on the surface (modal projection, O'Brien et al. 2002;
 // van den Doel & Pai 1998) and how long it lasts (Hertz theory, Johnson 1985).
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -66,21 +67,21 @@ Barycentric closestOnTriangle(const double* p, const double* a, const double* b,
 
 }  // namespace
 
-std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]) {
-  std::vector<double> g(bank.modeCount(), 0.0);
-  if (vertex >= bank.surfaceVertexCount() || bank.shapes.size() < bank.modeCount() * bank.surfaceVertexCount() * 3)
-    return g;
-  for (size_t m = 0; m < bank.modeCount(); ++m) {
+void projectImpulseAtVertexInto(const ModeBank& bank, size_t vertex, const double impulse[3], double* out) {
+  const size_t nm = bank.modeCount();
+  std::fill(out, out + nm, 0.0);
+  if (vertex >= bank.surfaceVertexCount() || bank.shapes.size() < nm * bank.surfaceVertexCount() * 3) return;
+  for (size_t m = 0; m < nm; ++m) {
     const float* phi = bank.shapeAt(m, vertex);
-    g[m] = phi[0] * impulse[0] + phi[1] * impulse[1] + phi[2] * impulse[2];
+    out[m] = phi[0] * impulse[0] + phi[1] * impulse[1] + phi[2] * impulse[2];
   }
-  return g;
 }
 
-std::vector<double> projectImpulse(const ModeBank& bank, const double point[3], const double impulse[3]) {
+void projectImpulseInto(const ModeBank& bank, const double point[3], const double impulse[3], double* out) {
   const size_t nv = bank.surfaceVertexCount();
-  std::vector<double> g(bank.modeCount(), 0.0);
-  if (nv == 0 || bank.shapes.size() < bank.modeCount() * nv * 3) return g;
+  const size_t nm = bank.modeCount();
+  std::fill(out, out + nm, 0.0);
+  if (nv == 0 || bank.shapes.size() < nm * nv * 3) return;
   // Brute force over triangles: a strike is projected once per contact event, and banks have a
   // few thousand surface triangles at most.
   const double* pos = bank.surface_positions.data();
@@ -103,16 +104,28 @@ std::vector<double> projectImpulse(const ModeBank& bank, const double point[3], 
       for (int i = 0; i < 3; ++i) d2 += (pos[3 * v + i] - point[i]) * (pos[3 * v + i] - point[i]);
       if (d2 < best) best = d2, best_v[0] = static_cast<uint32_t>(v);
     }
-    return projectImpulseAtVertex(bank, best_v[0], impulse);
+    projectImpulseAtVertexInto(bank, best_v[0], impulse, out);
+    return;
   }
-  for (size_t m = 0; m < bank.modeCount(); ++m) {
+  for (size_t m = 0; m < nm; ++m) {
     double s = 0.0;
     for (int k = 0; k < 3; ++k) {
       const float* phi = bank.shapeAt(m, best_v[k]);
       s += best_w[k] * (phi[0] * impulse[0] + phi[1] * impulse[1] + phi[2] * impulse[2]);
     }
-    g[m] = s;
+    out[m] = s;
   }
+}
+
+std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]) {
+  std::vector<double> g(bank.modeCount(), 0.0);
+  projectImpulseAtVertexInto(bank, vertex, impulse, g.data());
+  return g;
+}
+
+std::vector<double> projectImpulse(const ModeBank& bank, const double point[3], const double impulse[3]) {
+  std::vector<double> g(bank.modeCount(), 0.0);
+  projectImpulseInto(bank, point, impulse, g.data());
   return g;
 }
 

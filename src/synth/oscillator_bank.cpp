@@ -79,6 +79,7 @@ class AlignedBuffer {
     size_ = n;
   }
   T* data() { return data_; }
+  const T* data_const() const { return data_; }
   T& operator[](size_t i) { return data_[i]; }
   size_t size() const { return size_; }
 
@@ -180,8 +181,12 @@ struct OscillatorBank::Impl {
   AlignedBuffer<float> acc;  // kBlock x lanes partial sums
   std::vector<double> mix;   // kBlock output samples being assembled
 
-  std::vector<Impact> impacts;  // sorted by start_sample; [0, cursor) finished
-  size_t cursor = 0;
+  // Impact records are pooled so that a reserved bank schedules impacts without allocating
+  // (reserveImpacts, addImpactNoAlloc): records keep their vectors' capacity when recycled.
+  std::vector<Impact> pool;
+  std::vector<uint32_t> free_records;  // indices into pool; capacity >= pool.size()
+  std::vector<uint32_t> pending;       // indices into pool, sorted by start_sample; capacity >= pool.size()
+  size_t reserved_hits = 0, reserved_transient = 0;
   uint64_t pos = 0;  // next sample to render
   SynthStats stats;
 
@@ -250,16 +255,32 @@ struct OscillatorBank::Impl {
     damped_mode.reserve(damped_total);
     damped_x.reserve(2 * damped_total);
     objects.push_back(obj);
+    if (reserved_hits > 0 || reserved_transient > 0) reserveImpacts(pool.size(), reserved_transient);
     return static_cast<uint32_t>(objects.size() - 1);
   }
 
-  void addImpact(const ImpactDesc& desc) {
-    if (desc.object >= objects.size()) return;
-    ++stats.impacts;
-    if (cursor > 0) {  // drop finished impacts here, never in render()
-      impacts.erase(impacts.begin(), impacts.begin() + static_cast<std::ptrdiff_t>(cursor));
-      cursor = 0;
+  // Every record can hold an impact on the largest object and a pulse of max_transient samples.
+  void reserveImpacts(size_t records, size_t max_transient) {
+    size_t max_modes = 0;
+    for (const ObjectInfo& o : objects) max_modes = std::max<size_t>(max_modes, o.mode_count);
+    reserved_hits = std::max(reserved_hits, max_modes);
+    reserved_transient = std::max(reserved_transient, max_transient);
+    while (pool.size() < records) {
+      pool.emplace_back();
+      free_records.reserve(pool.size());
+      free_records.push_back(static_cast<uint32_t>(pool.size() - 1));
     }
+    pending.reserve(pool.size());
+    free_records.reserve(pool.size());
+    for (Impact& im : pool) {
+      im.hits.reserve(reserved_hits);
+      im.transient.reserve(reserved_transient);
+    }
+  }
+
+  // no_alloc: fail with NoCapacity rather than grow a record or the pool.
+  ImpactResult addImpact(const ImpactDesc& desc, bool no_alloc) {
+    if (desc.object >= objects.size()) return ImpactResult::BadObject;
     const ObjectInfo& obj = objects[desc.object];
     const double now = static_cast<double>(pos);
     double t0 = (desc.time_s + obj.delay_s) * fs;  // in samples
@@ -271,12 +292,26 @@ struct OscillatorBank::Impl {
     if (ideal) t0 += 0.5 * tau, tau = 0.0;
     // A sample counts as "at or after" an instant up to 1e-7 samples of rounding; the formulas
     // below are analytic, so evaluating them a hair before the instant is harmless.
-    Impact im;
-    im.start_sample = static_cast<uint64_t>(std::ceil(t0 - 1e-7));
-    im.end_sample = ideal ? im.start_sample : static_cast<uint64_t>(std::ceil(t0 + tau - 1e-7));
-    im.start_sample = std::max<uint64_t>(im.start_sample, pos);
-    im.end_sample = std::max(im.end_sample, im.start_sample);
-    im.transient.assign(im.end_sample - im.start_sample, 0.0);
+    uint64_t start_sample = static_cast<uint64_t>(std::ceil(t0 - 1e-7));
+    uint64_t end_sample = ideal ? start_sample : static_cast<uint64_t>(std::ceil(t0 + tau - 1e-7));
+    start_sample = std::max<uint64_t>(start_sample, pos);
+    end_sample = std::max(end_sample, start_sample);
+    const size_t transient_len = static_cast<size_t>(end_sample - start_sample);
+    if (free_records.empty()) {
+      if (no_alloc) return ImpactResult::NoCapacity;
+      reserveImpacts(pool.size() + 1, 0);
+    }
+    const uint32_t record = free_records.back();
+    Impact& im = pool[record];
+    if (no_alloc && (im.hits.capacity() < obj.mode_count || im.transient.capacity() < transient_len))
+      return ImpactResult::NoCapacity;
+    free_records.pop_back();
+    ++stats.impacts;
+    im.start_sample = start_sample;
+    im.end_sample = end_sample;
+    im.injected = false;
+    im.hits.clear();
+    im.transient.assign(transient_len, 0.0);  // within capacity: no allocation
     const double tau_s = tau * h;
     const double after_end_s = (static_cast<double>(im.end_sample) - (t0 + tau)) * h;
     const double first_u_s = (static_cast<double>(im.start_sample) - t0) * h;
@@ -358,11 +393,13 @@ struct OscillatorBank::Impl {
     }
     if (im.hits.empty()) {
       ++stats.impacts_inaudible;
-      return;
+      free_records.push_back(record);
+      return ImpactResult::Inaudible;
     }
-    auto at = std::upper_bound(impacts.begin(), impacts.end(), im.start_sample,
-                               [](uint64_t s, const Impact& other) { return s < other.start_sample; });
-    impacts.insert(at, std::move(im));
+    auto at = std::upper_bound(pending.begin(), pending.end(), im.start_sample,
+                               [this](uint64_t s, uint32_t other) { return s < pool[other].start_sample; });
+    pending.insert(at, record);  // capacity >= pool.size(): no allocation
+    return ImpactResult::Scheduled;
   }
 
   static double dampedAmplitude(const ModeInfo& m, double x1, double v) {
@@ -499,8 +536,8 @@ struct OscillatorBank::Impl {
     const uint64_t seg_begin = block_start + s0, seg_end = block_start + s1;
 
     // Pulse transients (precomputed, exact) overlapping this segment.
-    for (size_t k = cursor; k < impacts.size() && impacts[k].start_sample < seg_end; ++k) {
-      const Impact& im = impacts[k];
+    for (size_t k = 0; k < pending.size() && pool[pending[k]].start_sample < seg_end; ++k) {
+      const Impact& im = pool[pending[k]];
       const uint64_t from = std::max(im.start_sample, seg_begin), to = std::min(im.end_sample, seg_end);
       for (uint64_t n = from; n < to; ++n) mix[n - block_start] += im.transient[n - im.start_sample];
     }
@@ -510,8 +547,8 @@ struct OscillatorBank::Impl {
     while (a < s1) {
       const uint64_t abs_a = block_start + a;
       uint64_t next = seg_end;
-      for (size_t k = cursor; k < impacts.size() && impacts[k].start_sample < seg_end; ++k) {
-        Impact& im = impacts[k];
+      for (size_t k = 0; k < pending.size() && pool[pending[k]].start_sample < seg_end; ++k) {
+        Impact& im = pool[pending[k]];
         if (im.injected) continue;
         if (im.end_sample <= abs_a) {
           inject(im, a);
@@ -524,7 +561,13 @@ struct OscillatorBank::Impl {
       advance(a, b);
       a = b;
     }
-    while (cursor < impacts.size() && impacts[cursor].injected) ++cursor;
+    // Recycle injected records (their transients are over: they end where injection happens).
+    size_t kept = 0;
+    for (size_t k = 0; k < pending.size(); ++k) {
+      if (pool[pending[k]].injected) free_records.push_back(pending[k]);  // capacity >= pool.size()
+      else pending[kept++] = pending[k];
+    }
+    pending.resize(kept);  // shrinking: no allocation
     if (!use_double) kernels.reduce(acc.data(), s0, s1, mix.data() + s0);
   }
 
@@ -544,6 +587,33 @@ struct OscillatorBank::Impl {
       if (dampedAmplitude(modes[damped_mode[r]], damped_x[2 * r], damped_x[2 * r + 1]) < threshold) removeDamped(r);
       else ++r;
     }
+  }
+
+  // Squared output level of active entry k: ringing slots first, then damped modes.
+  float level2(size_t k) const {
+    if (k < n_active) {
+      if (use_double) return static_cast<float>(anc_re.data_const()[k] * anc_re.data_const()[k] +
+                                                anc_im.data_const()[k] * anc_im.data_const()[k]);
+      const float re = st_re.data_const()[k], im = st_im.data_const()[k];
+      return re * re + im * im;
+    }
+    const size_t r = k - n_active;
+    const double a = dampedAmplitude(modes[damped_mode[r]], damped_x[2 * r], damped_x[2 * r + 1]);
+    return static_cast<float>(a * a);
+  }
+
+  size_t sleepModesAtOrBelow(float threshold2) {
+    size_t culled = 0;
+    for (size_t i = 0; i < n_active;) {
+      if (level2(i) <= threshold2) removeRinging(i), ++culled;
+      else ++i;
+    }
+    for (size_t r = 0; r < damped_mode.size();) {
+      if (level2(n_active + r) <= threshold2) removeDamped(r), ++culled;
+      else ++r;
+    }
+    stats.active_modes = n_active + damped_mode.size();
+    return culled;
   }
 
   void render(float* out, size_t frames) {
@@ -569,7 +639,23 @@ OscillatorBank::OscillatorBank(OscillatorBank&&) noexcept = default;
 OscillatorBank& OscillatorBank::operator=(OscillatorBank&&) noexcept = default;
 
 uint32_t OscillatorBank::addObject(const ModalObjectDesc& object) { return impl_->addObject(object); }
-void OscillatorBank::addImpact(const ImpactDesc& impact) { impl_->addImpact(impact); }
+void OscillatorBank::addImpact(const ImpactDesc& impact) { (void)impl_->addImpact(impact, false); }
+ImpactResult OscillatorBank::addImpactNoAlloc(const ImpactDesc& impact) { return impl_->addImpact(impact, true); }
+void OscillatorBank::reserveImpacts(size_t max_pending, double max_pulse_s) {
+  const double samples = max_pulse_s * impl_->fs;
+  const size_t transient = (samples > 0.0 && std::isfinite(samples)) ? static_cast<size_t>(std::ceil(samples)) + 2 : 2;
+  impl_->reserveImpacts(max_pending, transient);
+}
+bool OscillatorBank::idle() const {
+  return impl_->n_active == 0 && impl_->damped_mode.empty() && impl_->pending.empty();
+}
+size_t OscillatorBank::activeModeCount() const { return impl_->n_active + impl_->damped_mode.size(); }
+size_t OscillatorBank::activeModeLevels(float* level2, size_t capacity) const {
+  const size_t n = std::min(capacity, activeModeCount());
+  for (size_t k = 0; k < n; ++k) level2[k] = impl_->level2(k);
+  return n;
+}
+size_t OscillatorBank::sleepModesAtOrBelow(float level2) { return impl_->sleepModesAtOrBelow(level2); }
 void OscillatorBank::render(float* out, size_t frames) {
   if (out && frames > 0) impl_->render(out, frames);
 }

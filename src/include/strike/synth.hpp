@@ -70,6 +70,14 @@ struct ImpactDesc {
   PulseShape shape = PulseShape::HalfSine;
 };
 
+/// What addImpactNoAlloc() did with an impact.
+enum class ImpactResult {
+  Scheduled,   ///< will sound
+  Inaudible,   ///< changed no mode above the audibility threshold; nothing scheduled
+  NoCapacity,  ///< dropped: no free reserved record, or the pulse is longer than reserved
+  BadObject,   ///< no such object
+};
+
 struct SynthStats {
   uint64_t modes_total = 0;         ///< over all objects
   uint64_t modes_out_of_band = 0;   ///< never synthesized (below min or above max frequency)
@@ -96,11 +104,28 @@ class OscillatorBank {
   /// integrates the pulse for every mode of the object (O(modes x pulse samples)) and allocates.
   /// Contributions below audibility_threshold are dropped (the mode is not woken).
   void addImpact(const ImpactDesc& impact);
+  /// Preallocates records for max_pending impacts that are scheduled but not yet fully injected,
+  /// each able to hold an impact on the largest object (also for objects added later) with a
+  /// pulse of up to max_pulse_s. Not real-time safe.
+  void reserveImpacts(size_t max_pending, double max_pulse_s);
+  /// addImpact() without allocation, locks or exceptions: real-time safe [audio-thread], on the
+  /// thread that calls render(). Returns NoCapacity instead of growing the reserve.
+  ImpactResult addImpactNoAlloc(const ImpactDesc& impact);
   /// Renders the next `frames` mono samples into out (overwrites). Sample n of the first call is
   /// time n / sample_rate. Output units are those of radiation_weight (Pa at the listener with
   /// radiationWeights()). [audio-thread] Never allocates, locks or throws; sets FTZ/DAZ in MXCSR
   /// for the call and restores it. Output is independent of how frames are split across calls.
   void render(float* out, size_t frames);
+  /// True when no mode is ringing and no impact is pending: render() would output zeros.
+  bool idle() const;
+  /// Modes ringing now (ringing and non-ringing kinds).
+  size_t activeModeCount() const;
+  /// Writes the squared output level (output units^2, before any gain applied outside) of up
+  /// to `capacity` active modes, in an internal order; returns how many. Real-time safe.
+  size_t activeModeLevels(float* level2, size_t capacity) const;
+  /// Puts every active mode whose squared level is <= level2 to sleep (budget culling); returns
+  /// how many. Real-time safe; call between render() calls.
+  size_t sleepModesAtOrBelow(float level2);
   /// Time of the next sample to be rendered, s.
   double time() const;
   SynthStats stats() const;
@@ -118,6 +143,11 @@ class OscillatorBank {
 std::vector<double> projectImpulse(const ModeBank& bank, const double point[3], const double impulse[3]);
 /// Same, at surface vertex v.
 std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]);
+/// projectImpulse() into out[0 .. #modes) without allocating (real-time safe; O(#triangles +
+/// #modes)).
+void projectImpulseInto(const ModeBank& bank, const double point[3], const double impulse[3], double* out);
+/// projectImpulseAtVertex() into out[0 .. #modes) without allocating (O(#modes)).
+void projectImpulseAtVertexInto(const ModeBank& bank, size_t vertex, const double impulse[3], double* out);
 
 /// Hertz contact duration of two elastic bodies meeting at normal speed v_n (m/s):
 /// tau = 2.868 (m*^2 / (R* E*^2 v_n))^(1/5), 1/E* = (1-nu1^2)/E1 + (1-nu2^2)/E2,

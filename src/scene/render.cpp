@@ -30,6 +30,11 @@ constexpr double kSubstep_s = 0.5e-3;
 // A velocity change below 1 micrometre per second cannot be heard from any object of audible
 // size; objects struck only that softly get no eigen-solve (a conservative audibility bound).
 constexpr double kInaudibleVelocityChange_m_s = 1e-6;
+// A contact approaching faster than this is an impact (a Hertz pulse); slower ones are sustained
+// contact (a force over the step). Gravity alone adds g * step = 5 mm/s per step to a resting
+// body, ten times less. Bullet may spread one impact over several substeps and flag only the first
+// as new, so the approach speed, not the flag, decides.
+constexpr double kImpactSpeed_m_s = 0.05;
 // Listener closer than this to a contact is treated as this far (the point-source model's 1/r
 // would blow up).
 constexpr double kMinListenerDistance_m = 0.05;
@@ -262,7 +267,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     desc.rayleigh_stiffness = body.bank.material.rayleigh_stiffness;
     desc.rayleigh_mass = body.bank.material.rayleigh_mass;
     desc.radiation_weight = radiationWeights(body.bank, distance);
-    for (double& w : desc.radiation_weight) w *= settings.gain;
+    for (double& w : desc.radiation_weight) w *= settings.gain / kFullScalePascal;
     desc.delay_s = distance / kSpeedOfSoundAir_m_s;
     body.synth_id = synth.addObject(desc);
   }
@@ -280,7 +285,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       impact.object = body.synth_id;
       impact.time_s = event.time_s;
       impact.modal_impulse = modal.data();
-      if (event.new_contact && event.normal_speed_m_s > 0) {
+      if (event.normal_speed_m_s > kImpactSpeed_m_s) {
         // An impact: a Hertz pulse, short and bright when hard and fast [Johnson 1985].
         const Material& m1 = body.bank.material;
         const bool ground = other == kGroundBody;

@@ -9,6 +9,7 @@
 #include "strike/audio.hpp"
 #include "strike/bank.hpp"
 #include "strike/materials.hpp"
+#include "strike/render.hpp"
 #include "strike/synth.hpp"
 
 namespace strike::cli {
@@ -23,8 +24,8 @@ CommandSpec hitSpec() {
       "Strikes the object of a mode bank once and renders what a listener hears. The impulse is projected\n"
       "onto the modes at the strike point (g_i = phi_i(p) . J, interpolated on the surface triangle), shaped\n"
       "as a Hertz contact pulse whose duration follows from the striker (a small sphere) and the speed, and\n"
-      "every mode in the audible band is advanced exactly. Output sample 1.0 = 1 Pa at the listener\n"
-      "(94 dB SPL) times --gain; clipping is reported, never silent (float output keeps values above 1).";
+      "every mode in the audible band is advanced exactly. Output sample 1.0 = 20 Pa at the listener\n"
+      "(120 dB SPL) times --gain; clipping is reported, never silent (float output keeps values above 1).";
   spec.options = {
       {"-o", "OUT.wav", "output sound file, .wav or .flac (required); written atomically"},
       {"--vertex", "I", "strike surface vertex I (see `strike info`); default: the vertex that excites most"},
@@ -34,7 +35,7 @@ CommandSpec hitSpec() {
       {"--rate", "HZ", "sample rate; default 48000"},
       {"--format", "pcm16|pcm24|float", "sample encoding; default float for .wav, pcm24 for .flac"},
       {"--distance", "M", "listener distance from the object, m; default 1 (sets gain and delay)"},
-      {"--gain", "G", "multiply the output (1.0 = 1 Pa full scale); default 1"},
+      {"--gain", "G", "multiply the output (1.0 full scale = 20 Pa); default 1"},
       {"--contact-time", "S", "force pulse duration, s (0 = ideal impulse); default from Hertz theory"},
       {"--striker", "MATERIAL", "striker sphere material for the Hertz contact time; default steel"},
       {"--striker-radius", "M", "striker sphere radius, m; default 0.005"},
@@ -159,7 +160,7 @@ int runHit(const std::vector<std::string>& raw_args) {
   object.rayleigh_stiffness = bank.material.rayleigh_stiffness;
   object.rayleigh_mass = bank.material.rayleigh_mass;
   object.radiation_weight = radiationWeights(bank, *distance);
-  for (double& w : object.radiation_weight) w *= *gain;
+  for (double& w : object.radiation_weight) w *= *gain / kFullScalePascal;
   object.delay_s = *distance / kSpeedOfSoundAir_m_s;
   const uint32_t id = synth.addObject(object);
   ImpactDesc impact;
@@ -203,7 +204,7 @@ int runHit(const std::vector<std::string>& raw_args) {
                  static_cast<unsigned long long>(stats.modes_out_of_band),
                  static_cast<unsigned long long>(stats.mode_starts));
     std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL at %.3g m)\n", peak,
-                 20.0 * std::log10(std::max(peak, 1e-30)), 20.0 * std::log10(std::max(peak / *gain, 1e-30) / 20e-6),
+                 20.0 * std::log10(std::max(peak, 1e-30)), 20.0 * std::log10(std::max(peak * kFullScalePascal / *gain, 1e-30) / 20e-6),
                  *distance);
     if (clipped > 0)
       std::fprintf(stderr, "  CLIPPING    %zu samples at or above full scale%s; lower --gain\n", clipped,

@@ -22,14 +22,14 @@ CommandSpec renderSpec() {
       "loaded from the cache or computed, only for objects struck hard enough to be heard; each contact\n"
       "impulse is projected onto the struck body's modes (impacts as Hertz pulses, resting contact as a\n"
       "force over the step, so it is silent when steady) and the oscillator bank renders the listener's\n"
-      "pressure: output 1.0 = 1 Pa (94 dB SPL) times --gain. The scene format is in ARCHITECTURE.md.";
+      "pressure: output 1.0 = 20 Pa (120 dB SPL) times --gain. The scene format is in ARCHITECTURE.md.";
   spec.options = {
       {"-o", "OUT.wav", "output sound file, .wav or .flac (required); written atomically"},
       {"--rate", "HZ", "sample rate; default the scene's sample_rate (48000)"},
       {"--duration", "S", "seconds to simulate and render; default the scene's duration"},
       {"--events", "EVENTS.csv", "also write every contact event (time, bodies, impulse, speed, point)"},
       {"--format", "pcm16|pcm24|float", "sample encoding; default float for .wav, pcm24 for .flac"},
-      {"--gain", "G", "multiply the output; default 1"},
+      {"--gain", "G", "multiply the output (1.0 full scale = 20 Pa); default 1"},
       {"--cache", "DIR", "mode bank cache folder; default $STRIKE_CACHE_DIR or ~/.cache/strike"},
       {"--no-cache", "", "compute every bank, read and write no cache"},
       {"--quiet", "", "no progress or summary on stderr"},
@@ -54,7 +54,8 @@ void printSummary(const RenderResult& result, const std::string& output, double 
   std::fprintf(stderr, "  modes       %llu in the banks, %llu out of the audible band, at most %llu ringing at once\n",
                static_cast<unsigned long long>(r.modes_total), static_cast<unsigned long long>(r.modes_out_of_band),
                static_cast<unsigned long long>(r.max_active_modes));
-  std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS)%s\n", r.peak, 20.0 * std::log10(std::max(r.peak, 1e-30)),
+  std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL)%s\n", r.peak, 20.0 * std::log10(std::max(r.peak, 1e-30)),
+               20.0 * std::log10(std::max(r.peak * kFullScalePascal, 1e-30) / 20e-6),
                r.clipped_samples ? (", CLIPPING: " + std::to_string(r.clipped_samples) + " samples at or above full scale; lower --gain").c_str() : "");
   std::fprintf(stderr, "  time        load %.2f s, simulate %.2f s, modes %.2f s, synthesize %.2f s, total %.2f s (%.1fx real time)\n",
                r.load_seconds, r.simulate_seconds, r.precompute_seconds, r.synthesize_seconds, r.total_seconds,

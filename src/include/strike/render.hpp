@@ -16,11 +16,16 @@
 
 namespace strike {
 
+/// The tools' output level convention: sample value 1.0 = 20 Pa (120 dB SPL, the threshold of
+/// pain) at the listener, so no physically plausible level clips, and the synthesizer's default
+/// audibility threshold of 1e-6 full scale is 20 uPa: the threshold of hearing (0 dB SPL).
+constexpr double kFullScalePascal = 20.0;
+
 struct RenderSettings {
   double sample_rate_hz = 0.0;   ///< 0: the scene's
   double duration_s = 0.0;       ///< 0: the scene's
   std::string cache_dir;         ///< where banks are cached by content hash; empty: no cache
-  double gain = 1.0;             ///< output scale; 1.0 full scale = 1 Pa at the listener
+  double gain = 1.0;             ///< output scale on top of kFullScalePascal
   ProgressFn progress;
 };
 

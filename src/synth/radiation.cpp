@@ -1,31 +1,41 @@
 // SPDX-License-Identifier: MIT
 // Listener model: how loud each mode is at the listener, per unit modal acceleration.
 //
-// Model: a compact source (monopole + dipole), never louder than all patches in phase.
+// Model: the surface as free monopoles, heard at the rms over directions.
 // A patch of surface of area A with outward normal n whose wall accelerates at a(t) is a point
-// source of volume acceleration A n.a. For a body small against the wavelength, the far field at
-// distance d is the multipole expansion of those sources about the centre of mass c
-// (Kinsler et al., Fundamentals of Acoustics, 4th ed., 2000, ch. 7; Pierce, Acoustics, 1989, 4.4):
-//   monopole  Q_i = sum_t A_t n_t . phi_i            (net volume acceleration per unit q'')
-//   dipole    D_i = sum_t A_t (n_t . phi_i) (x_t - c) (its first moment)
-//   p(t) ~= rho_air / (4 pi d) * [Q_i + i k_i rhat . D_i] q_i''(t - d / c_air),  k_i = omega_i / c_air.
-// The listener's direction rhat changes as bodies tumble, so the dipole is taken at its rms over
-// directions, |rhat . D|^2 -> |D|^2 / 3. The compact expansion overestimates once k L ~ 1, so the
-// weight is capped by the in-phase bound sum_t A_t |n_t . phi_i| (every patch a monopole in phase):
-//   R_i = min( sqrt(Q_i^2 + k_i^2 |D_i|^2 / 3),  sum_t A_t |n_t . phi_i| )   (m^2 / sqrt(kg)),
-// and the weight is rho_air R_i / (4 pi d) Pa per unit modal acceleration, so the output is sound
-// pressure in pascals at the listener. Checks: a breathing sphere gives Q = surface area times
-// the wall acceleration; a translating compact body gives D = V u (the fluid's added-mass
-// reaction, which raises a sphere's dipole by 1.5, is left out).
+// source of volume acceleration A n.a; in free field its pressure at distance d >> size is
+// rho_air / (4 pi d) * A n.a(t - d / c_air) (Kinsler et al., Fundamentals of Acoustics, 4th ed.,
+// 2000, sec. 7.4). Summing the patches of mode i with their far-field phases e^{i k r.x}
+// (k = omega_i / c_air, r the listener's direction) and averaging |.|^2 over all directions
+// (the body tumbles, so no direction is special; the average of e^{i k r.(x - y)} over the sphere
+// is sinc(k |x - y|) = sin(k r) / (k r)) gives
+//   R_i^2 = sum_a sum_b  s_a s_b sinc(k_i |x_a - x_b|),   s_a = A_a n_a . phi_i(x_a),
+//   p(t) ~= rho_air / (4 pi d) * sum_i R_i q_i''(t - d / c_air).
+// For a compact body this is exactly the multipole expansion: a volume change radiates as a
+// monopole (R = sum s_a), a body whose surface moves without changing its volume as a dipole
+// (R = k |D| / sqrt 3, D = sum s_a x_a), a bending bar whose length is not compact as a chain of
+// dipoles; for a large body (k L >> 1) it tends to the incoherent sum sqrt(sum s_a^2). So the
+// mode-to-mode balance follows the physics of radiation efficiency rather than a fixed guess
+// [compare van den Doel & Pai 1998, who use measured per-mode gains]. The weight is
+// rho_air R_i / (4 pi d) Pa per unit modal acceleration, so the output is pressure in pascals.
+//
+// Cost: patches are merged into cells with k * cell <= 1/4 before the double sum, so low modes of
+// large objects are cheap. A cell keeps its own dipole moment d_c (about its centre) in its self
+// term s_c^2 + k^2 |d_c|^2 / 3, so a body whose monopoles cancel inside one cell still radiates
+// as a dipole; only dipole cross terms between different cells are dropped.
 //
 // What it leaves out:
-//  - higher multipoles (a quadrupole mode of a compact body is underestimated below k L ~ 1),
-//    exact radiation efficiency near and above coincidence (Fahy & Gardonio 2007, ch. 3),
-//  - the phase between the monopole and dipole parts (the magnitude is used), directivity, near
-//    field (d ~ body size), diffraction by the body, ground reflection, the room, air absorption.
+//  - the body as an obstacle: patches radiate as if the body were acoustically transparent (no
+//    scattering, no baffle), so the fluid's added-mass reaction (x1.5 for a translating sphere)
+//    and shadowing are missing,
+//  - the phase and direction of the sound (magnitude only, rms over directions), the near field
+//    (d ~ body size), ground reflection, the room, and air absorption.
 // A precomputed acoustic transfer (James, Barbic & Pai 2006) would replace R_i without changing
 // the synthesizer.
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 
 #include "strike/synth.hpp"
 
@@ -35,12 +45,24 @@ constexpr double kAirDensity_kg_m3 = 1.204;     // dry air at 20 C, 101.325 kPa
 constexpr double kSpeedOfSoundAir_m_s = 343.0;  // dry air at 20 C
 }  // namespace
 
+namespace {
+
+/// One radiating patch: area-weighted normal and centroid.
+struct Patch {
+  double an[3];
+  double centre[3];
+  uint32_t tri[3];
+};
+
+}  // namespace
+
 std::vector<double> radiationWeights(const ModeBank& bank, double distance_m) {
   const size_t nv = bank.surfaceVertexCount();
   const size_t modes = bank.modeCount();
   std::vector<double> weights(modes, 0.0);
   if (!(distance_m > 0.0) || !std::isfinite(distance_m) || bank.shapes.size() < modes * nv * 3) return weights;
-  std::vector<double> monopole(modes, 0.0), in_phase(modes, 0.0), dipole(modes * 3, 0.0);
+  std::vector<Patch> patches;
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   const double* pos = bank.surface_positions.data();
   for (size_t t = 0; t + 2 < bank.surface_triangles.size(); t += 3) {
     const uint32_t* tri = &bank.surface_triangles[t];
@@ -50,30 +72,82 @@ std::vector<double> radiationWeights(const ModeBank& bank, double distance_m) {
     const double* c = pos + 3 * tri[2];
     const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    Patch p;
     // Area-weighted normal (|cross| = 2 area), so area_t * n_t = cross / 2.
-    const double an[3] = {0.5 * (e1[1] * e2[2] - e1[2] * e2[1]), 0.5 * (e1[2] * e2[0] - e1[0] * e2[2]),
-                          0.5 * (e1[0] * e2[1] - e1[1] * e2[0])};
-    double arm[3];
-    for (int k = 0; k < 3; ++k) arm[k] = (a[k] + b[k] + c[k]) / 3.0 - bank.centre_m[k];
-    for (size_t m = 0; m < modes; ++m) {
-      const float* p0 = bank.shapeAt(m, tri[0]);
-      const float* p1 = bank.shapeAt(m, tri[1]);
-      const float* p2 = bank.shapeAt(m, tri[2]);
-      double normal_disp = 0.0;
-      for (int k = 0; k < 3; ++k) normal_disp += an[k] * (static_cast<double>(p0[k]) + p1[k] + p2[k]) / 3.0;
-      monopole[m] += normal_disp;
-      in_phase[m] += std::fabs(normal_disp);
-      for (int k = 0; k < 3; ++k) dipole[m * 3 + k] += normal_disp * arm[k];
+    p.an[0] = 0.5 * (e1[1] * e2[2] - e1[2] * e2[1]);
+    p.an[1] = 0.5 * (e1[2] * e2[0] - e1[0] * e2[2]);
+    p.an[2] = 0.5 * (e1[0] * e2[1] - e1[1] * e2[0]);
+    for (int k = 0; k < 3; ++k) {
+      p.centre[k] = (a[k] + b[k] + c[k]) / 3.0;
+      lo[k] = std::min(lo[k], p.centre[k]);
+      hi[k] = std::max(hi[k], p.centre[k]);
+      p.tri[k] = tri[k];
     }
+    patches.push_back(p);
   }
+  if (patches.empty()) return weights;
+  const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-9});
+
   const double gain = kAirDensity_kg_m3 / (4.0 * M_PI * distance_m);
+  std::vector<double> strength(patches.size());
+  std::map<std::array<int64_t, 3>, size_t> cell_of;
+  std::vector<double> cell_strength, cell_centre, cell_weight, cell_moment;
   for (size_t m = 0; m < modes; ++m) {
     const double lambda = bank.eigenvalues[m];
     const double k = lambda > 0 && std::isfinite(lambda) ? std::sqrt(lambda) / kSpeedOfSoundAir_m_s : 0.0;
-    const double d2 = dipole[m * 3] * dipole[m * 3] + dipole[m * 3 + 1] * dipole[m * 3 + 1] +
-                      dipole[m * 3 + 2] * dipole[m * 3 + 2];
-    const double compact = std::sqrt(monopole[m] * monopole[m] + k * k * d2 / 3.0);
-    weights[m] = gain * std::min(compact, in_phase[m]);
+    // Merge patches into cells with k * cell <= 1/4.
+    const double cell = k > 0 ? std::min(0.25 / k, 2.0 * extent) : 2.0 * extent;
+    cell_of.clear();
+    cell_strength.clear();
+    cell_centre.clear();
+    cell_weight.clear();
+    cell_moment.clear();
+    for (const Patch& p : patches) {
+      const float* p0 = bank.shapeAt(m, p.tri[0]);
+      const float* p1 = bank.shapeAt(m, p.tri[1]);
+      const float* p2 = bank.shapeAt(m, p.tri[2]);
+      double s = 0.0;
+      for (int c = 0; c < 3; ++c) s += p.an[c] * (static_cast<double>(p0[c]) + p1[c] + p2[c]) / 3.0;
+      const std::array<int64_t, 3> key = {static_cast<int64_t>(std::floor((p.centre[0] - lo[0]) / cell)),
+                                          static_cast<int64_t>(std::floor((p.centre[1] - lo[1]) / cell)),
+                                          static_cast<int64_t>(std::floor((p.centre[2] - lo[2]) / cell))};
+      auto [it, inserted] = cell_of.emplace(key, cell_strength.size());
+      if (inserted) {
+        cell_strength.push_back(0.0);
+        cell_weight.push_back(0.0);
+        cell_centre.insert(cell_centre.end(), {0.0, 0.0, 0.0});
+        cell_moment.insert(cell_moment.end(), {0.0, 0.0, 0.0});
+      }
+      // The cell's centre is the area-weighted mean of its patches (fixed per mode, sign-free).
+      const double area = std::sqrt(p.an[0] * p.an[0] + p.an[1] * p.an[1] + p.an[2] * p.an[2]);
+      cell_strength[it->second] += s;
+      cell_weight[it->second] += area;
+      for (int c = 0; c < 3; ++c) {
+        cell_centre[it->second * 3 + c] += area * p.centre[c];
+        cell_moment[it->second * 3 + c] += s * p.centre[c];
+      }
+    }
+    const size_t cells = cell_strength.size();
+    for (size_t a = 0; a < cells; ++a)
+      for (int c = 0; c < 3; ++c) cell_centre[a * 3 + c] /= std::max(cell_weight[a], 1e-300);
+    double r2 = 0.0;
+    for (size_t a = 0; a < cells; ++a) {
+      double dipole2 = 0.0;  // |d_a|^2, the cell's dipole about its own centre
+      for (int c = 0; c < 3; ++c) {
+        const double d = cell_moment[a * 3 + c] - cell_strength[a] * cell_centre[a * 3 + c];
+        dipole2 += d * d;
+      }
+      r2 += cell_strength[a] * cell_strength[a] + k * k * dipole2 / 3.0;
+      for (size_t b = a + 1; b < cells; ++b) {
+        const double dx = cell_centre[a * 3] - cell_centre[b * 3], dy = cell_centre[a * 3 + 1] - cell_centre[b * 3 + 1],
+                     dz = cell_centre[a * 3 + 2] - cell_centre[b * 3 + 2];
+        const double kr = k * std::sqrt(dx * dx + dy * dy + dz * dz);
+        // sinc by its series near 0, where sin(x)/x loses digits.
+        const double sinc = kr < 1e-4 ? 1.0 - kr * kr / 6.0 : std::sin(kr) / kr;
+        r2 += 2.0 * cell_strength[a] * cell_strength[b] * sinc;
+      }
+    }
+    weights[m] = gain * std::sqrt(std::max(r2, 0.0));  // the quadratic form is PSD; clamp rounding
   }
   return weights;
 }

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "common/beam_theory.hpp"
 #include "run_cli.hpp"
 #include "strike/bank.hpp"
 
@@ -93,6 +94,170 @@ TEST(CliInfo, TruncatedAndForeignBanksAreRefused) {
   r = runCli("info '" + foreign + "'");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("magic"), std::string::npos) << r.err;
+}
+
+// ---- Physics through the command line ---------------------------------------------------------
+
+constexpr double kSteelE = 2.0e11, kSteelNu = 0.29, kSteelRho = 7850.0;  // assets/materials.json "steel"
+
+nlohmann::json jsonOf(const CliResult& r) {
+  nlohmann::json j = nlohmann::json::parse(r.out, nullptr, false);
+  EXPECT_FALSE(j.is_discarded()) << r.out;
+  return j;
+}
+
+/// The free-free steel bar of the issue, computed once for the suite.
+class SteelBar : public testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    bank_ = temp("steel-bar.modes");
+    CliResult r = runCli("modes box:0.3,0.02,0.02 --material steel --order 2 --max-freq 12000 --quiet -o '" + bank_ + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    CliResult info = runCli("info --json '" + bank_ + "'");
+    ASSERT_EQ(info.exit_code, 0) << info.err;
+    info_ = new nlohmann::json(jsonOf(info));
+  }
+  static void TearDownTestSuite() { delete info_; }
+  static std::string bank_;
+  static nlohmann::json* info_;
+  const test::BarProperties bar_{kSteelE, kSteelNu, kSteelRho, 0.3, 0.02, 0.02};
+};
+std::string SteelBar::bank_;
+nlohmann::json* SteelBar::info_ = nullptr;
+
+TEST_F(SteelBar, InfoJsonHasTheContractFields) {
+  const nlohmann::json& j = *info_;
+  for (const char* key : {"format_version", "frequencies_hz", "decay_per_s", "mass_kg", "volume_m3", "material", "mesh"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  for (const char* key : {"youngs_pa", "poisson", "density_kg_m3", "rayleigh_stiffness", "rayleigh_mass"})
+    EXPECT_TRUE(j["material"].contains(key)) << key;
+  for (const char* key : {"nodes", "tets", "order", "surface_vertices"}) EXPECT_TRUE(j["mesh"].contains(key)) << key;
+  EXPECT_EQ(j["mesh"]["order"], 2);
+  EXPECT_NEAR(j["mass_kg"].get<double>(), kSteelRho * 0.3 * 0.02 * 0.02, 1e-9);
+  EXPECT_NEAR(j["volume_m3"].get<double>(), 0.3 * 0.02 * 0.02, 1e-12);
+  EXPECT_EQ(j["material"]["youngs_pa"].get<double>(), kSteelE);
+}
+
+TEST_F(SteelBar, SixRigidModesDroppedAndFrequenciesAscendAboveOneHertz) {
+  const nlohmann::json& j = *info_;
+  EXPECT_EQ(j["cutoff"]["rigid_modes_dropped"], 6);
+  const std::vector<double> f = j["frequencies_hz"].get<std::vector<double>>();
+  ASSERT_GE(f.size(), 6u);
+  for (size_t i = 0; i < f.size(); ++i) {
+    EXPECT_GT(f[i], 1.0);
+    if (i > 0) {
+      EXPECT_GE(f[i], f[i - 1]);
+    }
+  }
+  // decay_per_s is (a1 lambda + a2) / 2 per mode.
+  const double a1 = j["material"]["rayleigh_stiffness"], a2 = j["material"]["rayleigh_mass"];
+  for (size_t i = 0; i < f.size(); ++i) {
+    const double lambda = std::pow(2 * M_PI * f[i], 2);
+    EXPECT_NEAR(j["decay_per_s"][i].get<double>(), 0.5 * (a1 * lambda + a2), 1e-9 * (1 + a1 * lambda + a2));
+  }
+}
+
+TEST_F(SteelBar, BendingAndLongitudinalModesMatchBeamTheory) {
+  const std::vector<double> f = (*info_)["frequencies_hz"].get<std::vector<double>>();
+  const std::vector<double> timoshenko = test::timoshenkoFreeFreeHz(bar_, 2);
+  ASSERT_EQ(timoshenko.size(), 2u);
+  // A square bar bends in two planes at the same frequency: modes 0,1 and 2,3 are pairs.
+  for (int n = 0; n < 2; ++n) {
+    for (int k = 0; k < 2; ++k) {
+      const double fem = f[2 * n + k];
+      EXPECT_NEAR(fem, timoshenko[n], 0.01 * timoshenko[n]) << "bending mode " << n + 1 << " vs Timoshenko";
+      // Euler-Bernoulli ignores shear and rotary inertia: it is higher, by 1.6% and 4.4% here.
+      const double eb = test::eulerBernoulliFreeFreeHz(bar_, n + 1);
+      EXPECT_LT(fem, eb);
+      EXPECT_NEAR(fem, eb, 0.06 * eb) << "bending mode " << n + 1 << " vs Euler-Bernoulli";
+    }
+  }
+  const double longitudinal = test::longitudinalFreeFreeHz(bar_, 1);
+  double nearest = 0;
+  for (double x : f)
+    if (std::fabs(x - longitudinal) < std::fabs(nearest - longitudinal)) nearest = x;
+  EXPECT_NEAR(nearest, longitudinal, 0.005 * longitudinal) << "first longitudinal mode";
+}
+
+TEST_F(SteelBar, StruckObliquelyItsSpectrumPeaksAtTheoryAndBank) {
+  const std::string wav = temp("bar-hit.wav");
+  // At an end vertex, obliquely, so bending in both planes and the longitudinal mode all sound.
+  CliResult r = runCli("hit '" + bank_ + "' -o '" + wav + "' --at 0.15,0.01,0.01 --impulse -0.006,-0.003,-0.008 --duration 2 --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  CliResult a = runCli("analyze --json --peaks 30 '" + wav + "'");
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const nlohmann::json j = jsonOf(a);
+  for (const char* key : {"sample_rate", "duration_s", "peak_amplitude", "rms", "peaks"}) EXPECT_TRUE(j.contains(key)) << key;
+  std::vector<double> peaks;
+  for (const auto& p : j["peaks"]) peaks.push_back(p["freq_hz"].get<double>());
+  auto nearest = [&](double target) {
+    double best = 0;
+    for (double x : peaks)
+      if (std::fabs(x - target) < std::fabs(best - target)) best = x;
+    return best;
+  };
+  // FFT of rendered audio against closed-form beam theory, within 1%.
+  const std::vector<double> timoshenko = test::timoshenkoFreeFreeHz(bar_, 2);
+  EXPECT_NEAR(nearest(timoshenko[0]), timoshenko[0], 0.01 * timoshenko[0]);
+  EXPECT_NEAR(nearest(timoshenko[1]), timoshenko[1], 0.01 * timoshenko[1]);
+  const double longitudinal = test::longitudinalFreeFreeHz(bar_, 1);
+  EXPECT_NEAR(nearest(longitudinal), longitudinal, 0.01 * longitudinal);
+  // Every peak above -60 dB is one of the bank's modes, within 0.1%.
+  const std::vector<double> bank = (*info_)["frequencies_hz"].get<std::vector<double>>();
+  for (const auto& p : j["peaks"]) {
+    if (p["level_db"].get<double>() < -60) continue;
+    const double fp = p["freq_hz"];
+    double best = 1e9;
+    for (double fb : bank) best = std::min(best, std::fabs(fb - fp) / fb);
+    EXPECT_LT(best, 1e-3) << "peak at " << fp << " Hz is not a mode of the bank";
+  }
+}
+
+TEST_F(SteelBar, AFixedHitRendersTheSameBytesEveryTime) {
+  const std::string a = temp("golden-a.wav"), b = temp("golden-b.wav");
+  for (const std::string& out : {a, b}) {
+    CliResult r = runCli("hit '" + bank_ + "' -o '" + out + "' --vertex 3 --impulse 0,0,-0.01 --duration 0.5 --format pcm24 --quiet");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  const std::string bytes = test::slurp(a);
+  EXPECT_GT(bytes.size(), 1000u);
+  EXPECT_EQ(bytes, test::slurp(b));
+}
+
+TEST_F(SteelBar, HitRejectsBadStrikePoints) {
+  CliResult r = runCli("hit '" + bank_ + "' -o '" + temp("x.wav") + "' --vertex 99999999");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--vertex = 99999999"), std::string::npos) << r.err;
+  r = runCli("hit '" + bank_ + "' -o '" + temp("x.wav") + "' --impulse 1,2");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--impulse"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(temp("x.wav")));
+}
+
+// Decay rates through the whole chain: a bar with distinct widths (no degenerate bending pairs to
+// beat against each other), struck, analysed: each strong peak's decay within 3% of the bank's.
+TEST(CliHit, FittedDecayRatesMatchTheBank) {
+  const std::string bank = temp("bar-2x3.modes"), wav = temp("bar-2x3.wav");
+  CliResult r = runCli("modes box:0.3,0.02,0.03 --material aluminium --max-freq 8000 --quiet -o '" + bank + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json info = jsonOf(runCli("info --json '" + bank + "'"));
+  r = runCli("hit '" + bank + "' -o '" + wav + "' --at 0.15,0.01,0.015 --impulse -0.005,-0.004,-0.008 --duration 4 --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json a = jsonOf(runCli("analyze --json --peaks 12 '" + wav + "'"));
+  int checked = 0;
+  for (const auto& p : a["peaks"]) {
+    if (p["level_db"].get<double>() < -40 || !p.contains("decay_per_s")) continue;
+    const double fp = p["freq_hz"];
+    size_t best = 0;
+    for (size_t i = 0; i < info["frequencies_hz"].size(); ++i)
+      if (std::fabs(info["frequencies_hz"][i].get<double>() - fp) <
+          std::fabs(info["frequencies_hz"][best].get<double>() - fp))
+        best = i;
+    const double expected = info["decay_per_s"][best];
+    EXPECT_NEAR(p["decay_per_s"].get<double>(), expected, 0.03 * expected) << "peak at " << fp << " Hz";
+    ++checked;
+  }
+  EXPECT_GE(checked, 3);
 }
 
 }  // namespace

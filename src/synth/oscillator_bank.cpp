@@ -602,14 +602,14 @@ struct OscillatorBank::Impl {
     return static_cast<float>(a * a);
   }
 
-  size_t sleepModesAtOrBelow(float threshold2) {
+  size_t sleepModesAtOrBelow(float threshold2, float scale2) {
     size_t culled = 0;
     for (size_t i = 0; i < n_active;) {
-      if (level2(i) <= threshold2) removeRinging(i), ++culled;
+      if (level2(i) * scale2 <= threshold2) removeRinging(i), ++culled;
       else ++i;
     }
     for (size_t r = 0; r < damped_mode.size();) {
-      if (level2(n_active + r) <= threshold2) removeDamped(r), ++culled;
+      if (level2(n_active + r) * scale2 <= threshold2) removeDamped(r), ++culled;
       else ++r;
     }
     stats.active_modes = n_active + damped_mode.size();
@@ -655,7 +655,9 @@ size_t OscillatorBank::activeModeLevels(float* level2, size_t capacity) const {
   for (size_t k = 0; k < n; ++k) level2[k] = impl_->level2(k);
   return n;
 }
-size_t OscillatorBank::sleepModesAtOrBelow(float level2) { return impl_->sleepModesAtOrBelow(level2); }
+size_t OscillatorBank::sleepModesAtOrBelow(float level2, float scale2) {
+  return impl_->sleepModesAtOrBelow(level2, scale2);
+}
 void OscillatorBank::render(float* out, size_t frames) {
   if (out && frames > 0) impl_->render(out, frames);
 }

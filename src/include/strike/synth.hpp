@@ -123,9 +123,10 @@ class OscillatorBank {
   /// Writes the squared output level (output units^2, before any gain applied outside) of up
   /// to `capacity` active modes, in an internal order; returns how many. Real-time safe.
   size_t activeModeLevels(float* level2, size_t capacity) const;
-  /// Puts every active mode whose squared level is <= level2 to sleep (budget culling); returns
-  /// how many. Real-time safe; call between render() calls.
-  size_t sleepModesAtOrBelow(float level2);
+  /// Puts every active mode whose squared level times scale2 is <= level2 to sleep (budget
+  /// culling; the float product is the same as level * scale2 computed by the caller from
+  /// activeModeLevels()); returns how many. Real-time safe; call between render() calls.
+  size_t sleepModesAtOrBelow(float level2, float scale2 = 1.0f);
   /// Time of the next sample to be rendered, s.
   double time() const;
   SynthStats stats() const;

@@ -1,0 +1,368 @@
+/* SPDX-License-Identifier: MIT */
+/**
+ * @file strike.h
+ * libstrike: the real-time-safe C API of Strike, for audio plugins and game engines.
+ *
+ * The only ABI-stable header of the project (C99, also valid C++). A host creates a context for
+ * a sample rate and a maximum block size, loads mode banks (files written by `strike modes`),
+ * adds sounding objects (a bank plus a pose), reports impacts from any thread, and pulls audio
+ * from its audio callback with strike_render().
+ *
+ * Threads. Every function carries a tag:
+ *  - [main-thread]: one thread at a time (the host's control thread); calls are not reentrant
+ *    and must not overlap each other. They may allocate, do file I/O and log.
+ *  - [any-thread]: any thread, concurrently with everything else; lock-free, never allocates.
+ *  - [audio-thread]: the one thread that renders; never allocates, locks, logs, does I/O or
+ *    throws. Only strike_render() and strike_impact() may be called from the audio callback.
+ * Changes made on the main thread (objects, poses, gains, the listener) are handed to the audio
+ * thread through a lock-free command queue and take effect at the start of the next
+ * strike_render(); memory the audio thread no longer uses is freed later on the main thread.
+ *
+ * Units: SI everywhere (metres, seconds, kilograms, newton-seconds, hertz). Output samples are
+ * sound pressure in pascals at the reference distance times the object gain (see
+ * strike_object_config.radiation).
+ *
+ * Status: EXPERIMENTAL (0.x). The ABI may change between minor versions until 1.0; the version
+ * check in strike_context_create() refuses a mismatched header.
+ */
+#ifndef STRIKE_STRIKE_H
+#define STRIKE_STRIKE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* ---- Export and calling convention ------------------------------------------------------ */
+#if defined(STRIKE_STATIC)
+#define STRIKE_API
+#elif defined(_WIN32)
+#if defined(STRIKE_BUILDING)
+#define STRIKE_API __declspec(dllexport)
+#else
+#define STRIKE_API __declspec(dllimport)
+#endif
+#elif defined(__GNUC__)
+#define STRIKE_API __attribute__((visibility("default")))
+#else
+#define STRIKE_API
+#endif
+
+#if defined(_WIN32) && !defined(_WIN64)
+#define STRIKE_CALL __cdecl
+#else
+#define STRIKE_CALL
+#endif
+
+/** Marks API that may still change in a minor release. Everything is experimental before 1.0. */
+#define STRIKE_EXPERIMENTAL
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- Version ---------------------------------------------------------------------------- */
+/* Kept equal to project(strike VERSION ...) in CMakeLists.txt (checked at configure time). */
+#define STRIKE_VERSION_MAJOR 0
+#define STRIKE_VERSION_MINOR 1
+#define STRIKE_VERSION_PATCH 0
+/** Packed version of this header: (major << 16) | (minor << 8) | patch. */
+#define STRIKE_VERSION \
+  ((uint32_t)(((uint32_t)STRIKE_VERSION_MAJOR << 16) | ((uint32_t)STRIKE_VERSION_MINOR << 8) | (uint32_t)STRIKE_VERSION_PATCH))
+/** True when this header is at least version maj.min.rev. */
+#define STRIKE_VERSION_GE(maj, min, rev)                                                     \
+  (STRIKE_VERSION_MAJOR > (maj) || (STRIKE_VERSION_MAJOR == (maj) && STRIKE_VERSION_MINOR > (min)) || \
+   (STRIKE_VERSION_MAJOR == (maj) && STRIKE_VERSION_MINOR == (min) && STRIKE_VERSION_PATCH >= (rev)))
+
+/** Packed version of the library actually loaded (same layout as STRIKE_VERSION). [any-thread] */
+STRIKE_API uint32_t STRIKE_CALL strike_get_version(void);
+
+/* ---- Status codes ----------------------------------------------------------------------- */
+/** 0 is success, negative values are errors. An int32_t, never a C enum (whose size varies). */
+typedef int32_t strike_status;
+enum {
+  STRIKE_OK = 0,
+  STRIKE_ERR_INVALID_ARG = -1,     /**< NULL handle or pointer, out-of-range or non-finite value */
+  STRIKE_ERR_OUT_OF_MEMORY = -2,   /**< an allocation failed */
+  STRIKE_ERR_VERSION = -3,         /**< header/library mismatch, or a bank of a newer format */
+  STRIKE_ERR_IO = -4,              /**< a file could not be opened or read */
+  STRIKE_ERR_PARSE = -5,           /**< not a valid mode bank (truncated, foreign, corrupt) */
+  STRIKE_ERR_STALE_ID = -6,        /**< the object was removed (or never existed) */
+  STRIKE_ERR_QUEUE_FULL = -7,      /**< a lock-free queue is full; the item was dropped and counted */
+  STRIKE_ERR_CAPACITY = -8,        /**< a configured maximum (objects) is reached */
+  STRIKE_ERR_TOO_MANY_FRAMES = -9, /**< render asked for more frames than max_block_frames */
+  STRIKE_ERR_NOT_INITIALIZED = -10,/**< a config struct that did not come from its _default() */
+  STRIKE_ERR_INTERNAL = -11        /**< a bug in libstrike; the message says where */
+};
+
+/** Static English text for a status code ("unknown status" for other values). [any-thread] */
+STRIKE_API const char* STRIKE_CALL strike_status_string(strike_status status);
+
+/* ---- Handles and ids -------------------------------------------------------------------- */
+/** A synthesis context: sample rate, objects, queues, and the audio-thread state. */
+typedef struct strike_context_s* strike_context;
+/** A loaded mode bank (immutable, shared by the objects that use it). */
+typedef struct strike_bank_s* strike_bank;
+
+/**
+ * A sounding object. Ids are values: a removed object's id becomes stale (its generation no
+ * longer matches) and is reported as STRIKE_ERR_STALE_ID, never mistaken for a newer object in
+ * the same slot. {0, 0} is never a valid id.
+ */
+typedef struct strike_object_id {
+  uint32_t index;      /**< slot, < max_objects */
+  uint32_t generation; /**< >= 1 for a valid id */
+} strike_object_id;
+
+/* ---- Callbacks (owned by the context: no process globals) ------------------------------- */
+enum { STRIKE_LOG_ERROR = 0, STRIKE_LOG_WARNING = 1, STRIKE_LOG_INFO = 2 };
+/** Log sink. Called only from [main-thread] functions, never from the audio thread.
+ *  @param message valid only during the call. */
+typedef void(STRIKE_CALL* strike_log_fn)(void* user, int32_t level, const char* message);
+/** Allocator: size bytes aligned to alignment (a power of two <= 64); NULL on failure. */
+typedef void*(STRIKE_CALL* strike_alloc_fn)(void* user, size_t size, size_t alignment);
+/** Frees what strike_alloc_fn returned (never called with NULL). */
+typedef void(STRIKE_CALL* strike_free_fn)(void* user, void* pointer);
+
+/* ---- Context ---------------------------------------------------------------------------- */
+typedef struct strike_context_config {
+  uint32_t api_version;          /**< STRIKE_VERSION of the caller's header (set by _default) */
+  double sample_rate_hz;         /**< 8000 .. 768000; default 48000 */
+  uint32_t max_block_frames;     /**< largest strike_render() frames, 1 .. 16384; default 1024 */
+  uint32_t channels;             /**< 1 (mono) or 2 (stereo, constant-power pan); default 2 */
+  uint32_t max_objects;          /**< objects alive at once, 1 .. 65536; default 64 */
+  /** Budget of ringing modes over all objects; when over it at the end of a render call, the
+   *  quietest (at the listener) are put to sleep first. 0 = no budget. Default 100000. */
+  uint32_t max_active_modes;
+  /** Impacts in flight between strike_impact() and the next render, 2 .. 1048576, rounded up to
+   *  a power of two; when full, strike_impact() drops and counts. Default 1024. */
+  uint32_t impact_queue_capacity;
+  /** Impacts per object whose contact pulse has not yet finished, 1 .. 4096; more are dropped
+   *  and counted (impacts_dropped_capacity). Default 32. */
+  uint32_t max_pending_impacts_per_object;
+  double max_contact_duration_s; /**< longer contact pulses are shortened to this, s; default 0.005 */
+  double min_freq_hz;            /**< modes below are not synthesized, Hz; default 20 */
+  double max_freq_hz;            /**< modes above min(this, 0.45 fs) are not synthesized; default 20000 */
+  /** Output amplitude (output units, before object gain) below which a mode sleeps; default 1e-6. */
+  double audibility_threshold;
+  /** Distance at which the output is the bank's radiated pressure, m (> 0); closer objects are
+   *  not louder. Gain = reference / max(distance, reference). Default 1. */
+  double reference_distance_m;
+  strike_log_fn log;             /**< NULL = no logging */
+  strike_alloc_fn alloc;         /**< NULL = aligned_alloc; alloc and free are both set or both NULL */
+  strike_free_fn free;
+  void* user;                    /**< passed to log, alloc and free */
+  int32_t internal_cookie;       /**< set by strike_context_config_default(); do not touch */
+} strike_context_config;
+
+/** Defaults (see each field). [any-thread] */
+STRIKE_API strike_context_config STRIKE_CALL strike_context_config_default(void);
+
+/**
+ * Creates a context; allocates everything the audio thread will need for max_objects objects.
+ * Fails with STRIKE_ERR_VERSION when config->api_version has another major version or a newer
+ * minor version than the library, STRIKE_ERR_NOT_INITIALIZED when config did not come from
+ * strike_context_config_default(), STRIKE_ERR_INVALID_ARG for a value out of range.
+ * [main-thread]
+ * @param config read during the call only.
+ * @param[out] out the new context on success; untouched on failure. Destroy with
+ *             strike_context_destroy().
+ */
+STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_config* config, strike_context* out);
+
+/**
+ * Destroys the context, its objects and its queues. Banks loaded in it must be destroyed first
+ * or after (a bank keeps its data alive on its own), but the context must outlive no audio
+ * callback: stop rendering before. NULL is a no-op. [main-thread]
+ */
+STRIKE_API void STRIKE_CALL strike_context_destroy(strike_context context);
+
+/**
+ * The message of the last failed [main-thread] call on this context ("" if none), naming the
+ * file, field or value. Also sent to the log callback. [main-thread]
+ * @return owned by the context, valid until the next [main-thread] call on it.
+ */
+STRIKE_API const char* STRIKE_CALL strike_context_last_error(strike_context context);
+
+/** Counters since creation. Read with relaxed atomics: consistent per field, not across fields. */
+typedef struct strike_stats {
+  uint64_t impacts_queued;             /**< accepted by strike_impact() */
+  uint64_t impacts_dropped_queue_full; /**< refused by strike_impact(): the queue was full */
+  uint64_t impacts_dropped_stale;      /**< their object was removed before they were rendered */
+  uint64_t impacts_dropped_capacity;   /**< max_pending_impacts_per_object reached */
+  uint64_t impacts_scheduled;          /**< reached the oscillators */
+  uint64_t impacts_inaudible;          /**< changed no mode above the audibility threshold */
+  uint64_t modes_culled;               /**< put to sleep by the max_active_modes budget */
+  uint64_t frames_rendered;            /**< by successful strike_render() calls */
+  uint32_t active_modes;               /**< ringing after the last render */
+  uint32_t objects;                    /**< objects alive on the audio thread after the last render */
+} strike_stats;
+
+/** Copies the counters. [any-thread]
+ *  @param[out] out written on success. */
+STRIKE_API strike_status STRIKE_CALL strike_context_get_stats(strike_context context, strike_stats* out);
+
+/**
+ * Frees memory the audio thread has released (removed objects). Every [main-thread] call does
+ * this too; call it periodically if you rarely call anything else. [main-thread]
+ */
+STRIKE_API strike_status STRIKE_CALL strike_context_collect(strike_context context);
+
+/* ---- Banks ------------------------------------------------------------------------------ */
+/**
+ * Loads a mode bank file (format: docs/bank-format.md). STRIKE_ERR_IO when it cannot be read,
+ * STRIKE_ERR_VERSION when it is of a newer format, STRIKE_ERR_PARSE when it is truncated,
+ * foreign or corrupt (strike_context_last_error() says which). [main-thread]
+ * @param path UTF-8 file name, read during the call only.
+ * @param[out] out the bank on success; untouched on failure. Destroy with strike_bank_destroy().
+ */
+STRIKE_API strike_status STRIKE_CALL strike_bank_load_file(strike_context context, const char* path, strike_bank* out);
+
+/**
+ * Same from bytes in memory (e.g. a bank bundled with a plugin). [main-thread]
+ * @param data size bytes, read during the call only (copied).
+ */
+STRIKE_API strike_status STRIKE_CALL strike_bank_load_memory(strike_context context, const void* data, size_t size,
+                                                             strike_bank* out);
+
+/** Releases the handle. Objects using the bank keep its data alive until they are removed.
+ *  NULL is a no-op. [main-thread] */
+STRIKE_API void STRIKE_CALL strike_bank_destroy(strike_bank bank);
+
+typedef struct strike_bank_info {
+  uint32_t mode_count;             /**< modes in the bank (some may be out of band) */
+  uint32_t surface_vertex_count;   /**< valid strike_impact_desc.surface_vertex values: 0 .. this-1 */
+  uint32_t surface_triangle_count;
+  double mass_kg;
+  double lowest_frequency_hz;      /**< of mode 0, 0 if no modes */
+  double bounds_min_m[3];          /**< axis-aligned bounds of the surface, mesh frame */
+  double bounds_max_m[3];
+} strike_bank_info;
+
+/** [any-thread] (banks are immutable) @param[out] out written on success. */
+STRIKE_API strike_status STRIKE_CALL strike_bank_get_info(strike_bank bank, strike_bank_info* out);
+
+/** Undamped natural frequency of one mode, Hz. [any-thread] @param[out] out_hz written on success. */
+STRIKE_API strike_status STRIKE_CALL strike_bank_mode_frequency(strike_bank bank, uint32_t mode, double* out_hz);
+
+/** Position of a surface vertex in the mesh frame, m. [any-thread] */
+STRIKE_API strike_status STRIKE_CALL strike_bank_surface_vertex(strike_bank bank, uint32_t vertex, double out_position[3],
+                                                                double out_normal[3]);
+
+/* ---- Objects ---------------------------------------------------------------------------- */
+enum {
+  /** Per-mode weights of a compact radiator: output is sound pressure (Pa) at the reference
+   *  distance (see radiation.cpp for the model and what it leaves out). */
+  STRIKE_RADIATION_PRESSURE = 0,
+  /** Weight 1 for every mode: output is the sum of modal accelerations (m/s^2 sqrt(kg)). */
+  STRIKE_RADIATION_UNIT = 1
+};
+
+typedef struct strike_object_config {
+  strike_bank bank;              /**< required; must come from the same context */
+  double position[3];            /**< world position of the mesh-frame origin, m; default 0 */
+  double orientation[4];         /**< unit quaternion w, x, y, z (world from mesh frame); default 1,0,0,0 */
+  float gain;                    /**< linear, >= 0; default 1 */
+  int32_t radiation;             /**< STRIKE_RADIATION_*; default PRESSURE */
+  /** Radius of curvature of the object's surface at contacts, m, for the Hertz contact time;
+   *  0 = flat (a half-space). Default 0. */
+  double contact_radius_m;
+  int32_t internal_cookie;       /**< set by strike_object_config_default(); do not touch */
+} strike_object_config;
+
+/** Defaults (see each field). [any-thread] */
+STRIKE_API strike_object_config STRIKE_CALL strike_object_config_default(void);
+
+/**
+ * Adds a sounding object; it can be struck from the next strike_render() on. Allocates its
+ * oscillators and impact reserve here (never on the audio thread). STRIKE_ERR_CAPACITY when
+ * max_objects are alive, STRIKE_ERR_QUEUE_FULL when the command queue is full (the audio thread
+ * is not rendering). [main-thread]
+ * @param[out] out the id on success; untouched on failure.
+ */
+STRIKE_API strike_status STRIKE_CALL strike_object_add(strike_context context, const strike_object_config* config,
+                                                       strike_object_id* out);
+
+/** Removes an object: it falls silent at the next render; pending impacts on it are dropped
+ *  (impacts_dropped_stale). STRIKE_ERR_STALE_ID for an id that is not alive. [main-thread] */
+STRIKE_API strike_status STRIKE_CALL strike_object_remove(strike_context context, strike_object_id object);
+
+/** 1 if the id names a live object, else 0 (also for a NULL context). [any-thread] */
+STRIKE_API int32_t STRIKE_CALL strike_object_is_valid(strike_context context, strike_object_id object);
+
+/** Moves an object (world frame; see strike_object_config). [main-thread] */
+STRIKE_API strike_status STRIKE_CALL strike_object_set_pose(strike_context context, strike_object_id object,
+                                                            const double position[3], const double orientation[4]);
+
+/** Sets the linear gain (>= 0), ramped over the next block. [main-thread] */
+STRIKE_API strike_status STRIKE_CALL strike_object_set_gain(strike_context context, strike_object_id object, float gain);
+
+/**
+ * Sets the listener pose (world frame). The listener faces its local +y, with +x to its right
+ * and +z up; stereo pans by the direction's x component. Default: at the origin, identity.
+ * [main-thread]
+ */
+STRIKE_API strike_status STRIKE_CALL strike_listener_set_pose(strike_context context, const double position[3],
+                                                              const double orientation[4]);
+
+/* ---- Impacts ---------------------------------------------------------------------------- */
+enum { STRIKE_FRAME_OBJECT = 0, STRIKE_FRAME_WORLD = 1 };
+enum { STRIKE_PULSE_HALF_SINE = 0, STRIKE_PULSE_BOX = 1 };
+
+/** One contact on an object. A plain value: copied into the queue by strike_impact(). */
+typedef struct strike_impact_desc {
+  strike_object_id object;
+  /** Frame of point and impulse: STRIKE_FRAME_OBJECT (the bank's mesh frame; default) or
+   *  STRIKE_FRAME_WORLD (transformed by the object's pose at render time). */
+  int32_t frame;
+  /** >= 0: strike this surface vertex (point ignored; O(modes) on the audio thread). -1
+   *  (default): the surface point nearest to `point` (O(triangles + modes) on the audio thread). */
+  int32_t surface_vertex;
+  double point[3];               /**< contact point, m */
+  double impulse[3];             /**< impulse applied TO the object, N s */
+  /** Relative normal speed at contact, m/s (> 0), for the Hertz contact time: faster is
+   *  shorter, so harder hits are brighter. Default 1. */
+  double normal_speed_m_s;
+  /** < 0 (default): Hertz duration from normal_speed_m_s and the materials; 0: an ideal
+   *  impulse; > 0: this duration, s. Always capped at max_contact_duration_s. */
+  double contact_duration_s;
+  double striker_radius_m;       /**< radius of the striking body at contact, m; 0 = flat. Default 0.01 */
+  double striker_youngs_pa;      /**< 0 (default): same material as the object */
+  double striker_poisson;        /**< used when striker_youngs_pa > 0; default 0.3 */
+  double striker_mass_kg;        /**< 0 (default): immovable (infinite mass) */
+  /** Frames after the start of the next strike_render() at which the contact begins
+   *  (sample-accurate scheduling within or beyond that block). Default 0. */
+  uint32_t sample_offset;
+  int32_t pulse;                 /**< STRIKE_PULSE_HALF_SINE (default) or STRIKE_PULSE_BOX (sustained) */
+} strike_impact_desc;
+
+/** Defaults (see each field). [any-thread] */
+STRIKE_API strike_impact_desc STRIKE_CALL strike_impact_desc_default(void);
+
+/**
+ * Queues an impact for the next strike_render(): lock-free, wait-free unless the queue is
+ * contended, no allocation. The projection onto modes and the pulse integration happen on the
+ * audio thread into preallocated storage. STRIKE_ERR_QUEUE_FULL when the queue is full (the
+ * impact is dropped and counted in impacts_dropped_queue_full), STRIKE_ERR_STALE_ID when the id
+ * is not alive now, STRIKE_ERR_INVALID_ARG for non-finite values. Does not set last_error.
+ * [any-thread], including the audio callback.
+ * @param impact read during the call only.
+ */
+STRIKE_API strike_status STRIKE_CALL strike_impact(strike_context context, const strike_impact_desc* impact);
+
+/* ---- Audio ------------------------------------------------------------------------------ */
+/**
+ * Renders the next `frames` samples of every object into planar buffers (overwrites them).
+ * Applies queued commands and impacts first, so an impact queued before this call sounds in
+ * this block (at its sample_offset). Never allocates, locks, logs, does I/O or throws.
+ * STRIKE_ERR_INVALID_ARG when channels differs from the context's or a pointer is NULL,
+ * STRIKE_ERR_TOO_MANY_FRAMES when frames > max_block_frames (nothing is rendered). Does not set
+ * last_error. [audio-thread]
+ * @param out `channels` pointers to `frames` floats each, owned by the caller.
+ */
+STRIKE_API strike_status STRIKE_CALL strike_render(strike_context context, float* const* out, uint32_t channels,
+                                                   uint32_t frames);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* STRIKE_STRIKE_H */

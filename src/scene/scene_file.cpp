@@ -242,6 +242,8 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
     } catch (const json::parse_error& e) {
       return badInput(path + ":" + lineColumn(json_text, e.byte > 0 ? e.byte - 1 : 0) + ": error: invalid JSON: " +
                       std::string(e.what()).substr(std::string(e.what()).find(':') + 2));
+    } catch (const json::exception& e) {  // e.g. a number too large for a double
+      return badInput(path + ": error: invalid JSON: " + std::string(e.what()).substr(std::string(e.what()).find(']') + 2));
     }
     return badInput(path + ": error: invalid JSON");
   }

@@ -345,11 +345,12 @@ TEST(CApi, FourProducersWhileRendering) {
     });
   // Main thread: churn one object while impacts fly.
   strike_object_id churn = f.add(-1.0, 1.0);
+  uint64_t main_full = 0;
   while (producers_done.load() < 4) {
     strike_impact_desc d = strike_impact_desc_default();
     d.object = churn;
     d.impulse[2] = 1e-3;
-    (void)strike_impact(f.ctx, &d);
+    if (strike_impact(f.ctx, &d) == STRIKE_ERR_QUEUE_FULL) ++main_full;  // may be stale when rendered
     EXPECT_EQ(strike_object_remove(f.ctx, churn), STRIKE_OK);
     churn = f.add(-1.0, 1.0);
     std::this_thread::sleep_for(std::chrono::microseconds(200));
@@ -362,7 +363,7 @@ TEST(CApi, FourProducersWhileRendering) {
   const strike_stats s = f.stats();
   EXPECT_EQ(ok.load() + full.load() + stale.load(), 4u * kPerProducer);
   EXPECT_EQ(stale.load(), 0u) << "producer ids stay alive";
-  EXPECT_EQ(s.impacts_dropped_queue_full, full.load());
+  EXPECT_EQ(s.impacts_dropped_queue_full, full.load() + main_full);
   EXPECT_GT(ok.load(), 0u);
   EXPECT_EQ(s.impacts_scheduled + s.impacts_inaudible + s.impacts_dropped_capacity + s.impacts_dropped_stale,
             s.impacts_queued);

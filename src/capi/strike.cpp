@@ -437,6 +437,7 @@ STRIKE_API strike_context_config STRIKE_CALL strike_context_config_default(void)
   c.max_active_modes = 100000;
   c.impact_queue_capacity = 1024;
   c.max_pending_impacts_per_object = 32;
+  c.max_impacts_per_render = 64;
   c.max_contact_duration_s = 0.005;
   c.min_freq_hz = 20.0;
   c.max_freq_hz = 20000.0;
@@ -840,9 +841,12 @@ STRIKE_API strike_status STRIKE_CALL strike_render(strike_context ctx, float* co
     Command cmd;
     while (ctx->commands.pop(cmd)) applyCommand(ctx, cmd), ++consumed;
     if (consumed) ctx->commands_done.fetch_add(consumed, std::memory_order_release);
-    // 2. Impacts, at most one queue's worth so that a flood cannot stall this call.
+    // 2. Impacts, at most max_impacts_per_render (and one queue's worth) so that a flood
+    //    cannot stall this call; the rest stay queued, in order, for the next one.
     strike_impact_desc d;
-    for (size_t k = ctx->impacts.capacity(); k > 0 && ctx->impacts.pop(d); --k) applyImpact(ctx, d);
+    size_t budget = ctx->impacts.capacity();
+    if (ctx->config.max_impacts_per_render > 0) budget = std::min<size_t>(budget, ctx->config.max_impacts_per_render);
+    for (size_t k = budget; k > 0 && ctx->impacts.pop(d); --k) applyImpact(ctx, d);
     // 3. Render and mix.
     for (uint32_t c = 0; c < channels; ++c) std::fill(out[c], out[c] + frames, 0.0f);
     uint64_t active = 0;

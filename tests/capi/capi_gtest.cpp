@@ -291,6 +291,7 @@ TEST(CApi, BudgetCullsTheQuietestObjectFirst) {
 TEST(CApi, FullQueueDropsAndCountsExactly) {
   strike_context_config c = strike_context_config_default();
   c.impact_queue_capacity = 64;
+  c.max_impacts_per_render = 0;
   Fixture f(c);
   const strike_object_id id = f.add();
   int full = 0;
@@ -305,6 +306,21 @@ TEST(CApi, FullQueueDropsAndCountsExactly) {
   EXPECT_EQ(s.impacts_scheduled + s.impacts_inaudible + s.impacts_dropped_capacity, 64u);
   EXPECT_EQ(s.impacts_dropped_capacity, 64u - c.max_pending_impacts_per_object);
   EXPECT_EQ(f.hit(id), STRIKE_OK) << "the queue drained";
+}
+
+TEST(CApi, ImpactsBeyondThePerRenderLimitWaitForTheNextCall) {
+  strike_context_config c = strike_context_config_default();
+  c.max_impacts_per_render = 3;
+  c.max_pending_impacts_per_object = 64;
+  Fixture f(c);
+  const strike_object_id id = f.add();
+  for (int k = 0; k < 7; ++k) ASSERT_EQ(f.hit(id, 1000), STRIKE_OK);
+  ASSERT_EQ(f.render(f.block), STRIKE_OK);
+  EXPECT_EQ(f.stats().impacts_scheduled, 3u);
+  ASSERT_EQ(f.render(f.block), STRIKE_OK);
+  EXPECT_EQ(f.stats().impacts_scheduled, 6u);
+  ASSERT_EQ(f.render(f.block), STRIKE_OK);
+  EXPECT_EQ(f.stats().impacts_scheduled, 7u);
 }
 
 // Four producers flood a small queue while the audio thread renders and the main thread adds

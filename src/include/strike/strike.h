@@ -138,6 +138,10 @@ typedef struct strike_context_config {
   /** Impacts per object whose contact pulse has not yet finished, 1 .. 4096; more are dropped
    *  and counted (impacts_dropped_capacity). Default 32. */
   uint32_t max_pending_impacts_per_object;
+  /** Impacts prepared per strike_render() call at most; the rest wait in the queue for the next
+   *  call (bounds the audio thread's work in a burst: preparing one impact costs about 0.5 us
+   *  per mode of its object on a 2020s x86 core). 0 = no limit (one queue's worth). Default 64. */
+  uint32_t max_impacts_per_render;
   double max_contact_duration_s; /**< longer contact pulses are shortened to this, s; default 0.005 */
   double min_freq_hz;            /**< modes below are not synthesized, Hz; default 20 */
   double max_freq_hz;            /**< modes above min(this, 0.45 fs) are not synthesized; default 20000 */

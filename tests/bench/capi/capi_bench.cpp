@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // libstrike throughput and latency through the C API and its queues, at 48 kHz, 256-frame blocks.
-//   BM_CapiRender/modes:N   N/2000 objects of 2000 lightly damped modes, every block one impact
+//   BM_CapiRender/modes:N/hits:H  N/2000 objects of 2000 lightly damped modes, H impacts per block
 //                           through strike_impact() (round robin), strike_render(256) stereo.
 //                           Counters: active modes, real-time factor (block duration / time),
 //                           and modes_realtime = active modes x real-time factor: how many modes
@@ -79,8 +79,7 @@ void BM_CapiRender(benchmark::State& state) {
   for (int k = 0; k < 20; ++k) strike_render(s.ctx, s.out, 2, kBlock);  // warm up
   size_t k = 0;
   for (auto _ : state) {
-    s.hit(k, static_cast<uint32_t>(k % kBlock));
-    ++k;
+    for (int64_t h = 0; h < state.range(1); ++h, ++k) s.hit(k, static_cast<uint32_t>(k % kBlock));
     strike_render(s.ctx, s.out, 2, kBlock);
     benchmark::DoNotOptimize(s.l.data());
     benchmark::ClobberMemory();
@@ -93,7 +92,10 @@ void BM_CapiRender(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(st.active_modes) * kBlock / kRate, benchmark::Counter::kIsIterationInvariantRate);
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kBlock * st.active_modes);
 }
-BENCHMARK(BM_CapiRender)->ArgName("modes")->Arg(10000)->Arg(50000)->Arg(100000)->Arg(200000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CapiRender)
+    ->ArgNames({"modes", "hits"})
+    ->ArgsProduct({{10000, 50000, 100000, 200000}, {0, 1}})
+    ->Unit(benchmark::kMicrosecond);
 
 void BM_ImpactLatency(benchmark::State& state) {
   Scene s(1, 64);

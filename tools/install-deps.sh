@@ -14,6 +14,8 @@ packages=(
   libfftw3-dev           # FFT analysis (GPL: tool and tests only)
   nlohmann-json3-dev     # JSON (MIT)
   libgtest-dev           # tests
+  lv2-dev                # examples/lv2 plugin headers (ISC)
+  liblilv-dev lilv-utils # examples/lv2 host test, lv2ls/lv2info (ISC)
 )
 [ "${STRIKE_BENCHMARKS:-0}" = 1 ] && packages+=(libbenchmark-dev)
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <mutex>
 
@@ -15,6 +16,12 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kNepersPerDb = 0.11512925464970229;  // ln(10) / 20
+/// A spectral line must stand this many times (6 dB) above the modelled leakage of the
+/// stronger lines at its frequency.
+constexpr double kLeakageMargin = 2.0;
+/// A line's frame-measured amplitude may fall this far (20 dB) below what its spectral peak
+/// implies before the peak is taken for leakage (the frames see lines, not skirts).
+constexpr double kMinLineAmplitudeRatio = 0.1;
 
 struct Mono {
   std::vector<double> x;
@@ -65,6 +72,7 @@ size_t nextPowerOfTwo(size_t n) {
 struct Spectrum {
   std::vector<double> amplitude;
   double bin_hz = 0.0;
+  double window_sum = 0.0;  ///< sum of the window over the signal: a line's |X| is A sum(w) / 2
 };
 
 Spectrum wholeSpectrum(const Mono& mono, SpectrumWindow window, double rate_hz) {
@@ -102,6 +110,7 @@ Spectrum wholeSpectrum(const Mono& mono, SpectrumWindow window, double rate_hz) 
   fftw_execute(plan);
   Spectrum spectrum;
   spectrum.bin_hz = rate_hz / static_cast<double>(size);
+  spectrum.window_sum = window_sum;
   spectrum.amplitude.resize(size / 2 + 1);
   const double scale = window_sum > 0.0 ? 2.0 / window_sum : 0.0;
   for (size_t k = 0; k <= size / 2; ++k) spectrum.amplitude[k] = scale * std::hypot(out[k][0], out[k][1]);
@@ -114,10 +123,64 @@ Spectrum wholeSpectrum(const Mono& mono, SpectrumWindow window, double rate_hz) 
   return spectrum;
 }
 
+/// The whole-signal window's response to one decaying complex line, in closed form: for
+/// x(n) = e^{(-a + j t) n} (a = d / fs, t = 2 pi (f_line - f) / fs) and a window that is a sum of
+/// complex exponentials, sum_n w(n) x(n) is a sum of geometric series (1 - q^L) / (1 - q).
+/// OnsetHalfHann: cos^2(pi n / 2L) = 1/2 + (e^{j pi n / L} + e^{-j pi n / L}) / 4.
+/// Hann: sin^2(pi (n + 1/2) / L) = 1/2 - (e^{j pi / L} e^{j 2 pi n / L} + conj) / 4.
+/// Exact for any offset and decay (the Lorentzian line convolved with the window's transform),
+/// so it gives a mode's leakage ("skirt") at any distance, not only its asymptote.
+double lineShape(double offset_hz, double decay_per_s, size_t length, double rate_hz, SpectrumWindow window) {
+  const double a = decay_per_s / rate_hz;
+  const double l = static_cast<double>(length);
+  auto series = [&](double theta) {
+    // 1 - q with q = e^{-a} e^{j theta}, without cancellation when a and theta are tiny.
+    const double c = std::cos(theta), s = std::sin(theta), half = std::sin(0.5 * theta);
+    const std::complex<double> one_minus_q(-std::expm1(-a) * c + 2.0 * half * half, -std::exp(-a) * s);
+    const std::complex<double> q_l = std::exp(std::complex<double>(-a * l, theta * l));
+    if (std::abs(one_minus_q) < 1e-14) return std::complex<double>(l, 0.0);
+    return (1.0 - q_l) / one_minus_q;
+  };
+  const double theta = -2.0 * kPi * offset_hz / rate_hz;
+  if (window == SpectrumWindow::Hann) {
+    const std::complex<double> e(std::cos(kPi / l), std::sin(kPi / l));
+    return std::abs(0.5 * series(theta) - 0.25 * e * series(theta + 2.0 * kPi / l) -
+                    0.25 * std::conj(e) * series(theta - 2.0 * kPi / l));
+  }
+  return std::abs(0.5 * series(theta) + 0.25 * series(theta + kPi / l) + 0.25 * series(theta - kPi / l));
+}
+
+/// -3 dB half width of lineShape (bisection: the main lobe falls monotonically to it).
+double modelHalfWidthHz(double decay_per_s, size_t length, double rate_hz, SpectrumWindow window) {
+  const double target = lineShape(0.0, decay_per_s, length, rate_hz, window) / std::sqrt(2.0);
+  double lo = 0.0, hi = rate_hz / static_cast<double>(length);
+  while (lineShape(hi, decay_per_s, length, rate_hz, window) > target && hi < 0.25 * rate_hz) hi *= 2.0;
+  for (int i = 0; i < 50; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (lineShape(mid, decay_per_s, length, rate_hz, window) > target ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+/// The decay whose model line is as wide as the measured one (0 if it is no wider than the
+/// window's own main lobe). For the leakage test before the decay is fitted; a merged pair
+/// looks wider than either mode, which over-estimates its skirt (the safe side).
+double decayFromHalfWidth(double half_width_hz, size_t length, double rate_hz, SpectrumWindow window) {
+  if (!(half_width_hz > modelHalfWidthHz(0.0, length, rate_hz, window))) return 0.0;
+  double lo = 0.0, hi = 2.0 * kPi * half_width_hz;
+  while (modelHalfWidthHz(hi, length, rate_hz, window) < half_width_hz && hi < rate_hz) hi *= 2.0;
+  for (int i = 0; i < 40; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (modelHalfWidthHz(mid, length, rate_hz, window) < half_width_hz ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 struct Candidate {
   double freq_hz = 0.0;
   double amplitude = 0.0;
   double half_width_hz = 0.0;  ///< half width at -3 dB, for the first guess of the decay
+  double skirt_decay_per_s = 0.0;  ///< decay used to model this line's leakage onto others
 };
 
 /// Quadratic interpolation of log|X| through bins k-1, k, k+1 (Smith, SASP, "Quadratic
@@ -170,6 +233,7 @@ double blackmanHarris(size_t n, size_t length) {
 struct DecayFit {
   double decay_per_s = -1.0;  ///< < 0: too few usable frames
   double freq_hz = 0.0;       ///< from the phase slope of the same frames
+  double amplitude = 0.0;     ///< A of A e^{-d t} cos(...) at the onset, from the line's intercept
 };
 
 /// Decay rate from one frame length: log|Y_m| over frame starts s_m = onset + m hop, where
@@ -269,6 +333,13 @@ DecayFit fitDecayWithFrame(const Mono& mono, double rate_hz, double freq_hz, dou
   }
   DecayFit fit;
   fit.decay_per_s = std::max(0.0, -sty / stt);  // a rising envelope is reported as no decay
+  {
+    // |Y(0)| = (A / 2) sum_n w(n) e^{-d n / fs} for a line that starts at the onset.
+    const double intercept = mean_y + fit.decay_per_s * mean_t;
+    double gain = 0.0;
+    for (size_t n = 0; n < frame; ++n) gain += blackmanHarris(n, frame) * std::exp(-fit.decay_per_s * static_cast<double>(n) / rate_hz);
+    fit.amplitude = 2.0 * std::exp(intercept) / gain;
+  }
   fit.freq_hz = wstt > 0.0 ? freq_hz + wstp / wstt / (2.0 * kPi) : freq_hz;
   return fit;
 }
@@ -295,7 +366,15 @@ DecayFit fitDecay(const Mono& mono, double rate_hz, const Candidate& peak, doubl
   size_t frame = frameLengthFor(decay, peak.freq_hz, nearest_df_hz, rate_hz, available);
   DecayFit fitted;
   for (int iteration = 0; iteration < 4; ++iteration) {
-    const DecayFit fit = fitDecayWithFrame(mono, rate_hz, peak.freq_hz, decay, frame);
+    DecayFit fit = fitDecayWithFrame(mono, rate_hz, peak.freq_hz, decay, frame);
+    // Too few frames above the floor: the width guess was too narrow (noise ripples on a wide
+    // line's top end the -3 dB walk early), so the line died within a frame or two. Retry
+    // with guesses 4 and 16 times faster (shorter frames, finer hop).
+    for (int retry = 0; retry < 2 && iteration == 0 && fit.decay_per_s < 0.0; ++retry) {
+      decay *= 4.0;
+      frame = frameLengthFor(decay, peak.freq_hz, nearest_df_hz, rate_hz, available);
+      fit = fitDecayWithFrame(mono, rate_hz, peak.freq_hz, decay, frame);
+    }
     if (fit.decay_per_s < 0.0) break;
     fitted = fit;
     decay = fit.decay_per_s;
@@ -349,32 +428,66 @@ AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& optio
     const bool separate = std::all_of(accepted.begin(), accepted.end(), [&](const Candidate& a) {
       const double df_hz = std::fabs(a.freq_hz - c.freq_hz);
       if (df_hz < min_separation_hz) return false;
-      if (options.window != SpectrumWindow::Hann) return true;  // its leakage is a monotone tail
+      if (options.window != SpectrumWindow::Hann) return true;
       // Hann sidelobes: |W(b)| = |sin(pi b) / (pi b (1 - b^2))| at b bins; a candidate below
       // twice the sidelobe envelope of a stronger peak may be that sidelobe (Harris 1978).
       const double b = df_hz / bin_hz;
       return b >= 1.5 && c.amplitude > 2.0 * a.amplitude / (kPi * b * (b * b - 1.0));
     });
-    if (separate) accepted.push_back(c);
+    if (!separate) continue;
+    // Leakage test. Between and beside strong decaying modes the spectrum is the sum of their
+    // skirts (a line of decay d falls only as d / (2 pi df) of its peak, 1/f, whatever the
+    // window), and where those skirts cross it is flat to a fraction of a dB: any ripple there
+    // (interference of the skirts, the window's end) is a local maximum. A genuine line stands
+    // above the summed skirts of the stronger lines, modelled exactly by lineShape (with the
+    // negative-frequency images); a ripple does not: its level is at most that sum.
+    double leakage = 0.0;
+    for (const Candidate& a : accepted) {
+      const double at_peak = lineShape(0.0, a.skirt_decay_per_s, length, audio.sample_rate_hz, options.window);
+      leakage += a.amplitude *
+                 (lineShape(c.freq_hz - a.freq_hz, a.skirt_decay_per_s, length, audio.sample_rate_hz, options.window) +
+                  lineShape(c.freq_hz + a.freq_hz, a.skirt_decay_per_s, length, audio.sample_rate_hz, options.window)) /
+                 at_peak;
+    }
+    if (!(c.amplitude > kLeakageMargin * leakage)) continue;
+    Candidate kept = c;
+    kept.half_width_hz = halfWidthHz(spectrum, kept);
+    kept.skirt_decay_per_s = decayFromHalfWidth(kept.half_width_hz, length, audio.sample_rate_hz, options.window);
+    accepted.push_back(kept);
   }
 
-  const size_t reported = std::min(accepted.size(), static_cast<size_t>(options.max_peaks));
-  for (size_t i = 0; i < reported; ++i) {
-    Candidate& c = accepted[i];
+  // Confirmation and decay, strongest first, until max_peaks lines are confirmed. The frame fit
+  // runs even when no decay is wanted: it is what tells a line from a leakage ripple.
+  std::vector<char> dropped(accepted.size(), 0);
+  const size_t wanted = static_cast<size_t>(options.max_peaks);
+  for (size_t i = 0; i < accepted.size() && analysis.peaks.size() < wanted; ++i) {
+    const Candidate& c = accepted[i];
     SpectralPeak peak;
     peak.freq_hz = c.freq_hz;
     peak.level_dbfs = 20.0 * std::log10(c.amplitude);
     peak.level_db = 20.0 * std::log10(c.amplitude / strongest);
-    if (options.fit_decay) {
-      c.half_width_hz = halfWidthHz(spectrum, c);
-      // Neighbours include peaks above the floor that are not reported: they still leak.
-      double nearest_df_hz = 0.0;
-      for (size_t j = 0; j < accepted.size(); ++j) {
-        if (j == i) continue;
-        const double df = std::fabs(accepted[j].freq_hz - c.freq_hz);
-        if (nearest_df_hz == 0.0 || df < nearest_df_hz) nearest_df_hz = df;
+    // Neighbours include peaks above the floor that are not reported (they still leak), but
+    // not candidates already found to be leakage.
+    double nearest_df_hz = 0.0;
+    for (size_t j = 0; j < accepted.size(); ++j) {
+      if (j == i || dropped[j]) continue;
+      const double df = std::fabs(accepted[j].freq_hz - c.freq_hz);
+      if (nearest_df_hz == 0.0 || df < nearest_df_hz) nearest_df_hz = df;
+    }
+    const DecayFit fit = fitDecay(mono, audio.sample_rate_hz, c, nearest_df_hz);
+    if (fit.decay_per_s >= 0.0) {
+      // Line test. The frames reject every other peak (> 4 of their bins away) to -92 dB, so
+      // they see only what is really at this frequency. A line of amplitude A (at the onset)
+      // and decay d gives the whole-signal peak A lineShape(0, d) / sum(w); if the frames
+      // find less than a tenth of that A, the peak was the skirts of other lines.
+      const double spectral_a =
+          c.amplitude * spectrum.window_sum / lineShape(0.0, fit.decay_per_s, length, audio.sample_rate_hz, options.window);
+      if (fit.amplitude < kMinLineAmplitudeRatio * spectral_a) {
+        dropped[i] = 1;
+        continue;
       }
-      const DecayFit fit = fitDecay(mono, audio.sample_rate_hz, c, nearest_df_hz);
+    }
+    if (options.fit_decay) {
       peak.decay_per_s = fit.decay_per_s;
       // Take the phase-slope frequency when it lies within the line's own -3 dB half width
       // (a wide line's spectral peak is pulled by up to about that much) and nearer to this

@@ -236,6 +236,110 @@ struct DecayFit {
   double amplitude = 0.0;     ///< A of A e^{-d t} cos(...) at the onset, from the line's intercept
 };
 
+/// Near-degenerate pairs. Two modes closer than the line width (a square bar's bending pairs,
+/// 0.01-3 Hz apart) make one spectral peak, and the demodulated frames u_m = Y_m e^{-j w0 s_m}
+/// are c1 z1^m + c2 z2^m: their magnitude beats slowly, so the log-line fit is biased (for two
+/// modes of equal decay starting in antiphase the envelope can even rise). But u_m is exactly a
+/// sum of two exponentials (the frames are linear and shift-invariant), so a two-pole linear
+/// prediction recovers both (Prony's method; Kay, "Modern Spectral Estimation", 1988, ch. 11):
+/// u_{m+2K} = p1 u_{m+K} + p2 u_m, roots r_k = z_k^K of r^2 - p1 r - p2. The lag K = count/3
+/// spreads the poles by K times their one-hop separation, which is what keeps the fit
+/// well-conditioned for pairs whose beat period exceeds the fit range. Used only when one
+/// exponential leaves more than 1e-4 of the energy unexplained and two explain ten times more,
+/// and the two decays are within a factor of 2 (a near-degenerate pair shares its damping; a
+/// wider spread means the second pole is fitting something else). Then decay and frequency are
+/// the |c_k|^2-weighted means of the two, i.e. the pair's, and amplitude is |c1| + |c2|.
+void refineAsPair(const std::vector<double>& times_s, const std::vector<double>& logs, const std::vector<double>& phases,
+                  size_t m_begin, size_t m_end, double frames_per_s, double freq_hz, DecayFit& fit) {
+  using C = std::complex<double>;
+  const size_t count = m_end - m_begin;
+  if (count < 9) return;
+  std::vector<C> u(count);
+  double energy = 0.0;
+  for (size_t m = 0; m < count; ++m) {
+    u[m] = std::polar(std::exp(logs[m_begin + m] - logs[m_begin]), phases[m_begin + m]);
+    energy += std::norm(u[m]);
+  }
+  // One exponential, with the fit's own decay and frequency; its complex amplitude by least squares.
+  auto residualOf = [&](const std::vector<C>& z, std::vector<C>& c) {
+    // Least squares for u_m = sum_k c_k z_k^m (k = 1 or 2) through the normal equations.
+    const size_t k_count = z.size();
+    C g[2][2] = {{0.0, 0.0}, {0.0, 0.0}}, r[2] = {0.0, 0.0};
+    std::vector<C> power(k_count, C(1.0, 0.0));
+    for (size_t m = 0; m < count; ++m) {
+      for (size_t a = 0; a < k_count; ++a) {
+        r[a] += std::conj(power[a]) * u[m];
+        for (size_t b = 0; b < k_count; ++b) g[a][b] += std::conj(power[a]) * power[b];
+      }
+      for (size_t a = 0; a < k_count; ++a) power[a] *= z[a];
+    }
+    c.assign(k_count, 0.0);
+    if (k_count == 1) {
+      c[0] = r[0] / g[0][0];
+    } else {
+      const C det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
+      if (std::abs(det) < 1e-300) return std::numeric_limits<double>::infinity();
+      c[0] = (r[0] * g[1][1] - g[0][1] * r[1]) / det;
+      c[1] = (g[0][0] * r[1] - g[1][0] * r[0]) / det;
+    }
+    double residual = 0.0;
+    std::fill(power.begin(), power.end(), C(1.0, 0.0));
+    for (size_t m = 0; m < count; ++m) {
+      C model = 0.0;
+      for (size_t a = 0; a < k_count; ++a) {
+        model += c[a] * power[a];
+        power[a] *= z[a];
+      }
+      residual += std::norm(u[m] - model);
+    }
+    return residual / energy;
+  };
+  const double hop_s = 1.0 / frames_per_s;
+  std::vector<C> c1;
+  const double residual1 =
+      residualOf({std::exp(C(-fit.decay_per_s * hop_s, 2.0 * kPi * (fit.freq_hz - freq_hz) * hop_s))}, c1);
+  if (!(residual1 > 1e-4)) return;
+  const size_t lag = count / 3;
+  C g00 = 0.0, g01 = 0.0, g11 = 0.0, r0 = 0.0, r1 = 0.0;
+  for (size_t m = 0; m + 2 * lag < count; ++m) {
+    const C a = u[m + lag], b = u[m], y = u[m + 2 * lag];
+    g00 += std::norm(a);
+    g01 += std::conj(a) * b;
+    g11 += std::norm(b);
+    r0 += std::conj(a) * y;
+    r1 += std::conj(b) * y;
+  }
+  const C det = g00 * g11 - g01 * std::conj(g01);
+  if (std::abs(det) < 1e-300) return;
+  const C p1 = (r0 * g11 - g01 * r1) / det;
+  const C p2 = (g00 * r1 - std::conj(g01) * r0) / det;
+  const C root = std::sqrt(p1 * p1 + 4.0 * p2);
+  std::vector<C> z;
+  for (const C r : {0.5 * (p1 + root), 0.5 * (p1 - root)}) {
+    // A growing pole, or one so far off that its K-th root is ambiguous, is not half a pair.
+    if (!(std::abs(r) < 1.0) || std::fabs(std::arg(r)) > 0.9 * kPi) return;
+    z.push_back(std::exp(std::log(r) / static_cast<double>(lag)));
+  }
+  std::vector<C> c2;
+  const double residual2 = residualOf(z, c2);
+  if (!(residual2 < 0.1 * residual1)) return;
+  double weight = 0.0, decay = 0.0, freq = 0.0, d_min = std::numeric_limits<double>::infinity(), d_max = 0.0;
+  for (size_t k = 0; k < 2; ++k) {
+    const double d_k = -std::log(std::abs(z[k])) / hop_s;
+    const double w = std::norm(c2[k]);
+    d_min = std::min(d_min, d_k);
+    d_max = std::max(d_max, d_k);
+    weight += w;
+    decay += w * d_k;
+    freq += w * (freq_hz + std::arg(z[k]) / (2.0 * kPi * hop_s));
+  }
+  if (!(weight > 0.0) || !(d_max < 2.0 * d_min)) return;
+  fit.decay_per_s = decay / weight;
+  fit.freq_hz = freq / weight;
+  fit.amplitude *= (std::abs(c2[0]) + std::abs(c2[1])) / std::abs(c1[0]);
+  (void)times_s;
+}
+
 /// Decay rate from one frame length: log|Y_m| over frame starts s_m = onset + m hop, where
 /// Y_m = sum_n w(n) x(s_m + n) e^{-j 2 pi f0 n / fs}. For x = A e^{-d t} cos(2 pi f t + phi),
 /// Y_m = (A/2) e^{(-d + j 2 pi f) s_m / fs} * (a constant of the frame) + (what leaks in), so
@@ -341,6 +445,7 @@ DecayFit fitDecayWithFrame(const Mono& mono, double rate_hz, double freq_hz, dou
     fit.amplitude = 2.0 * std::exp(intercept) / gain;
   }
   fit.freq_hz = wstt > 0.0 ? freq_hz + wstp / wstt / (2.0 * kPi) : freq_hz;
+  refineAsPair(times_s, logs, phases, m_max, m_end, rate_hz / static_cast<double>(hop), freq_hz, fit);
   return fit;
 }
 

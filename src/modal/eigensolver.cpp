@@ -44,9 +44,31 @@ extern "C" void dsyevr_(const char* jobz, const char* range, const char* uplo, c
                         double* w, double* z, const int* ldz, int* isuppz, double* work, const int* lwork, int* iwork,
                         const int* liwork, int* info, size_t jobz_len, size_t range_len, size_t uplo_len);
 
+// OpenBLAS thread control, weak so that another BLAS (no such functions) still links.
+extern "C" __attribute__((weak)) void openblas_set_num_threads(int num_threads);
+extern "C" __attribute__((weak)) int openblas_get_num_threads(void);
+
 namespace strike {
 
 namespace {
+
+/// Sets OpenBLAS's thread count for a scope and restores it (no-op for 0 or another BLAS).
+class BlasThreadsScope {
+ public:
+  explicit BlasThreadsScope(int threads) {
+    if (threads <= 0 || openblas_set_num_threads == nullptr || openblas_get_num_threads == nullptr) return;
+    previous_ = openblas_get_num_threads();
+    if (previous_ != threads) openblas_set_num_threads(threads);
+  }
+  ~BlasThreadsScope() {
+    if (previous_ > 0) openblas_set_num_threads(previous_);
+  }
+  BlasThreadsScope(const BlasThreadsScope&) = delete;
+  BlasThreadsScope& operator=(const BlasThreadsScope&) = delete;
+
+ private:
+  int previous_ = 0;
+};
 
 using SpMat = Eigen::SparseMatrix<double>;
 using Clock = std::chrono::steady_clock;
@@ -203,6 +225,11 @@ struct Context {
   double sigma;
   const ModalSettings& settings;
   int applications = 0;
+  double solve_seconds = 0.0;
+  double orthogonalize_seconds = 0.0;
+  double ritz_seconds = 0.0;
+  int block_size = 0;
+  int basis = 0;
 };
 
 /// One ARPACK run for `nev` eigenpairs of OP deflated against `found`; appends the converged
@@ -257,7 +284,9 @@ Result<int> lanczosChunk(Context& ctx, Found& found, int nev, double tol, uint64
         mx.noalias() = ctx.M * Eigen::Map<const Eigen::VectorXd>(x, n);
         bx = mx.data();
       }
+      const auto t_solve = Clock::now();
       if (!ctx.solver.solve(bx, y, 1)) return internalError("eigensolver: CHOLMOD solve failed");
+      ctx.solve_seconds += secondsSince(t_solve);
       Eigen::Map<Eigen::VectorXd> y_vec(y, n);
       deflate(y_vec);
       ++ctx.applications;
@@ -348,8 +377,6 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   Eigen::MatrixXd Q(n, (max_steps + 1) * b);
   Eigen::MatrixXd MQ(n, (max_steps + 1) * b);
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero((max_steps + 1) * b, (max_steps + 1) * b);
-  double t_solve = 0.0, t_orth = 0.0, t_ritz = 0.0, t_sparse = 0.0;
-  int extra_passes = 0;
 
   auto deflate = [&](Eigen::MatrixXd& W) {
     if (locked > 0) W.noalias() -= found.vectors * (found.m_vectors.transpose() * W);
@@ -401,7 +428,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
     if (!ctx.solver.solve(MQ.middleCols(j * b, b).data(), W.data(), static_cast<int>(b))) {
       return internalError("eigensolver: CHOLMOD block solve failed");
     }
-    t_solve += secondsSince(t0);
+    ctx.solve_seconds += secondsSince(t0);
     t0 = Clock::now();
     ctx.applications += static_cast<int>(b);
     deflate(W);
@@ -421,14 +448,11 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
       h.noalias() = MQ.leftCols(k).transpose() * W;
       W.noalias() -= Q.leftCols(k) * h;
       H += h;
-      auto ts = Clock::now();
       symmetricTimesBlock(ctx.M, W, MW);
-      t_sparse += secondsSince(ts);
       const Eigen::ArrayXd after = W.cwiseProduct(MW).colwise().sum().transpose().array();
       const Eigen::ArrayXd removed = h.colwise().squaredNorm().transpose().array();
       // ||w_after||_M < 0.717 ||w_before||_M: the pass cancelled, rounding may remain.
       if (!((after < 0.514 * (after + removed)).any())) break;
-      ++extra_passes;
     }
     T.block(0, j * b, k, b) = H;
     const bool ok = orthonormalize(W, MW, R);
@@ -441,7 +465,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
     } else {
       R = Eigen::MatrixXd::Zero(b, b);  // invariant subspace found: residuals are exact zeros
     }
-    t_orth += secondsSince(t0);
+    ctx.orthogonalize_seconds += secondsSince(t0);
     // Ritz pairs of the k x k projection (symmetrized: full reorthogonalization keeps the
     // entries above the block tridiagonal at round-off level); only the top `want + b` pairs,
     // and only once the basis is bigger than what is wanted.
@@ -454,7 +478,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
     if (!topEigenpairs(Tk, m, ritz_values, ritz_vectors)) {
       return internalError("eigensolver: block Lanczos projection eigen-solve failed");
     }
-    t_ritz += secondsSince(t0);
+    ctx.ritz_seconds += secondsSince(t0);
     // Largest theta first = smallest lambda first.
     converged.clear();
     num_converged = 0;
@@ -474,11 +498,8 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
     }
   }
   const Eigen::Index kb = steps * b;
-  if (std::getenv("STRIKE_MODAL_TRACE") != nullptr) {
-    std::fprintf(stderr, "block lanczos: b %d, steps %d, basis %d, converged %d, solve %.3f s, orth %.3f s (extra passes %d), ritz %.3f s sparse %.3f\n",
-                 static_cast<int>(b), static_cast<int>(steps), static_cast<int>(kb), static_cast<int>(num_converged), t_solve,
-                 t_orth, extra_passes, t_ritz, t_sparse);
-  }
+  ctx.block_size = static_cast<int>(b);
+  ctx.basis = std::max(ctx.basis, static_cast<int>(kb));
   if (num_converged == 0 || S.cols() != num_converged) return 0;
   const Eigen::Index total = locked + num_converged;
   found.vectors.conservativeResize(n, total);
@@ -572,6 +593,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     if (settings.progress) settings.progress("factorize", 1.0);
 
     const auto t_lanczos = Clock::now();
+    const BlasThreadsScope blas_threads(settings.blas_threads);
     Context ctx{K, M, *solver, out.sigma, settings};
     Found found;
     // Stage 1, ARPACK: the rigid modes and the lowest elastic ones, to full accuracy. Small
@@ -592,8 +614,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     const int wanted_total = settings.max_modes + 7;
     int chunk = arpack_only ? std::min(wanted_total, 400) : std::min(wanted_total, kArpackModes);
     bool done = false;
-    double arpack_seconds = 0.0;
-    const bool block_only = !arpack_only && wanted_total > kArpackModes && std::getenv("STRIKE_MODAL_ARPACKFIRST") == nullptr;
+    const bool block_only = !arpack_only && wanted_total > kArpackModes;
     for (int round = 0; round < 64 && !done && !block_only; ++round) {
       auto got = lanczosChunk(ctx, found, chunk, 1e-10, 0x5eed0000ULL + static_cast<uint64_t>(round),
                               0.0, 1.0);
@@ -603,7 +624,6 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
       done = status({}, elastic_below, top);
       const bool exhausted = static_cast<Eigen::Index>(found.lambdas.size()) + 2 >= n;
       if (*got == 0 || exhausted) done = true;
-      arpack_seconds = secondsSince(t_lanczos);
       if (!arpack_only) break;
       chunk = std::min(std::max(chunk, 16), settings.max_modes + 7 - elastic_below);
     }
@@ -616,7 +636,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
                                                               [&](double l) { return std::abs(l) <= lambda_zero; }));
       const int needed = settings.max_modes + 1 - elastic_below + std::max(0, 6 - rigid_found);
       const Eigen::Index room = n - static_cast<Eigen::Index>(found.lambdas.size()) - 1;
-      const int block_pref = std::getenv("STRIKE_MODAL_BLOCK") ? std::atoi(std::getenv("STRIKE_MODAL_BLOCK")) : kBlockSize;
+      const int block_pref = settings.block_size > 0 ? settings.block_size : kBlockSize;
       const int block = static_cast<int>(std::min<Eigen::Index>(room / 3, block_pref));
       if (block < 1) break;
       const int max_basis = static_cast<int>(std::min<Eigen::Index>(room, std::max(kBasisFactor * needed, 4 * block) + 2 * block));
@@ -630,8 +650,12 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
       done = status({}, elastic_below, top) || *got == 0;
     }
     out.lanczos_seconds = secondsSince(t_lanczos);
-    if (std::getenv("STRIKE_MODAL_TRACE") != nullptr) std::fprintf(stderr, "lanczos total %.3f s, arpack stage %.3f s, %d applications\n", out.lanczos_seconds, arpack_seconds, ctx.applications);
     out.operator_applications = ctx.applications;
+    out.solve_seconds = ctx.solve_seconds;
+    out.orthogonalize_seconds = ctx.orthogonalize_seconds;
+    out.ritz_seconds = ctx.ritz_seconds;
+    out.block_size = ctx.block_size;
+    out.lanczos_basis = ctx.basis;
     all_lambdas = Eigen::Map<Eigen::VectorXd>(found.lambdas.data(), static_cast<Eigen::Index>(found.lambdas.size()));
     all_vectors = std::move(found.vectors);
   }

@@ -28,6 +28,13 @@ struct ModalSettings {
   double rigid_freq_hz = 1.0;
   ProgressFn progress;           ///< optional
   ModalMethod method = ModalMethod::Hybrid;
+  /// Right-hand sides per block solve in the block Lanczos stage (Hybrid); 0 = default (16).
+  int block_size = 0;
+  /// OpenBLAS threads during the Lanczos stage, restored afterwards (the setting is process
+  /// wide: do not run other BLAS work concurrently); 0 leaves OpenBLAS alone. One thread is
+  /// the default: the stage's dense products are thin, and on a shared 2-core machine idle
+  /// OpenBLAS threads spin (sched_yield) instead of working (tests/bench/modal).
+  int blas_threads = 1;
 };
 
 struct ModalResult {
@@ -43,7 +50,13 @@ struct ModalResult {
   /// error estimate that precompute reports (eigenvalue error is about its square).
   double max_relative_residual = 0.0;
   double sigma = 0.0;            ///< the shift used (rad^2/s^2, negative)
-  double refine_seconds = 0.0;   ///< block refinement and Rayleigh-Ritz after Lanczos
+  double refine_seconds = 0.0;   ///< Rayleigh-Ritz and residuals after Lanczos
+  // Parts of lanczos_seconds:
+  double solve_seconds = 0.0;        ///< CHOLMOD solves
+  double orthogonalize_seconds = 0.0;///< block Lanczos recurrence, reorthogonalization, M products
+  double ritz_seconds = 0.0;         ///< projected eigen-solves (block Lanczos convergence checks)
+  int block_size = 0;                ///< block Lanczos block size used (0: ARPACK only)
+  int lanczos_basis = 0;             ///< largest block Krylov basis built
 };
 
 Result<ModalResult> solveModes(const Eigen::SparseMatrix<double>& K,

@@ -230,6 +230,7 @@ struct Context {
   double ritz_seconds = 0.0;
   int block_size = 0;
   int basis = 0;
+  int reorthogonalizations = 0;
 };
 
 /// One ARPACK run for `nev` eigenpairs of OP deflated against `found`; appends the converged
@@ -441,9 +442,11 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
       W.noalias() -= Q.middleCols((j - 1) * b, b) * R_prev.transpose();
       H.middleRows((j - 1) * b, b) = R_prev.transpose();
     }
-    // Full reorthogonalization: one CGS pass, a second one only where the DGKS test asks.
-    // MW = M W is recomputed after each pass (a sparse product costs about what updating it
-    // with M Q would), and the norm before the pass follows from Pythagoras: Q is M-orthonormal.
+    // Full reorthogonalization: one classical Gram-Schmidt pass (two BLAS-3 products), a
+    // second one only where the DGKS test says the pass cancelled (Daniel, Gragg, Kaufman &
+    // Stewart, Math. Comp. 30, 1976). MW = M W is recomputed after each pass (the sparse
+    // product costs less than updating it with M Q), and the norm before a pass follows from
+    // Pythagoras: Q is M-orthonormal.
     for (int pass = 0; pass < 3; ++pass) {
       h.noalias() = MQ.leftCols(k).transpose() * W;
       W.noalias() -= Q.leftCols(k) * h;
@@ -453,6 +456,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
       const Eigen::ArrayXd removed = h.colwise().squaredNorm().transpose().array();
       // ||w_after||_M < 0.717 ||w_before||_M: the pass cancelled, rounding may remain.
       if (!((after < 0.514 * (after + removed)).any())) break;
+      ++ctx.reorthogonalizations;
     }
     T.block(0, j * b, k, b) = H;
     const bool ok = orthonormalize(W, MW, R);
@@ -573,6 +577,11 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   // below a tiny fraction of the shift as rigid too, whatever rigid_freq_hz says.
   const double lambda_zero = std::max(lambda_rigid, 1e-6 * std::abs(out.sigma));
 
+  // The assembled M stores the 3x3 pattern of K, but a consistent mass matrix couples only
+  // equal directions: two thirds of its entries are exact zeros. Dropping them makes every
+  // M product up to 3x cheaper (block Lanczos does one or two per step).
+  SpMat M_pruned = M;
+  M_pruned.prune(0.0, 0.0);
   Eigen::VectorXd all_lambdas;
   Eigen::MatrixXd all_vectors;
   std::unique_ptr<CholmodSolver> solver;
@@ -594,7 +603,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
 
     const auto t_lanczos = Clock::now();
     const BlasThreadsScope blas_threads(settings.blas_threads);
-    Context ctx{K, M, *solver, out.sigma, settings};
+    Context ctx{K, M_pruned, *solver, out.sigma, settings};
     Found found;
     // Stage 1, ARPACK: the rigid modes and the lowest elastic ones, to full accuracy. Small
     // requests end here. Stage 2, block Lanczos on the operator deflated against stage 1,
@@ -656,6 +665,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     out.ritz_seconds = ctx.ritz_seconds;
     out.block_size = ctx.block_size;
     out.lanczos_basis = ctx.basis;
+    out.reorthogonalizations = ctx.reorthogonalizations;
     all_lambdas = Eigen::Map<Eigen::VectorXd>(found.lambdas.data(), static_cast<Eigen::Index>(found.lambdas.size()));
     all_vectors = std::move(found.vectors);
   }
@@ -687,7 +697,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     // Rayleigh-Ritz on the kept vectors: exact M-orthonormality and ascending order.
     Eigen::MatrixXd KX, MX;
     symmetricTimesBlock(K, X, KX);
-    symmetricTimesBlock(M, X, MX);
+    symmetricTimesBlock(M_pruned, X, MX);
     Eigen::MatrixXd Kr = X.transpose() * KX;
     Eigen::MatrixXd Mr = X.transpose() * MX;
     Kr = 0.5 * (Kr + Kr.transpose()).eval();

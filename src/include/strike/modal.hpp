@@ -57,6 +57,7 @@ struct ModalResult {
   double ritz_seconds = 0.0;         ///< projected eigen-solves (block Lanczos convergence checks)
   int block_size = 0;                ///< block Lanczos block size used (0: ARPACK only)
   int lanczos_basis = 0;             ///< largest block Krylov basis built
+  int reorthogonalizations = 0;      ///< extra (DGKS) Gram-Schmidt passes in block Lanczos
 };
 
 Result<ModalResult> solveModes(const Eigen::SparseMatrix<double>& K,

@@ -104,11 +104,11 @@ int main(int argc, char** argv) {
     const double best = *std::min_element(totals.begin(), totals.end());
     const double worst = *std::max_element(totals.begin(), totals.end());
     std::printf("       %s: best total %.3f s, spread %.3f s over %d run(s); modes %lld, f1 %.2f Hz, f100 %.2f Hz,"
-                " rigid dropped %d, max residual %.2e, sigma %.3e, basis %d\n",
+                " rigid dropped %d, max residual %.2e, sigma %.3e, basis %d, reorthogonalized steps %d\n",
                 c.name, best, worst - best, repeat, static_cast<long long>(modes.eigenvalues.size()),
                 std::sqrt(modes.eigenvalues[0]) / (2 * M_PI),
                 std::sqrt(modes.eigenvalues[modes.eigenvalues.size() - 1]) / (2 * M_PI), modes.rigid_modes_dropped,
-                modes.max_relative_residual, modes.sigma, modes.lanczos_basis);
+                modes.max_relative_residual, modes.sigma, modes.lanczos_basis, modes.reorthogonalizations);
     if (naive) {
       settings.method = strike::ModalMethod::ArpackOnly;
       t0 = std::chrono::steady_clock::now();

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 
 #include "strike/atomic_file.hpp"
@@ -54,6 +55,9 @@ struct Body {
   double max_velocity_change_m_s = 0.0;
   bool sounded = false;
   uint32_t synth_id = 0;
+  std::unique_ptr<SurfaceLocator> locator;  ///< nearest surface point, for projecting contacts
+  double sustained_time_s = -1.0;           ///< substep whose sustained contacts are being summed
+  std::vector<double> sustained_modal;      ///< their summed modal impulses
   double contact_radius_m = 0.0;     ///< radius of the sphere of equal volume, for Hertz
 };
 
@@ -270,21 +274,33 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     for (double& w : desc.radiation_weight) w *= settings.gain / kFullScalePascal;
     desc.delay_s = distance / kSpeedOfSoundAir_m_s;
     body.synth_id = synth.addObject(desc);
+    body.locator = std::make_unique<SurfaceLocator>(body.bank);
   }
 
+  // Sustained contacts of one body in one substep are one force over that step: their modal
+  // impulses add (the projection is linear in J), so they become one box pulse per body per step.
+  std::vector<double> modal;
+  auto flushSustained = [&](Body& body) {
+    if (body.sustained_time_s < 0) return;
+    ImpactDesc impact;
+    impact.object = body.synth_id;
+    impact.time_s = body.sustained_time_s;
+    impact.duration_s = kSubstep_s;
+    impact.shape = PulseShape::Box;
+    impact.modal_impulse = body.sustained_modal.data();
+    synth.addImpact(impact);
+    body.sustained_time_s = -1.0;
+  };
   for (const ContactEvent& event : result.events) {
     for (int side = 0; side < 2; ++side) {
       const uint32_t index = side == 0 ? event.body_a : event.body_b;
       const uint32_t other = side == 0 ? event.body_b : event.body_a;
       if (index == kGroundBody || !bodies[index].sounded) continue;
-      const Body& body = bodies[index];
+      Body& body = bodies[index];
       const auto& point = side == 0 ? event.point_a_mesh : event.point_b_mesh;
       const auto& impulse = side == 0 ? event.impulse_on_a_mesh : event.impulse_on_b_mesh;
-      const std::vector<double> modal = projectImpulse(body.bank, point.data(), impulse.data());
-      ImpactDesc impact;
-      impact.object = body.synth_id;
-      impact.time_s = event.time_s;
-      impact.modal_impulse = modal.data();
+      modal.resize(body.bank.modeCount());
+      body.locator->projectImpulseInto(point.data(), impulse.data(), modal.data());
       if (event.normal_speed_m_s > kImpactSpeed_m_s) {
         // An impact: a Hertz pulse, short and bright when hard and fast [Johnson 1985].
         const Material& m1 = body.bank.material;
@@ -293,20 +309,29 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
         const double r2 = ground ? INFINITY : bodies[other].contact_radius_m;
         const double mass2 = ground || bodies[other].object->is_static ? INFINITY : bodies[other].bank.mass_kg;
         const double mass1 = body.object->is_static ? INFINITY : body.bank.mass_kg;
+        ImpactDesc impact;
+        impact.object = body.synth_id;
+        impact.time_s = event.time_s;
+        impact.modal_impulse = modal.data();
         impact.duration_s = hertzContactDuration(m1.youngs_pa, m1.poisson, body.contact_radius_m, mass1, m2.youngs_pa,
                                                  m2.poisson, r2, mass2, event.normal_speed_m_s);
         impact.shape = PulseShape::HalfSine;
+        synth.addImpact(impact);
         ++report.impacts;
       } else {
         // Sustained contact: the step's impulse is a constant force over the step, so a
         // steady resting force is a constant and makes no sound; only its changes do.
-        impact.duration_s = kSubstep_s;
-        impact.shape = PulseShape::Box;
+        if (body.sustained_time_s != event.time_s) {
+          flushSustained(body);
+          body.sustained_time_s = event.time_s;
+          body.sustained_modal.assign(modal.size(), 0.0);
+        }
+        for (size_t i = 0; i < modal.size(); ++i) body.sustained_modal[i] += modal[i];
         ++report.sustained_contacts;
       }
-      synth.addImpact(impact);
     }
   }
+  for (Body& body : bodies) flushSustained(body);
 
   AudioBuffer& audio = result.audio;
   audio.sample_rate_hz = rate;

@@ -117,6 +117,121 @@ void projectImpulseInto(const ModeBank& bank, const double point[3], const doubl
   }
 }
 
+SurfaceLocator::SurfaceLocator(const ModeBank& bank) : bank_(&bank) {
+  const size_t nv = bank.surfaceVertexCount();
+  const size_t nt = bank.surface_triangles.size() / 3;
+  const double* pos = bank.surface_positions.data();
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (size_t v = 0; v < nv; ++v)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], pos[3 * v + k]), hi[k] = std::max(hi[k], pos[3 * v + k]);
+  if (nt == 0 || !(hi[0] >= lo[0])) {
+    cell_start_.assign(2, 0);
+    return;
+  }
+  // About one triangle per cell on a surface: cell ~ sqrt(area / triangles), from the box.
+  const double ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+  const double area = 2.0 * (ext[0] * ext[1] + ext[1] * ext[2] + ext[0] * ext[2]);
+  cell_m_ = std::max(std::sqrt(area / static_cast<double>(nt)), 1e-9 * std::max({ext[0], ext[1], ext[2], 1e-12}));
+  for (int k = 0; k < 3; ++k) {
+    origin_[k] = lo[k];
+    dims_[k] = std::clamp(static_cast<int>(ext[k] / cell_m_) + 1, 1, 256);
+  }
+  const size_t cells = static_cast<size_t>(dims_[0]) * dims_[1] * dims_[2];
+  auto cellRange = [&](const uint32_t* tri, int from[3], int to[3]) {
+    for (int k = 0; k < 3; ++k) {
+      double a = INFINITY, b = -INFINITY;
+      for (int c = 0; c < 3; ++c) a = std::min(a, pos[3 * tri[c] + k]), b = std::max(b, pos[3 * tri[c] + k]);
+      from[k] = std::clamp(static_cast<int>((a - origin_[k]) / cell_m_), 0, dims_[k] - 1);
+      to[k] = std::clamp(static_cast<int>((b - origin_[k]) / cell_m_), 0, dims_[k] - 1);
+    }
+  };
+  cell_start_.assign(cells + 1, 0);
+  for (int pass = 0; pass < 2; ++pass) {  // count, then fill (CSR)
+    std::vector<uint32_t> fill(pass == 1 ? cell_start_.begin() : cell_start_.end(), cell_start_.end());
+    if (pass == 1) cell_tris_.resize(cell_start_[cells]);
+    for (size_t t = 0; t < nt; ++t) {
+      const uint32_t* tri = &bank.surface_triangles[3 * t];
+      if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) continue;
+      int from[3], to[3];
+      cellRange(tri, from, to);
+      for (int x = from[0]; x <= to[0]; ++x)
+        for (int y = from[1]; y <= to[1]; ++y)
+          for (int z = from[2]; z <= to[2]; ++z) {
+            const size_t c = (static_cast<size_t>(x) * dims_[1] + y) * dims_[2] + z;
+            if (pass == 0) ++cell_start_[c + 1];
+            else cell_tris_[fill[c]++] = static_cast<uint32_t>(t);
+          }
+    }
+    if (pass == 0)
+      for (size_t c = 0; c < cells; ++c) cell_start_[c + 1] += cell_start_[c];
+  }
+}
+
+void SurfaceLocator::nearest(const double point[3], uint32_t vertices[3], double weights[3]) const {
+  const ModeBank& bank = *bank_;
+  const double* pos = bank.surface_positions.data();
+  vertices[0] = vertices[1] = vertices[2] = 0;
+  weights[0] = 1.0, weights[1] = weights[2] = 0.0;
+  if (cell_tris_.empty()) return;
+  int home[3];
+  for (int k = 0; k < 3; ++k)
+    home[k] = std::clamp(static_cast<int>(std::floor((point[k] - origin_[k]) / cell_m_)), 0, dims_[k] - 1);
+  // Distance from the point to the grid box (when it lies outside), so ring r is at least
+  // (r - 1) cells + that far away.
+  double outside2 = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double below = origin_[k] - point[k], above = point[k] - (origin_[k] + dims_[k] * cell_m_);
+    const double d = std::max({below, above, 0.0});
+    outside2 += d * d;
+  }
+  double best = INFINITY;
+  const int max_ring = std::max({dims_[0], dims_[1], dims_[2]});
+  for (int r = 0; r <= max_ring; ++r) {
+    // Cells in ring r (Chebyshev distance r from home) are at least (r - 1) cells away.
+    const double reach = std::max(0, r - 1) * cell_m_;
+    if (best < INFINITY && reach * reach + outside2 > best) break;
+    for (int x = home[0] - r; x <= home[0] + r; ++x) {
+      if (x < 0 || x >= dims_[0]) continue;
+      for (int y = home[1] - r; y <= home[1] + r; ++y) {
+        if (y < 0 || y >= dims_[1]) continue;
+        for (int z = home[2] - r; z <= home[2] + r; ++z) {
+          if (z < 0 || z >= dims_[2]) continue;
+          if (std::max({std::abs(x - home[0]), std::abs(y - home[1]), std::abs(z - home[2])}) != r) continue;
+          const size_t c = (static_cast<size_t>(x) * dims_[1] + y) * dims_[2] + z;
+          for (uint32_t i = cell_start_[c]; i < cell_start_[c + 1]; ++i) {
+            const uint32_t* tri = &bank.surface_triangles[3 * cell_tris_[i]];
+            const Barycentric b = closestOnTriangle(point, pos + 3 * tri[0], pos + 3 * tri[1], pos + 3 * tri[2]);
+            if (b.dist2 < best) {
+              best = b.dist2;
+              for (int k = 0; k < 3; ++k) vertices[k] = tri[k], weights[k] = b.w[k];
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
+void SurfaceLocator::projectImpulseInto(const double point[3], const double impulse[3], double* out) const {
+  const ModeBank& bank = *bank_;
+  const size_t nm = bank.modeCount();
+  if (cell_tris_.empty() || bank.shapes.size() < nm * bank.surfaceVertexCount() * 3) {
+    strike::projectImpulseInto(bank, point, impulse, out);
+    return;
+  }
+  uint32_t v[3];
+  double w[3];
+  nearest(point, v, w);
+  for (size_t m = 0; m < nm; ++m) {
+    double s = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const float* phi = bank.shapeAt(m, v[k]);
+      s += w[k] * (phi[0] * impulse[0] + phi[1] * impulse[1] + phi[2] * impulse[2]);
+    }
+    out[m] = s;
+  }
+}
+
 std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]) {
   std::vector<double> g(bank.modeCount(), 0.0);
   projectImpulseAtVertexInto(bank, vertex, impulse, g.data());

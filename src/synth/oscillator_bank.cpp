@@ -263,18 +263,22 @@ struct OscillatorBank::Impl {
   void reserveImpacts(size_t records, size_t max_transient) {
     size_t max_modes = 0;
     for (const ObjectInfo& o : objects) max_modes = std::max<size_t>(max_modes, o.mode_count);
+    const bool grew = max_modes > reserved_hits || max_transient > reserved_transient;
     reserved_hits = std::max(reserved_hits, max_modes);
     reserved_transient = std::max(reserved_transient, max_transient);
+    const size_t old_size = pool.size();
+    pool.reserve(records);
+    free_records.reserve(records);
     while (pool.size() < records) {
       pool.emplace_back();
-      free_records.reserve(pool.size());
       free_records.push_back(static_cast<uint32_t>(pool.size() - 1));
     }
     pending.reserve(pool.size());
     free_records.reserve(pool.size());
-    for (Impact& im : pool) {
-      im.hits.reserve(reserved_hits);
-      im.transient.reserve(reserved_transient);
+    // Only new records need capacity unless the reservation itself grew.
+    for (size_t i = grew ? 0 : old_size; i < pool.size(); ++i) {
+      pool[i].hits.reserve(reserved_hits);
+      pool[i].transient.reserve(reserved_transient);
     }
   }
 
@@ -299,7 +303,7 @@ struct OscillatorBank::Impl {
     const size_t transient_len = static_cast<size_t>(end_sample - start_sample);
     if (free_records.empty()) {
       if (no_alloc) return ImpactResult::NoCapacity;
-      reserveImpacts(pool.size() + 1, 0);
+      reserveImpacts(std::max<size_t>(16, pool.size() * 2), 0);  // geometric: O(1) amortized
     }
     const uint32_t record = free_records.back();
     Impact& im = pool[record];

@@ -142,6 +142,26 @@ class OscillatorBank {
 /// frame): p is projected onto the nearest surface triangle and the shapes are interpolated
 /// barycentrically. Returns #modes values.
 std::vector<double> projectImpulse(const ModeBank& bank, const double point[3], const double impulse[3]);
+
+/// Finds the nearest surface point of a bank quickly (a uniform grid over its triangles), for
+/// renders that project many contacts. Built once per bank (allocates); queries do not allocate.
+/// The bank must outlive the locator.
+class SurfaceLocator {
+ public:
+  explicit SurfaceLocator(const ModeBank& bank);
+  /// The nearest point to `point` (mesh frame) as a triangle's vertices and barycentric weights.
+  void nearest(const double point[3], uint32_t vertices[3], double weights[3]) const;
+  /// projectImpulseInto with this locator: the same result, found in O(1) instead of O(#F).
+  void projectImpulseInto(const double point[3], const double impulse[3], double* out) const;
+
+ private:
+  const ModeBank* bank_;
+  double origin_[3] = {0, 0, 0};
+  double cell_m_ = 1.0;
+  int dims_[3] = {1, 1, 1};
+  std::vector<uint32_t> cell_start_;  ///< CSR: triangles of cell c are cell_tris_[cell_start_[c] .. cell_start_[c+1])
+  std::vector<uint32_t> cell_tris_;
+};
 /// Same, at surface vertex v.
 std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]);
 /// projectImpulse() into out[0 .. #modes) without allocating (real-time safe; O(#triangles +

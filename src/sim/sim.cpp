@@ -375,7 +375,11 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
       radius_max = std::max(radius_max, r);
     }
     const double radius_mean = hull.vertices.size() > 0 ? radius_sum / hull.vertices.size() : 0.0;
-    if (hull.vertices.size() >= 12 && radius_max - radius_min <= 0.02 * radius_mean) {
+    // All points on one sphere is not enough (a box's corners are too): the hull must also fill
+    // the sphere.
+    const double sphere_volume = 4.0 / 3.0 * M_PI * radius_mean * radius_mean * radius_mean;
+    if (hull.vertices.size() >= 12 && radius_max - radius_min <= 0.02 * radius_mean &&
+        hull_volume >= 0.9 * sphere_volume) {
       // Volume-equivalent radius, so the sphere neither floats above nor sinks into the ground.
       const double radius = std::cbrt(3.0 * std::abs(meshVolume(state->body_xyz, desc.surface_triangles)) / (4.0 * M_PI));
       state->shape = std::make_unique<btSphereShape>(radius > 0 ? radius : radius_mean);

@@ -267,5 +267,92 @@ TEST(CliHit, FittedDecayRatesMatchTheBank) {
   EXPECT_GE(checked, 3);
 }
 
+// ---- strike render ------------------------------------------------------------------------------
+
+const std::string kBarDrop = std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/bar-drop.json";
+
+/// Renders the bar-drop example once per build of the tool into a shared cache.
+class BarDrop : public testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    struct stat tool {};
+    stat(STRIKE_CLI, &tool);
+    const std::string key = std::to_string(tool.st_size) + "-" + std::to_string(tool.st_mtime);
+    cache_ = temp("render-cache-" + key);
+    wav_ = temp("bar-drop-" + key + ".wav");
+    events_ = temp("bar-drop-" + key + ".csv");
+    if (!std::filesystem::exists(wav_)) {
+      CliResult r = runCli("render '" + kBarDrop + "' -o '" + wav_ + "' --events '" + events_ + "' --cache '" + cache_ + "' --quiet");
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+    }
+  }
+  static std::string cache_, wav_, events_;
+};
+std::string BarDrop::cache_, BarDrop::wav_, BarDrop::events_;
+
+TEST_F(BarDrop, SpectrumHasTheBarsBendingModesFromItsBank) {
+  // The cache holds the bar's bank: its first two bending frequencies must be in the render.
+  std::string bank;
+  for (const auto& entry : std::filesystem::directory_iterator(cache_)) bank = entry.path().string();
+  ASSERT_FALSE(bank.empty());
+  const nlohmann::json info = jsonOf(runCli("info --json '" + bank + "'"));
+  const nlohmann::json a = jsonOf(runCli("analyze --json --peaks 20 '" + wav_ + "'"));
+  const std::vector<double> modes = info["frequencies_hz"].get<std::vector<double>>();
+  ASSERT_GE(modes.size(), 4u);
+  for (double mode : {modes[0], modes[2]}) {  // bending pairs: 0,1 and 2,3
+    double best = 1e9;
+    for (const auto& p : a["peaks"]) best = std::min(best, std::fabs(p["freq_hz"].get<double>() - mode));
+    EXPECT_LT(best, 0.005 * mode) << "bending mode at " << mode << " Hz missing from the render";
+  }
+  EXPECT_GT(a["peak_amplitude"].get<double>(), 1e-4);
+}
+
+TEST_F(BarDrop, EventLogHasTheFirstImpactAtFreeFallTime) {
+  std::ifstream in(events_);
+  std::string header, first;
+  std::getline(in, header);
+  std::getline(in, first);
+  EXPECT_EQ(header.rfind("time_s,body_a,body_b,new_contact,normal_speed_m_s", 0), 0u) << header;
+  // Dropped from 0.15 m (its lowest corner ~0.139 m, tilted 1 degree): t = sqrt(2 h / g).
+  const double t = std::stod(first.substr(0, first.find(',')));
+  EXPECT_NEAR(t, std::sqrt(2 * 0.139 / 9.81), 0.01);
+  EXPECT_NE(first.find(",bar,ground,"), std::string::npos) << first;
+}
+
+TEST_F(BarDrop, RendersAreDeterministicAndTheCacheChangesNothing) {
+  const std::string again = temp("bar-drop-again.wav"), uncached = temp("bar-drop-uncached.wav");
+  CliResult r = runCli("render '" + kBarDrop + "' -o '" + again + "' --cache '" + cache_ + "' --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(test::slurp(again), test::slurp(wav_)) << "two renders differ";
+  r = runCli("render '" + kBarDrop + "' -o '" + uncached + "' --no-cache --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(test::slurp(uncached), test::slurp(wav_)) << "a render from the cache differs from one without";
+}
+
+TEST(CliRender, MalformedScenesFailNamingTheKeyAndWriteNothing) {
+  struct Case {
+    std::string json, expected;
+  } cases[] = {
+      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "steel", "colour": "red"}]})", "objects[0].colour: unknown key"},
+      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "steel", "velocity": [0, "x", 0]}]})", "objects[0].velocity[1]"},
+      {R"({"objects": [{"mesh": "nothere.obj", "material": "steel"}]})", "objects[0].mesh: file not found"},
+      {"{\"objects\": [{\"mesh\": \"box:1,1,1\", \"material\": \"steel\", \"velocity\": [NaN, 0, 0]}]}", "scene.json:1:"},
+  };
+  int n = 0;
+  for (const Case& c : cases) {
+    const std::string dir = temp("bad-scene-" + std::to_string(n++));
+    std::filesystem::create_directories(dir);
+    {
+      std::ofstream out(dir + "/scene.json");
+      out << c.json;
+    }
+    const std::string wav = dir + "/out.wav";
+    CliResult r = runCli("render '" + dir + "/scene.json' -o '" + wav + "' --no-cache");
+    EXPECT_EQ(r.exit_code, 1) << c.json;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.json << "\n" << r.err;
+    EXPECT_FALSE(std::filesystem::exists(wav));
+  }
+}
+
 }  // namespace
 }  // namespace strike

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# The README's first command: install what is missing, build the release tool, and make a sound.
+# The README's first command: install what is missing, build the release tool, and render an
+# example scene (a steel bar dropped on concrete) to out/bar-drop.wav, with its spectrogram.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/install-deps.sh
@@ -8,7 +9,6 @@ cmake --preset release >/dev/null
 cmake --build --preset release --target strike_cli
 mkdir -p out
 strike=build/release/tools/strike
-"$strike" modes box:0.3,0.02,0.02 --material steel --order 2 -o out/steel-bar.modes
-"$strike" hit out/steel-bar.modes -o out/steel-bar-hit.wav --duration 3
-"$strike" analyze out/steel-bar-hit.wav --peaks 8
-echo "quickstart: wrote out/steel-bar-hit.wav"
+"$strike" render examples/scenes/bar-drop.json -o out/bar-drop.wav --events out/bar-drop-events.csv
+"$strike" analyze out/bar-drop.wav --peaks 8 --spectrogram out/bar-drop.png
+echo "quickstart: wrote out/bar-drop.wav (sound), out/bar-drop.png (spectrogram), out/bar-drop-events.csv (contacts)"

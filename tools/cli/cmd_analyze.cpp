@@ -22,8 +22,11 @@ CommandSpec analyzeSpec() {
       {"--json", "", "print one JSON object on stdout (the contract in ARCHITECTURE.md)"},
       {"--peaks", "N", "report the N strongest peaks; default 20"},
       {"--floor", "DB", "ignore peaks more than DB below the strongest; default -60"},
+      {"--spectrogram", "PNG", "also draw a spectrogram (log frequency, 100 dB range) to this PNG file"},
   };
-  spec.examples = "  strike analyze hit.wav\n  strike analyze hit.wav --json --peaks 5\n";
+  spec.examples =
+      "  strike analyze hit.wav\n  strike analyze hit.wav --json --peaks 5\n"
+      "  strike analyze render.wav --spectrogram render.png\n";
   spec.min_positional = 1;
   spec.max_positional = 1;
   return spec;
@@ -54,6 +57,10 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
   Result<AudioBuffer> audio = readAudio(path);
   if (!audio) return reportError("analyze", audio.error());
   const AudioAnalysis analysis = analyzeAudio(*audio, options);
+  if (args->has("--spectrogram")) {
+    Status drawn = writeSpectrogramPng(args->text("--spectrogram"), *audio, SpectrogramOptions{});
+    if (!drawn) return reportError("analyze", drawn.error());
+  }
 
   if (args->has("--json")) {
     nlohmann::json j;

@@ -618,9 +618,10 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     const BlasThreadsScope blas_threads(settings.blas_threads);
     Context ctx{K, M_pruned, *solver, out.sigma, settings};
     Found found;
-    // Stage 1, ARPACK: the rigid modes and the lowest elastic ones, to full accuracy. Small
-    // requests end here. Stage 2, block Lanczos on the operator deflated against stage 1,
-    // finds the rest until the cut-off or the cap is passed.
+    // A small request (at most kArpackModes pairs): ARPACK alone, to full accuracy. A larger
+    // one: block Lanczos from scratch (rigid modes included), then, only if it fell short,
+    // further block rounds on the operator deflated against what was found.
+    // ModalMethod::ArpackOnly grows ARPACK requests instead.
     auto status = [&](const std::vector<double>& extra, int& elastic_below, double& top) {
       elastic_below = 0;
       top = -INFINITY;

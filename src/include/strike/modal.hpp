@@ -14,8 +14,8 @@ namespace strike {
 
 /// How the Lanczos work is split (both use one CHOLMOD factorization of K - sigma M).
 enum class ModalMethod {
-  /// ARPACK finds the rigid modes and the lowest elastic ones; block shift-invert Lanczos
-  /// (multi-right-hand-side solves) finds the rest. The fast default.
+  /// Small requests (a few modes): ARPACK alone. Larger ones: block shift-invert Lanczos
+  /// (multi-right-hand-side solves, BLAS-3 Gram-Schmidt). The fast default.
   Hybrid,
   /// ARPACK alone, single-vector solves: the reference the hybrid is checked against.
   ArpackOnly,

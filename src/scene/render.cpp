@@ -36,6 +36,9 @@ constexpr double kInaudibleVelocityChange_m_s = 1e-6;
 // body, ten times less. Bullet may spread one impact over several substeps and flag only the first
 // as new, so the approach speed, not the flag, decides.
 constexpr double kImpactSpeed_m_s = 0.05;
+// Sustained contacts closer in time than this belong to one contact span (contact damping).
+// Sleeping bodies report no contacts, so an open span at the end of the events stays open.
+constexpr double kContactGap_s = 0.02;
 // Listener closer than this to a contact is treated as this far (the point-source model's 1/r
 // would blow up).
 constexpr double kMinListenerDistance_m = 0.05;
@@ -57,6 +60,7 @@ struct Body {
   uint32_t synth_id = 0;
   std::unique_ptr<SurfaceLocator> locator;  ///< nearest surface point, for projecting contacts
   double sustained_time_s = -1.0;           ///< substep whose sustained contacts are being summed
+  double last_sustained_time_s = -1.0;      ///< the last substep with sustained contact
   std::vector<double> sustained_modal;      ///< their summed modal impulses
   double contact_radius_m = 0.0;     ///< radius of the sphere of equal volume, for Hertz
 };
@@ -277,6 +281,28 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     body.locator = std::make_unique<SurfaceLocator>(body.bank);
   }
 
+  // Contact damping: while a body is in sustained contact, its modes lose energy into what it
+  // touches. Contact spans are the runs of sustained-contact steps with gaps under kContactGap_s.
+  if (scene.contact_damping_per_s > 0) {
+    for (size_t index = 0; index < bodies.size(); ++index) {
+      Body& body = bodies[index];
+      if (!body.sounded) continue;
+      double span_start = -1.0, last = -1.0;
+      for (const ContactEvent& event : result.events) {
+        if ((event.body_a != index && event.body_b != index) || event.normal_speed_m_s > kImpactSpeed_m_s) continue;
+        if (span_start >= 0 && event.time_s - last > kContactGap_s) {
+          synth.setExtraDamping(body.synth_id, span_start, scene.contact_damping_per_s);
+          synth.setExtraDamping(body.synth_id, last + kContactGap_s, 0.0);
+          span_start = -1.0;
+        }
+        if (span_start < 0) span_start = event.time_s;
+        last = event.time_s;
+      }
+      // A span still open at the end lasts: the body came to rest on something.
+      if (span_start >= 0) synth.setExtraDamping(body.synth_id, span_start, scene.contact_damping_per_s);
+    }
+  }
+
   // Sustained contacts of one body in one substep are one force over that step: their modal
   // impulses add (the projection is linear in J), so they become one box pulse per body per step.
   std::vector<double> modal;
@@ -289,6 +315,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     impact.shape = PulseShape::Box;
     impact.modal_impulse = body.sustained_modal.data();
     synth.addImpact(impact);
+    body.last_sustained_time_s = body.sustained_time_s;
     body.sustained_time_s = -1.0;
   };
   for (const ContactEvent& event : result.events) {
@@ -332,6 +359,28 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     }
   }
   for (Body& body : bodies) flushSustained(body);
+
+  // A body Bullet puts to sleep reports no more contacts, but it still rests on its support: its
+  // last resting force is held to the end, or its disappearance would ring the modes like a lift.
+  for (size_t index = 0; index < bodies.size(); ++index) {
+    Body& body = bodies[index];
+    if (!body.sounded || body.last_sustained_time_s < 0 || body.object->is_static) continue;
+    const double hold_start = body.last_sustained_time_s + kSubstep_s;
+    if (hold_start >= duration || norm(simulated->final_velocity_m_s[index]) > kImpactSpeed_m_s) continue;
+    bool later_impact = false;
+    for (const ContactEvent& event : result.events)
+      if ((event.body_a == index || event.body_b == index) && event.time_s > body.last_sustained_time_s) later_impact = true;
+    if (later_impact) continue;
+    const double hold = duration - hold_start;
+    for (double& g : body.sustained_modal) g *= hold / kSubstep_s;  // same force, longer box
+    ImpactDesc impact;
+    impact.object = body.synth_id;
+    impact.time_s = hold_start;
+    impact.duration_s = hold;
+    impact.shape = PulseShape::Box;
+    impact.modal_impulse = body.sustained_modal.data();
+    synth.addImpact(impact);
+  }
 
   AudioBuffer& audio = result.audio;
   audio.sample_rate_hz = rate;

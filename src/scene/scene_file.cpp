@@ -251,7 +251,8 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
   Scene scene;
   scene.path = path;
   Status keys = checkKeys(doc, Where{path, "(top level)"},
-                          {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes"});
+                          {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes",
+                           "contact_damping"});
   if (!keys) return keys.error();
   if (doc.contains("sample_rate")) {
     Result<double> rate = number(doc["sample_rate"], root.at("sample_rate"));
@@ -275,6 +276,12 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
     if (!f) return f.error();
     if (*f <= 0) return root.at("max_freq").error("must be > 0 Hz, got " + show(doc["max_freq"]));
     scene.max_freq_hz = *f;
+  }
+  if (doc.contains("contact_damping")) {
+    Result<double> c = number(doc["contact_damping"], root.at("contact_damping"));
+    if (!c) return c.error();
+    if (*c < 0) return root.at("contact_damping").error("must be >= 0 (1/s), got " + show(doc["contact_damping"]));
+    scene.contact_damping_per_s = *c;
   }
   if (doc.contains("max_modes")) {
     if (!doc["max_modes"].is_number_integer() || doc["max_modes"].get<long long>() < 1 || doc["max_modes"].get<long long>() > 100000)

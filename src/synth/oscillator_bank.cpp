@@ -102,6 +102,7 @@ struct ModeInfo {
   double damping_c = 0.0;  // c, 1/s
   // Ringing: pole p, e^{p h}, e^{p B h}, and the output weight b = -i p^2 R / omega_d.
   Complex pole, step, block_step, out_weight;
+  Complex base_pole, base_step;  // the material's pole and e^{p h}; `pole` adds contact damping
   // Damped: 2x2 per-sample transition in scaled coordinates, row-major.
   double phi[4] = {0, 0, 0, 0};
   int32_t slot = -1;  // index in the active set of its kind, -1 when asleep
@@ -188,6 +189,15 @@ struct OscillatorBank::Impl {
   std::vector<uint32_t> pending;       // indices into pool, sorted by start_sample; capacity >= pool.size()
   size_t reserved_hits = 0, reserved_transient = 0;
   uint64_t pos = 0;  // next sample to render
+
+  // Scheduled changes of an object's extra damping (contact damping), applied at block ends.
+  struct DampingChange {
+    uint64_t sample;
+    uint32_t object;
+    double extra_decay_per_s;
+  };
+  std::vector<DampingChange> damping_changes;  // sorted by sample
+  size_t damping_cursor = 0;
   SynthStats stats;
 
   explicit Impl(const SynthSettings& s) : settings(s) {
@@ -235,6 +245,8 @@ struct OscillatorBank::Impl {
         const double omega_d = std::sqrt(nu);
         m.kind = ModeKind::Ringing;
         m.pole = Complex(-sigma, omega_d);
+        m.base_pole = m.pole;
+        m.base_step = std::exp(m.pole * h);
         m.step = std::exp(m.pole * h);
         m.block_step = std::exp(m.pole * (static_cast<double>(kBlock) * h));
         m.out_weight = Complex(0.0, -1.0) * m.pole * m.pole * (m.radiation / omega_d);
@@ -324,24 +336,32 @@ struct OscillatorBank::Impl {
     // (Om = 0) for the box.
     const double pulse_omega = ideal || box ? 0.0 : M_PI / tau_s;
 
+    // Contact damping scheduled for this object at the pulse's start (setExtraDamping is called
+    // before the impacts it covers), so pulses and the oscillators they feed use the same pole.
+    double extra_damping = 0.0;
+    for (const DampingChange& c : damping_changes)
+      if (c.object == desc.object && c.sample <= start_sample) extra_damping = c.extra_decay_per_s;
     for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
       const double g = desc.modal_impulse[j];
       if (g == 0.0 || !std::isfinite(g)) continue;
       const uint32_t mi = obj.first_mode + j;
       const ModeInfo& m = modes[mi];
       if (m.kind == ModeKind::Ringing) {
+        // The pole in force when the pulse starts (contact damping may have moved it).
+        const Complex pole = m.base_pole - extra_damping;
+        const Complex step = extra_damping == 0.0 ? m.base_step : std::exp(pole * h);
         const Complex y_end = ideal ? Complex(1.0, 0.0)
-                              : box   ? detail::boxResponse(m.pole, tau_s, tau_s)
-                                      : detail::halfSineResponse(m.pole, tau_s, tau_s);
+                              : box   ? detail::boxResponse(pole, tau_s, tau_s)
+                                      : detail::halfSineResponse(pole, tau_s, tau_s);
         const Complex bg = g * m.out_weight;
-        const Complex v = bg * std::exp(m.pole * after_end_s) * y_end;
+        const Complex v = bg * std::exp(pole * after_end_s) * y_end;
         if (!(std::abs(v) >= threshold)) continue;
         im.hits.push_back({mi, v});
         if (im.transient.empty()) continue;
         if (box) {
           // Transient of the box: y(U) = E(0, p, U) / tau, E(0, p, U + h) = e^{ph} E(0, p, U) + E(0, p, h).
-          Complex e0 = detail::expDividedDifference(Complex(0.0, 0.0), m.pole, first_u_s);
-          const Complex h0 = detail::expDividedDifference(Complex(0.0, 0.0), m.pole, h);
+          Complex e0 = detail::expDividedDifference(Complex(0.0, 0.0), pole, first_u_s);
+          const Complex h0 = detail::expDividedDifference(Complex(0.0, 0.0), pole, h);
           const Complex k = bg / tau_s;
           // A box is a sustained force, so its feedthrough g R f (left out of the ringing output)
           // is added back while it acts: a constant force then gives exactly zero acceleration
@@ -350,24 +370,24 @@ struct OscillatorBank::Impl {
           const double feedthrough = g * m.radiation / tau_s;
           for (double& out : im.transient) {
             out += (k * e0).real() + feedthrough;
-            e0 = m.step * e0 + h0;
+            e0 = step * e0 + h0;
           }
           continue;
         }
         // Transient: y(U) = K (E(i Om, p, U) - E(-i Om, p, U)) / 2i at U = first_u + n h, with
         // E(a, p, U + h) = e^{ph} E(a, p, U) + e^{aU} E(a, p, h): exact, stable recurrences.
         const Complex ia(0.0, pulse_omega);
-        Complex ep = detail::expDividedDifference(ia, m.pole, first_u_s);
-        Complex em = detail::expDividedDifference(-ia, m.pole, first_u_s);
-        const Complex hp = detail::expDividedDifference(ia, m.pole, h);
-        const Complex hm = detail::expDividedDifference(-ia, m.pole, h);
+        Complex ep = detail::expDividedDifference(ia, pole, first_u_s);
+        Complex em = detail::expDividedDifference(-ia, pole, first_u_s);
+        const Complex hp = detail::expDividedDifference(ia, pole, h);
+        const Complex hm = detail::expDividedDifference(-ia, pole, h);
         Complex rot_p = std::exp(ia * first_u_s), rot_m = std::conj(rot_p);
         const Complex turn_p = std::exp(ia * h), turn_m = std::conj(turn_p);
         const Complex k = bg * (M_PI / (2.0 * tau_s)) / Complex(0.0, 2.0);
         for (double& out : im.transient) {
           out += (k * (ep - em)).real();
-          ep = m.step * ep + rot_p * hp;
-          em = m.step * em + rot_m * hm;
+          ep = step * ep + rot_p * hp;
+          em = step * em + rot_m * hm;
           rot_p *= turn_p;
           rot_m *= turn_m;
         }
@@ -593,6 +613,44 @@ struct OscillatorBank::Impl {
     }
   }
 
+  void scheduleExtraDamping(uint32_t object, double time_s, double extra_decay_per_s) {
+    if (object >= objects.size() || !(extra_decay_per_s >= 0.0) || !std::isfinite(extra_decay_per_s)) return;
+    const double t = (time_s + objects[object].delay_s) * fs;
+    // Changes take effect at block ends: round up to the block grid so impacts know exactly
+    // which pole is in force.
+    uint64_t sample = t > static_cast<double>(pos) ? static_cast<uint64_t>(std::ceil(t)) : pos;
+    sample = (sample + kBlock - 1) / kBlock * kBlock;
+    DampingChange change{sample, object, extra_decay_per_s};
+    auto at = std::upper_bound(damping_changes.begin() + static_cast<std::ptrdiff_t>(damping_cursor),
+                               damping_changes.end(), sample,
+                               [](uint64_t s0, const DampingChange& c) { return s0 < c.sample; });
+    damping_changes.insert(at, change);
+  }
+
+  // Exact: the pole moves left by the extra rate, so the mode keeps its frequency and its state
+  // continues from where it is; only its decay from here on changes.
+  void applyDampingChanges() {
+    while (damping_cursor < damping_changes.size() && damping_changes[damping_cursor].sample <= pos) {
+      const DampingChange& c = damping_changes[damping_cursor++];
+      const ObjectInfo& obj = objects[c.object];
+      for (uint32_t j = 0; j < obj.mode_count; ++j) {
+        ModeInfo& m = modes[obj.first_mode + j];
+        if (m.kind != ModeKind::Ringing) continue;
+        m.pole = m.base_pole - c.extra_decay_per_s;
+        m.step = std::exp(m.pole * h);
+        m.block_step = std::exp(m.pole * (static_cast<double>(kBlock) * h));
+        if (m.slot < 0) continue;
+        const size_t i = static_cast<size_t>(m.slot);
+        co_re[i] = static_cast<float>(m.step.real());
+        co_im[i] = static_cast<float>(m.step.imag());
+        pb_re[i] = m.block_step.real();
+        pb_im[i] = m.block_step.imag();
+        dco_re[i] = m.step.real();
+        dco_im[i] = m.step.imag();
+      }
+    }
+  }
+
   // Squared output level of active entry k: ringing slots first, then damped modes.
   float level2(size_t k) const {
     if (k < n_active) {
@@ -631,7 +689,10 @@ struct OscillatorBank::Impl {
       for (size_t n = s0; n < s1; ++n) out[done + n - s0] = static_cast<float>(mix[n]);
       done += s1 - s0;
       pos = block_start + s1;
-      if (s1 == kBlock) endBlock();
+      if (s1 == kBlock) {
+        endBlock();
+        applyDampingChanges();
+      }
     }
     stats.active_modes = n_active + damped_mode.size();
   }
@@ -661,6 +722,9 @@ size_t OscillatorBank::activeModeLevels(float* level2, size_t capacity) const {
 }
 size_t OscillatorBank::sleepModesAtOrBelow(float level2, float scale2) {
   return impl_->sleepModesAtOrBelow(level2, scale2);
+}
+void OscillatorBank::setExtraDamping(uint32_t object, double time_s, double extra_decay_per_s) {
+  impl_->scheduleExtraDamping(object, time_s, extra_decay_per_s);
 }
 void OscillatorBank::render(float* out, size_t frames) {
   if (out && frames > 0) impl_->render(out, frames);

@@ -127,6 +127,11 @@ class OscillatorBank {
   /// culling; the float product is the same as level * scale2 computed by the caller from
   /// activeModeLevels()); returns how many. Real-time safe; call between render() calls.
   size_t sleepModesAtOrBelow(float level2, float scale2 = 1.0f);
+  /// From time_s on, the object's ringing modes decay faster by extra_decay_per_s (1/s, amplitude;
+  /// 0 restores the material's damping). Applied exactly at the first 128-sample block boundary
+  /// at or after time_s (plus the object's delay): the pole moves left, the state carries on.
+  /// Models energy an object loses into what it rests on (contact damping). Not real-time safe.
+  void setExtraDamping(uint32_t object, double time_s, double extra_decay_per_s);
   /// Time of the next sample to be rendered, s.
   double time() const;
   SynthStats stats() const;

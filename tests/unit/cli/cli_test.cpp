@@ -11,6 +11,7 @@
 
 #include "common/beam_theory.hpp"
 #include "run_cli.hpp"
+#include "strike/audio.hpp"
 #include "strike/bank.hpp"
 
 namespace strike {
@@ -305,6 +306,21 @@ TEST_F(BarDrop, SpectrumHasTheBarsBendingModesFromItsBank) {
     EXPECT_LT(best, 0.005 * mode) << "bending mode at " << mode << " Hz missing from the render";
   }
   EXPECT_GT(a["peak_amplitude"].get<double>(), 1e-4);
+}
+
+TEST_F(BarDrop, GoesQuietOnceItRests) {
+  Result<AudioBuffer> audio = readAudio(wav_);
+  ASSERT_TRUE(audio) << audio.error().message;
+  const size_t last_second = static_cast<size_t>(audio->sample_rate_hz);
+  ASSERT_GT(audio->samples.size(), 2 * last_second);
+  double peak = 0, tail = 0;
+  for (size_t n = 0; n < audio->samples.size(); ++n) {
+    const double v = std::fabs(audio->samples[n]);
+    peak = std::max(peak, v);
+    if (n >= audio->samples.size() - last_second) tail = std::max(tail, v);
+  }
+  EXPECT_LT(tail, peak * 1e-3) << "the last second must be 60 dB below the impact peak: "
+                               << 20 * std::log10(tail / peak) << " dB";
 }
 
 TEST_F(BarDrop, EventLogHasTheFirstImpactAtFreeFallTime) {

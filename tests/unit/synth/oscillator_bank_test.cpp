@@ -396,3 +396,36 @@ TEST(OscillatorBank, RenderDoesNotAllocate) {
 }
 }  // namespace
 }  // namespace strike
+
+namespace strike {
+namespace {
+
+// Contact damping: from a block boundary on, the pole moves left by the extra rate, so the
+// output after it is the undamped-change output times exp(-extra (t - t1)), sample by sample.
+TEST(OscillatorBank, ExtraDampingScalesTheRingingExactlyFromItsStart) {
+  const double rate = 48000.0, extra = 5.0;
+  auto render = [&](bool change) {
+    SynthSettings s;
+    s.sample_rate_hz = rate;
+    s.double_precision = true;
+    s.audibility_threshold = 0.0;
+    OscillatorBank bank(s);
+    bank.addObject(test::makeObject({1000.0}, 0.0, 2.0));
+    const double g = 1.0;
+    bank.addImpact(ImpactDesc{0, 0.01, 0.0, &g});
+    if (change) bank.setExtraDamping(0, 1.0, extra);  // 1.0 s = 375 blocks of 128 at 48 kHz
+    return test::renderAll(bank, static_cast<size_t>(2.0 * rate));
+  };
+  const std::vector<float> plain = render(false), damped = render(true);
+  const double peak = test::peakAbs(plain);
+  double err = 0;
+  for (size_t n = 0; n < plain.size(); ++n) {
+    const double t = n / rate;
+    const double expected = t <= 1.0 ? plain[n] : plain[n] * std::exp(-extra * (t - 1.0));
+    err = std::max(err, std::fabs(damped[n] - expected));
+  }
+  EXPECT_LT(err / peak, 1e-6);
+}
+
+}  // namespace
+}  // namespace strike

@@ -6,6 +6,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "progress_reporter.hpp"
+#include "strike/error_estimate.hpp"
 #include "strike/materials.hpp"
 #include "strike/precompute.hpp"
 
@@ -36,6 +37,9 @@ CommandSpec modesSpec() {
       {"--size", "METRES", "target tet edge length; default: chosen from the object's size"},
       {"--max-freq", "HZ", "keep every mode up to this frequency; default 20000"},
       {"--max-modes", "N", "but at most N modes (lowest first); default 200"},
+      {"--error-estimate", "", "estimate each mode's frequency error (default: on for primitives and surfaces)"},
+      {"--no-error-estimate", "", "skip the error estimate"},
+      {"--tolerance", "PCT", "pick the cheapest order and --size whose estimated error is below PCT (e.g. 0.5%)"},
       {"--quiet", "", "no progress or summary on stderr"},
       {"--list-materials", "", "print the material table with sources and exit"},
   };
@@ -117,7 +121,49 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
   std::fprintf(stderr, "  time        mesh %.2f s, assemble %.2f s, factorize %.2f s, Lanczos %.2f s, total %.2f s\n",
                bank.meshing_seconds, bank.assembly_seconds, bank.factorize_seconds, bank.lanczos_seconds,
                bank.total_seconds);
+  const std::vector<double>& error = bank.frequency_error_estimate;
+  if (!error.empty()) {
+    size_t worst = 0;
+    for (size_t i = 1; i < error.size(); ++i)
+      if (error[i] > error[worst]) worst = i;
+    std::fprintf(stderr, "  est. error  max %.3g%% (mode %zu, %.2f Hz), %s, coarse %zu DOF (h ratio %.2f), extra %.2f s (%.0f%%)\n",
+                 100.0 * error[worst], worst, bank.frequencyHz(worst), result.report.error_estimate_method.c_str(),
+                 result.report.error_estimate_coarse_dofs, result.report.error_estimate_ratio,
+                 result.report.error_estimate_seconds,
+                 bank.total_seconds > 0 ? 100.0 * result.report.error_estimate_seconds / bank.total_seconds : 0.0);
+  } else if (!result.report.error_estimate_note.empty()) {
+    std::fprintf(stderr, "  est. error  none: %s\n", result.report.error_estimate_note.c_str());
+  }
   std::fprintf(stderr, "  wrote       %s\n", output.c_str());
+}
+
+/// `--tolerance PCT`: the cheapest order and size whose estimated error meets PCT for every
+/// kept mode (src/scene/error_estimate.cpp); prints what it tried, chose and what it cost.
+Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSettings& settings, bool quiet) {
+  std::string text = args.text("--tolerance");
+  const bool percent = !text.empty() && text.back() == '%';
+  if (percent) text.pop_back();
+  Result<double> value = parseNumber(text, "--tolerance");
+  if (!value) return value.error();
+  const double tolerance = percent ? *value / 100.0 : *value;
+  if (args.has("--order") || args.has("--size"))
+    return badInput("--tolerance chooses --order and --size itself; give one or the other");
+  if (args.has("--no-error-estimate")) return badInput("--tolerance needs the error estimate; drop --no-error-estimate");
+  Result<ToleranceResult> chosen = computeModeBankToTolerance(settings, tolerance);
+  if (!chosen) return chosen.error();
+  if (!quiet) {
+    for (const ToleranceTrial& t : chosen->trials)
+      std::fprintf(stderr, "strike modes: tolerance %.3g%%: Tet%d, size %.4g m, %zu DOF, %.2f s, max est. error %.3g%%%s\n",
+                   100.0 * tolerance, t.order == 2 ? 10 : 4, t.target_edge_m, t.dofs, t.seconds, 100.0 * t.max_estimate,
+                   t.met ? "  <- chosen" : "");
+    std::fprintf(stderr, "strike modes: tolerance %s after %zu tries, %.2f s in all\n",
+                 chosen->met ? "met" : "NOT met by the finest candidate (kept it)", chosen->trials.size(),
+                 chosen->total_seconds);
+  }
+  settings.order = chosen->trials.back().order;
+  settings.target_edge_m = chosen->trials.back().target_edge_m;
+  PrecomputeResult out = std::move(chosen->chosen);
+  return out;
 }
 
 }  // namespace
@@ -159,10 +205,17 @@ int runModes(const std::vector<std::string>& raw_args) {
     return reportError("modes", badInput("--max-modes = " + args.text("--max-modes") + " (must be 1 to 100000)"));
   settings.max_modes = static_cast<int>(*max_modes);
 
+  if (args.has("--error-estimate") && args.has("--no-error-estimate"))
+    return reportError("modes", badInput("--error-estimate and --no-error-estimate contradict each other"));
+  // Default: on when the mesh can be coarsened (Richardson, ~10-25% extra; see
+  // src/include/strike/error_estimate.hpp), off for tet files (Tet4 on corners costs more, bounds less).
+  settings.error_estimate = args.has("--error-estimate") || (!args.has("--no-error-estimate") && canRemesh(settings.mesh_spec));
+
   const bool quiet = args.has("--quiet");
   ProgressReporter progress(quiet);
   settings.progress = progress.callback();
-  Result<PrecomputeResult> result = computeModeBank(settings);
+  Result<PrecomputeResult> result = args.has("--tolerance") ? computeToTolerance(args, settings, quiet)
+                                                           : computeModeBank(settings);
   progress.finish();
   if (!result) return reportError("modes", result.error());
   if (!quiet)

@@ -21,6 +21,9 @@ struct PrecomputeSettings {
   double max_freq_hz = 20000.0;
   int max_modes = 200;
   ProgressFn progress;      ///< optional
+  /// Estimate each mode's frequency error (src/scene/error_estimate.cpp) at extra cost;
+  /// does not change the modes, so it is not part of the cache key.
+  bool error_estimate = false;
 };
 
 struct PrecomputeReport {
@@ -28,6 +31,12 @@ struct PrecomputeReport {
   size_t dofs = 0;
   bool capped_by_max_modes = false;
   int operator_applications = 0;
+  // The frequency error estimate (settings.error_estimate): method, extra time, caveats.
+  std::string error_estimate_method;  ///< "richardson", "tet4-corner" or empty (none)
+  std::string error_estimate_note;
+  double error_estimate_seconds = 0.0;
+  double error_estimate_ratio = 0.0;  ///< h_coarse / h_fine of the Richardson pair
+  size_t error_estimate_coarse_dofs = 0;
 };
 
 struct PrecomputeResult {

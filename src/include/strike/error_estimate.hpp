@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: MIT
+// Estimated frequency error per mode of a mode bank, and the cheapest-mesh search behind
+// `strike modes --tolerance`.
+//
+// Method (Richardson 1911; Roache, "Verification and Validation in Computational Science and
+// Engineering", 1998, ch. 5): the same problem is solved again on a mesh about twice as coarse
+// (h_c / h_f = r, measured as the cube root of the tet-count ratio, so the extra solve has ~1/8
+// of the unknowns), the modes are paired in ascending order (within a degenerate group any
+// pairing gives the same frequencies; sorted pairing minimizes the largest difference over all
+// pairings), and the fine mesh's relative error is estimated as
+//     e_i = Fs |f_c,i - f_f,i| / ((r^p - 1) f_f,i),
+// with the asymptotic order of the frequency error p = 2 for Tet4 and p = 4 for Tet10 (eigenvalue
+// error O(h^{2k}) for degree-k elements: Strang & Fix, "An Analysis of the Finite Element
+// Method", 1973, ch. 6) and the safety factor Fs of Roache's grid convergence index.
+// When the mesh cannot be regenerated coarser (a tet file), a Tet10 bank is compared with Tet4
+// on its corner nodes instead: e_i = |f_4,i - f_10,i| / f_10,i, an upper bound in practice
+// (the Tet4 error dominates) but pessimistic by one to two orders of magnitude.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "strike/precompute.hpp"
+
+namespace strike {
+
+struct ErrorEstimateReport {
+  std::string method;        ///< "richardson" or "tet4-corner" (empty when not estimated)
+  std::string note;          ///< why not estimated, or a caveat
+  double seconds = 0.0;      ///< extra run time (meshing + assembly + solve of the coarse problem)
+  double ratio = 0.0;        ///< h_coarse / h_fine (richardson)
+  size_t coarse_dofs = 0;
+  size_t unmatched = 0;      ///< fine modes with no coarse partner (their estimate is 1.0 = 100%)
+};
+
+/// Grid-convergence safety factor Fs: Roache recommends 3 for a two-mesh study (1.25 needs three
+/// meshes and an observed order). With 1.25 the default Tet4 bar was under-estimated (13% for 16%); the
+/// validation tests in tests/unit/extreme/accuracy_test.cpp state how often it holds.
+constexpr double kRichardsonSafety = 3.0;
+
+/// True when `mesh_spec` can be meshed again at another resolution (a primitive or a surface).
+bool canRemesh(const std::string& mesh_spec);
+
+/// Fills `estimate` (one relative error per fine eigenvalue) for the bank computed from `loaded`
+/// with `settings`. On an error the estimate is left empty.
+Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, const PrecomputeSettings& settings,
+                                                    const std::vector<double>& fine_eigenvalues,
+                                                    std::vector<double>& estimate);
+
+/// One candidate tried by computeModeBankToTolerance.
+struct ToleranceTrial {
+  int order = 1;
+  double target_edge_m = 0.0;
+  size_t dofs = 0;
+  double seconds = 0.0;       ///< its precompute + error estimate
+  double max_estimate = 0.0;  ///< largest estimated relative error over kept modes
+  bool met = false;
+};
+
+struct ToleranceResult {
+  PrecomputeResult chosen;
+  std::vector<ToleranceTrial> trials;  ///< in the order tried (cheapest first)
+  double total_seconds = 0.0;
+  bool met = false;                    ///< false: the finest candidate is returned, tolerance missed
+};
+
+/// Tries element orders and resolutions from the cheapest (fewest unknowns) up, and returns the
+/// first whose estimated error meets `tolerance` (relative, e.g. 0.005) for every kept mode.
+/// Needs a remeshable spec (primitive or surface file).
+Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& settings, double tolerance);
+
+}  // namespace strike

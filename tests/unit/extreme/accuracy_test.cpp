@@ -1,0 +1,124 @@
+// SPDX-License-Identifier: MIT
+// Validation of the per-mode frequency error estimate (src/scene/error_estimate.cpp) on cases
+// with known answers: the free-free bar (Timoshenko bending, tests/unit/common/beam_theory.hpp)
+// and the free solid sphere (Lamb 1882, lamb_sphere.hpp). "Covered" means the true relative
+// error is at most the estimate.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "common/beam_theory.hpp"
+#include "extreme/lamb_sphere.hpp"
+#include "strike/precompute.hpp"
+
+namespace strike {
+namespace {
+
+struct Coverage {
+  int modes = 0, covered = 0;
+  double worst_ratio = 0;  // largest true / estimate
+};
+
+PrecomputeResult compute(const std::string& spec, int order, const Material& material, double max_freq, int max_modes) {
+  PrecomputeSettings settings;
+  settings.mesh_spec = spec;
+  settings.material = material;
+  settings.order = order;
+  settings.max_freq_hz = max_freq;
+  settings.max_modes = max_modes;
+  settings.error_estimate = true;
+  Result<PrecomputeResult> r = computeModeBank(settings);
+  EXPECT_TRUE(r.ok()) << r.error().message;
+  return r.ok() ? std::move(*r) : PrecomputeResult{};
+}
+
+Material steel() {
+  Material m;
+  m.name = "steel";
+  m.youngs_pa = 2.0e11;
+  m.poisson = 0.29;
+  m.density_kg_m3 = 7850;
+  return m;
+}
+
+// Bar 0.3 x 0.02 x 0.02 m, Tet4 at the default size (4 cells across): the Tet4 error (8-16%)
+// dwarfs the Timoshenko reference's own ~0.1% deviation from 3D elasticity, so the check is
+// meaningful. Bending modes are the FEM modes nearest to a Timoshenko frequency (pairs).
+// Measured: 6 of 6 bending modes covered, true/estimate <= 0.45 (the estimate is ~2-3x high).
+TEST(ErrorEstimate, Tet4BarBendingCoveredByEstimate) {
+  const PrecomputeResult r = compute("box:0.3,0.02,0.02", 1, steel(), 7000.0, 12);
+  const ModeBank& bank = r.bank;
+  ASSERT_EQ(bank.frequency_error_estimate.size(), bank.modeCount());
+  EXPECT_EQ(r.report.error_estimate_method, "richardson");
+  const test::BarProperties bar{2.0e11, 0.29, 7850, 0.3, 0.02, 0.02};
+  const std::vector<double> timoshenko = test::timoshenkoFreeFreeHz(bar, 3);
+  Coverage c;
+  for (double ref : timoshenko) {
+    // the two FEM modes nearest to this reference (square section: a degenerate pair)
+    std::vector<std::pair<double, size_t>> near;
+    for (size_t i = 0; i < bank.modeCount(); ++i) near.push_back({std::abs(bank.frequencyHz(i) - ref), i});
+    std::sort(near.begin(), near.end());
+    for (int k = 0; k < 2; ++k) {
+      const size_t i = near[static_cast<size_t>(k)].second;
+      const double truth = std::abs(bank.frequencyHz(i) - ref) / ref, est = bank.frequency_error_estimate[i];
+      ++c.modes;
+      c.covered += truth <= est;
+      c.worst_ratio = std::max(c.worst_ratio, truth / est);
+      std::printf("bar Tet4 %8.1f Hz ref %8.1f true %.3f%% est %.3f%%\n", bank.frequencyHz(i), ref, 100 * truth, 100 * est);
+    }
+  }
+  std::printf("bar Tet4: %d of %d covered, worst true/estimate %.2f, estimate cost %.3f s of %.3f s\n", c.covered,
+              c.modes, c.worst_ratio, r.report.error_estimate_seconds, bank.total_seconds);
+  EXPECT_EQ(c.covered, c.modes);
+}
+
+// Solid steel-like sphere R = 0.05 m, nu = 0.25: sorted FEM modes against sorted Lamb modes
+// (torsional + spheroidal, each root repeated 2n + 1 times), so no mode classification is
+// needed. The faceted sphere's geometric error is part of what the coarser mesh sees.
+Coverage sphereCoverage(int order, int count, double* cost_fraction) {
+  Material m = steel();
+  m.poisson = 0.25;
+  const double R = 0.05, cs = std::sqrt(m.youngs_pa / (2 * (1 + m.poisson)) / m.density_kg_m3);
+  const PrecomputeResult r = compute("sphere:0.05", order, m, 1e9, count);
+  const ModeBank& bank = r.bank;
+  const std::vector<double> etas = test::lambSphereEtas(m.poisson, 7.0);
+  Coverage c;
+  for (size_t i = 0; i < bank.modeCount() && i < etas.size(); ++i) {
+    const double ref = etas[i] * cs / (2 * 3.14159265358979323846 * R);
+    const double truth = std::abs(bank.frequencyHz(i) - ref) / ref, est = bank.frequency_error_estimate[i];
+    ++c.modes;
+    c.covered += truth <= est;
+    c.worst_ratio = std::max(c.worst_ratio, truth / est);
+    std::printf("sphere Tet%d mode %2zu %9.1f Hz ref %9.1f true %.3f%% est %.3f%%\n", order == 2 ? 10 : 4, i,
+                bank.frequencyHz(i), ref, 100 * truth, 100 * est);
+  }
+  *cost_fraction = r.report.error_estimate_seconds / bank.total_seconds;
+  std::printf("sphere Tet%d: %d of %d covered, worst true/estimate %.2f, estimate cost %.0f%%\n", order == 2 ? 10 : 4,
+              c.covered, c.modes, c.worst_ratio, 100 * *cost_fraction);
+  return c;
+}
+
+// Measured (R = 5 cm, default mesh, 28 lowest modes): Tet4 28 of 28 covered, true/estimate
+// <= 0.54; estimate cost 40% of the bank's time (small mesh: remeshing overhead dominates).
+TEST(ErrorEstimate, SphereTet4AgainstLamb) {
+  double cost = 0;
+  const Coverage c = sphereCoverage(1, 28, &cost);
+  ASSERT_GE(c.modes, 28);
+  EXPECT_GE(c.covered, c.modes * 8 / 10);
+}
+
+// Measured: Tet10 21 of 27 covered (78%); the misses are the S1 triplet (34.8 kHz) and the
+// S3 group near 39.8 kHz, under-estimated by up to 3.7x (true 0.07-0.2%, estimate 0.02-0.13%):
+// the coarse Tet10 sphere is pre-asymptotic for the facet geometry error. Cost 53%.
+TEST(ErrorEstimate, SphereTet10AgainstLamb) {
+  double cost = 0;
+  const Coverage c = sphereCoverage(2, 28, &cost);
+  ASSERT_GE(c.modes, 27);
+  EXPECT_GE(c.covered, c.modes * 3 / 4);
+  EXPECT_LT(c.worst_ratio, 4.0);
+}
+
+}  // namespace
+}  // namespace strike

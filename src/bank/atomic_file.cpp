@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include "strike/interrupt_cleanup.hpp"
+
 namespace strike {
 
 std::string temporaryPathFor(const std::string& path) {
@@ -19,6 +21,9 @@ std::string temporaryPathFor(const std::string& path) {
 
 Status writeFileAtomically(const std::string& path, const void* data, size_t size) {
   const std::string temp = temporaryPathFor(path);
+  // Registered before it exists, so an interrupt at any point removes it (unlink of a missing
+  // file is harmless); unregistered after the rename or the removal.
+  TemporaryRegistration registration(temp);
   std::FILE* file = std::fopen(temp.c_str(), "wb");
   if (!file) return badInput(path + ": error: cannot create output file: " + std::strerror(errno));
   const bool written = size == 0 || std::fwrite(data, 1, size, file) == size;

@@ -179,6 +179,13 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank) {
     w.endChunk(at);
   }
 
+  if (!bank.radiation_m2.empty()) {
+    at = w.beginChunk("RADI");
+    w.put<uint32_t>(static_cast<uint32_t>(bank.radiation_m2.size()));
+    w.putArray(bank.radiation_m2);
+    w.endChunk(at);
+  }
+
   at = w.beginChunk("PROV");
   w.put(bank.meshing_seconds);
   w.put(bank.assembly_seconds);
@@ -279,6 +286,9 @@ Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string&
     } else if (tag == "FERR") {
       const uint32_t count = r.get<uint32_t>();
       r.getArray(bank.frequency_error_estimate, count);
+    } else if (tag == "RADI") {
+      const uint32_t count = r.get<uint32_t>();
+      r.getArray(bank.radiation_m2, count);
     } else if (tag == "PROV") {
       bank.meshing_seconds = r.get<double>();
       bank.assembly_seconds = r.get<double>();

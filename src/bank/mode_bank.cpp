@@ -38,6 +38,10 @@ std::string ModeBank::checkConsistency() const {
   if (!frequency_error_estimate.empty() && frequency_error_estimate.size() != modes)
     return "frequency error estimates hold " + std::to_string(frequency_error_estimate.size()) +
            " values, expected " + std::to_string(modes);
+  if (!radiation_m2.empty() && radiation_m2.size() != modes)
+    return "radiation strengths hold " + std::to_string(radiation_m2.size()) + " values, expected " + std::to_string(modes);
+  for (double v : radiation_m2)
+    if (!std::isfinite(v) || v < 0) return "a radiation strength is negative or not finite";
   for (size_t i = 0; i < modes; ++i) {
     if (!std::isfinite(eigenvalues[i]) || eigenvalues[i] < 0.0)
       return "eigenvalue " + std::to_string(i) + " is " + std::to_string(eigenvalues[i]) + " (must be finite, >= 0)";

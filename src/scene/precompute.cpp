@@ -124,6 +124,7 @@ Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings) {
   MeshOptions mesh_options;
   mesh_options.order = settings.order;
   mesh_options.target_edge_m = settings.target_edge_m;
+  mesh_options.max_tets = settings.max_tets;
   mesh_options.progress = settings.progress;
   Result<LoadedMesh> loaded = loadTetMesh(settings.mesh_spec, mesh_options);
   if (!loaded) return loaded.error();

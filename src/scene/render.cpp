@@ -36,6 +36,8 @@ constexpr double kInaudibleVelocityChange_m_s = 1e-6;
 // body, ten times less. Bullet may spread one impact over several substeps and flag only the first
 // as new, so the approach speed, not the flag, decides.
 constexpr double kImpactSpeed_m_s = 0.05;
+// Sustained force changes smaller than this (relative, per step) are solver jitter, not sound.
+constexpr double kSteadyForceTolerance = 1e-3;
 // Sustained contacts closer in time than this belong to one contact span (contact damping).
 // Sleeping bodies report no contacts, so an open span at the end of the events stays open.
 constexpr double kContactGap_s = 0.02;
@@ -62,6 +64,9 @@ struct Body {
   double sustained_time_s = -1.0;           ///< substep whose sustained contacts are being summed
   double last_sustained_time_s = -1.0;      ///< the last substep with sustained contact
   std::vector<double> sustained_modal;      ///< their summed modal impulses
+  double box_start_s = 0.0;                 ///< the open run of steady sustained force: start,
+  int box_steps = 0;                        ///< length in substeps,
+  std::vector<double> box_force;            ///< and modal impulse per substep
   double contact_radius_m = 0.0;     ///< radius of the sphere of equal volume, for Hertz
 };
 
@@ -80,7 +85,7 @@ Result<uint64_t> meshHash(const std::string& spec) {
 
 /// Phase 1 for one object: a bank with at least mass properties and surface.
 Status prepareBody(const Scene& scene, const RenderSettings& settings, double max_freq_hz, Body& body,
-                   RenderReport& report) {
+                   std::map<uint64_t, const Body*>& loaded_by_key, RenderReport& report) {
   const SceneObject& object = *body.object;
   if (!object.bank.empty()) {
     Result<ModeBank> bank = readBank(object.bank);
@@ -100,6 +105,12 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   Result<uint64_t> hash = meshHash(object.mesh);
   if (!hash) return hash.error();
   body.cache_key = bankCacheKey(*hash, body.precompute);
+  if (auto same = loaded_by_key.find(body.cache_key); same != loaded_by_key.end()) {
+    body.bank = same->second->bank;  // an identical object was read or meshed already
+    body.has_modes = same->second->has_modes;
+    if (!body.has_modes) body.mesh = same->second->mesh;
+    return {};
+  }
   if (!settings.cache_dir.empty()) {
     const std::string path = settings.cache_dir + "/" + hex(body.cache_key) + ".modes";
     if (std::filesystem::is_regular_file(path)) {
@@ -175,10 +186,12 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
 
   // ---- Phase 1: bodies and simulation -------------------------------------------------------
   std::vector<Body> bodies(scene.objects.size());
+  std::map<uint64_t, const Body*> loaded_by_key;  // identical objects are read or meshed once
   for (size_t i = 0; i < bodies.size(); ++i) {
     bodies[i].object = &scene.objects[i];
-    Status prepared = prepareBody(scene, settings, max_freq_hz, bodies[i], report);
+    Status prepared = prepareBody(scene, settings, max_freq_hz, bodies[i], loaded_by_key, report);
     if (!prepared) return prepared.error();
+    if (bodies[i].object->bank.empty()) loaded_by_key.emplace(bodies[i].cache_key, &bodies[i]);
     bodies[i].contact_radius_m = std::cbrt(3.0 * bodies[i].bank.volume_m3 / (4.0 * M_PI));
     result.body_names.push_back(scene.objects[i].name);
   }
@@ -304,17 +317,42 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   }
 
   // Sustained contacts of one body in one substep are one force over that step: their modal
-  // impulses add (the projection is linear in J), so they become one box pulse per body per step.
+  // impulses add (the projection is linear in J). Consecutive steps whose force stays within
+  // kSteadyForceTolerance of the run's first step are one longer box (contiguous boxes of one
+  // force are exactly one box), so a body resting for seconds costs a few pulses, not thousands;
+  // what is dropped is solver jitter 60 dB below the resting force.
   std::vector<double> modal;
-  auto flushSustained = [&](Body& body) {
-    if (body.sustained_time_s < 0) return;
+  auto emitBox = [&](Body& body) {
+    if (body.box_steps == 0) return;
+    for (double& g : body.box_force) g *= body.box_steps;
     ImpactDesc impact;
     impact.object = body.synth_id;
-    impact.time_s = body.sustained_time_s;
-    impact.duration_s = kSubstep_s;
+    impact.time_s = body.box_start_s;
+    impact.duration_s = body.box_steps * kSubstep_s;
     impact.shape = PulseShape::Box;
-    impact.modal_impulse = body.sustained_modal.data();
+    impact.modal_impulse = body.box_force.data();
     synth.addImpact(impact);
+    body.box_steps = 0;
+  };
+  auto flushSustained = [&](Body& body) {
+    if (body.sustained_time_s < 0) return;
+    const bool contiguous = body.box_steps > 0 &&
+        std::fabs(body.sustained_time_s - (body.box_start_s + body.box_steps * kSubstep_s)) < 0.25 * kSubstep_s;
+    bool steady = contiguous;
+    if (steady) {
+      double scale = 0.0, change = 0.0;
+      for (size_t i = 0; i < body.box_force.size(); ++i) {
+        scale = std::max(scale, std::fabs(body.box_force[i]));
+        change = std::max(change, std::fabs(body.sustained_modal[i] - body.box_force[i]));
+      }
+      steady = change <= kSteadyForceTolerance * scale;
+    }
+    if (!steady) {
+      emitBox(body);
+      body.box_start_s = body.sustained_time_s;
+      body.box_force = body.sustained_modal;
+    }
+    ++body.box_steps;
     body.last_sustained_time_s = body.sustained_time_s;
     body.sustained_time_s = -1.0;
   };
@@ -358,7 +396,10 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       }
     }
   }
-  for (Body& body : bodies) flushSustained(body);
+  for (Body& body : bodies) {
+    flushSustained(body);
+    emitBox(body);
+  }
 
   // A body Bullet puts to sleep reports no more contacts, but it still rests on its support: its
   // last resting force is held to the end, or its disappearance would ring the modes like a lift.

@@ -112,6 +112,8 @@ struct ObjectInfo {
   uint32_t first_mode = 0;
   uint32_t mode_count = 0;
   double delay_s = 0.0;
+  // This object's scheduled contact damping: (sample, extra decay per s), sorted by sample.
+  std::vector<std::pair<uint64_t, double>> damping_schedule;
 };
 
 struct ModeHit {
@@ -313,6 +315,7 @@ struct OscillatorBank::Impl {
     start_sample = std::max<uint64_t>(start_sample, pos);
     end_sample = std::max(end_sample, start_sample);
     const size_t transient_len = static_cast<size_t>(end_sample - start_sample);
+    if (desc.shape == PulseShape::Box && !ideal && !no_alloc && onlyRinging(desc)) return addBoxAsSteps(desc, t0, tau);
     if (free_records.empty()) {
       if (no_alloc) return ImpactResult::NoCapacity;
       reserveImpacts(std::max<size_t>(16, pool.size() * 2), 0);  // geometric: O(1) amortized
@@ -339,8 +342,11 @@ struct OscillatorBank::Impl {
     // Contact damping scheduled for this object at the pulse's start (setExtraDamping is called
     // before the impacts it covers), so pulses and the oscillators they feed use the same pole.
     double extra_damping = 0.0;
-    for (const DampingChange& c : damping_changes)
-      if (c.object == desc.object && c.sample <= start_sample) extra_damping = c.extra_decay_per_s;
+    {
+      const auto& schedule = obj.damping_schedule;
+      auto after = std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(start_sample, static_cast<double>(INFINITY)));
+      if (after != schedule.begin()) extra_damping = std::prev(after)->second;
+    }
     for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
       const double g = desc.modal_impulse[j];
       if (g == 0.0 || !std::isfinite(g)) continue;
@@ -423,6 +429,63 @@ struct OscillatorBank::Impl {
     auto at = std::upper_bound(pending.begin(), pending.end(), im.start_sample,
                                [this](uint64_t s, uint32_t other) { return s < pool[other].start_sample; });
     pending.insert(at, record);  // capacity >= pool.size(): no allocation
+    return ImpactResult::Scheduled;
+  }
+
+  // True when every mode the impact touches rings (no over- or critically damped ones).
+  bool onlyRinging(const ImpactDesc& desc) const {
+    const ObjectInfo& obj = objects[desc.object];
+    for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j)
+      if (modes[obj.first_mode + j].kind == ModeKind::Damped && desc.modal_impulse[j] != 0.0) return false;
+    return true;
+  }
+
+  // A box of force g / tau on [t0, t0 + tau] is, for a ringing mode, exactly two steps: the
+  // ringing part of its response is (e^{pU} - H(U - tau) e^{p(U - tau)}) / (p tau), and the rest,
+  // the static deflection -1/(p tau) while it acts, cancels the box's own feedthrough g R / tau.
+  // So it costs two ideal injections, +-b g / (p tau), however long it lasts (a body resting for
+  // seconds), instead of a transient of tau * fs samples.
+  ImpactResult addBoxAsSteps(const ImpactDesc& desc, double t0, double tau) {
+    const ObjectInfo& obj = objects[desc.object];
+    const double tau_s = tau * h;
+    double extra_damping = 0.0;
+    {
+      const auto& schedule = obj.damping_schedule;
+      const uint64_t first = std::max<uint64_t>(static_cast<uint64_t>(std::ceil(t0 - 1e-7)), pos);
+      auto after = std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(first, static_cast<double>(INFINITY)));
+      if (after != schedule.begin()) extra_damping = std::prev(after)->second;
+    }
+    ++stats.impacts;
+    bool audible = false;
+    for (int edge = 0; edge < 2; ++edge) {
+      const double te = edge == 0 ? t0 : t0 + tau;
+      if (free_records.empty()) reserveImpacts(std::max<size_t>(16, pool.size() * 2), 0);
+      const uint32_t record = free_records.back();
+      free_records.pop_back();
+      Impact& im = pool[record];
+      im.start_sample = im.end_sample = std::max<uint64_t>(static_cast<uint64_t>(std::ceil(te - 1e-7)), pos);
+      im.injected = false;
+      im.hits.clear();
+      im.transient.clear();
+      const double after_s = (static_cast<double>(im.start_sample) - te) * h;
+      const double sign = edge == 0 ? 1.0 : -1.0;
+      for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
+        const double g = desc.modal_impulse[j];
+        if (g == 0.0 || !std::isfinite(g)) continue;
+        const uint32_t mi = obj.first_mode + j;
+        const ModeInfo& m = modes[mi];
+        if (m.kind != ModeKind::Ringing) continue;
+        const Complex pole = m.base_pole - extra_damping;
+        const Complex step_amplitude = g * m.out_weight / (pole * tau_s);
+        // Audible when the net ringing after the box, |b g (e^{p tau} - 1) / (p tau)|, is.
+        if (edge == 0 && std::abs(step_amplitude * (std::exp(pole * tau_s) - 1.0)) >= threshold) audible = true;
+        im.hits.push_back({mi, sign * step_amplitude * std::exp(pole * after_s)});
+      }
+      auto at = std::upper_bound(pending.begin(), pending.end(), im.start_sample,
+                                 [this](uint64_t s0, uint32_t other) { return s0 < pool[other].start_sample; });
+      pending.insert(at, record);
+    }
+    if (!audible) ++stats.impacts_inaudible;
     return ImpactResult::Scheduled;
   }
 
@@ -621,6 +684,9 @@ struct OscillatorBank::Impl {
     uint64_t sample = t > static_cast<double>(pos) ? static_cast<uint64_t>(std::ceil(t)) : pos;
     sample = (sample + kBlock - 1) / kBlock * kBlock;
     DampingChange change{sample, object, extra_decay_per_s};
+    auto& schedule = objects[object].damping_schedule;
+    schedule.insert(std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(sample, static_cast<double>(INFINITY))),
+                    std::make_pair(sample, extra_decay_per_s));
     auto at = std::upper_bound(damping_changes.begin() + static_cast<std::ptrdiff_t>(damping_cursor),
                                damping_changes.end(), sample,
                                [](uint64_t s0, const DampingChange& c) { return s0 < c.sample; });

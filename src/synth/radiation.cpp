@@ -93,10 +93,19 @@ std::vector<std::array<double, 3>> icosphereDirections() {
 }  // namespace
 
 std::vector<double> radiationWeights(const ModeBank& bank, double distance_m) {
+  const size_t modes = bank.modeCount();
+  if (!(distance_m > 0.0) || !std::isfinite(distance_m)) return std::vector<double>(modes, 0.0);
+  std::vector<double> weights = bank.radiation_m2.size() == modes ? bank.radiation_m2 : radiationStrengths(bank);
+  const double gain = kAirDensity_kg_m3 / (4.0 * M_PI * distance_m);
+  for (double& w : weights) w *= gain;
+  return weights;
+}
+
+std::vector<double> radiationStrengths(const ModeBank& bank) {
   const size_t nv = bank.surfaceVertexCount();
   const size_t modes = bank.modeCount();
   std::vector<double> weights(modes, 0.0);
-  if (!(distance_m > 0.0) || !std::isfinite(distance_m) || bank.shapes.size() < modes * nv * 3) return weights;
+  if (bank.shapes.size() < modes * nv * 3) return weights;
   std::vector<Patch> patches;
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   const double* pos = bank.surface_positions.data();
@@ -124,7 +133,6 @@ std::vector<double> radiationWeights(const ModeBank& bank, double distance_m) {
   if (patches.empty()) return weights;
   const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-9});
 
-  const double gain = kAirDensity_kg_m3 / (4.0 * M_PI * distance_m);
   const std::vector<std::array<double, 3>> directions = icosphereDirections();
   std::map<std::array<int64_t, 3>, size_t> cell_of;
   std::vector<double> cell_strength, cell_centre, cell_weight, cell_moment;
@@ -186,7 +194,7 @@ std::vector<double> radiationWeights(const ModeBank& bank, double distance_m) {
       power += re * re + im * im;
     }
     r2 += power / static_cast<double>(directions.size());
-    weights[m] = gain * std::sqrt(std::max(r2, 0.0));  // the quadratic form is PSD; clamp rounding
+    weights[m] = std::sqrt(std::max(r2, 0.0));  // the quadratic form is PSD; clamp rounding
   }
   return weights;
 }

@@ -43,6 +43,9 @@ struct ModeBank {
   std::vector<double> eigenvalues;               ///< #modes
   std::vector<float> shapes;                     ///< #modes * #surface vertices * 3: [mode][vertex][xyz]
   std::vector<double> frequency_error_estimate;  ///< #modes relative error estimate, or empty
+  /// #modes radiation strengths R_i (m^2 / sqrt(kg)) of the listener model (synth radiation.cpp),
+  /// computed once with the modes so renders need not; empty in banks that predate it.
+  std::vector<double> radiation_m2;
 
   // The surface: collision shape and where impacts land.
   std::vector<double> surface_positions;   ///< #V * 3, metres, mesh frame

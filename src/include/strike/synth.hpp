@@ -187,5 +187,8 @@ double hertzContactDuration(double youngs1_pa, double poisson1, double radius1_m
 /// Listener model, per mode, for a listener at distance_m from the object (see radiation.cpp for
 /// the approximation and what it leaves out). Returns #modes weights for ModalObjectDesc.
 std::vector<double> radiationWeights(const ModeBank& bank, double distance_m);
+/// The distance-free part of radiationWeights: R_i per mode (m^2 / sqrt(kg)), computed from the
+/// surface and shapes. radiationWeights uses bank.radiation_m2 instead when the bank has it.
+std::vector<double> radiationStrengths(const ModeBank& bank);
 
 }  // namespace strike

@@ -180,6 +180,8 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
     result.report.error_estimate_ratio = estimated->ratio;
     result.report.error_estimate_coarse_dofs = estimated->coarse_dofs;
   }
+  if (const std::string locking = lockingWarning(mesh.order, settings.material); !locking.empty())
+    result.report.warnings.push_back({locking});
 
   const std::string problem = bank.checkConsistency();
   if (!problem.empty()) return internalError("the computed mode bank is inconsistent: " + problem);

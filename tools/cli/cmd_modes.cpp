@@ -126,11 +126,15 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
     size_t worst = 0;
     for (size_t i = 1; i < error.size(); ++i)
       if (error[i] > error[worst]) worst = i;
-    std::fprintf(stderr, "  est. error  max %.3g%% (mode %zu, %.2f Hz), %s, coarse %zu DOF (h ratio %.2f), extra %.2f s (%.0f%%)\n",
+    char ratio[48] = "";
+    if (result.report.error_estimate_ratio > 0)
+      std::snprintf(ratio, sizeof ratio, ", h ratio %.2f", result.report.error_estimate_ratio);
+    std::fprintf(stderr, "  est. error  max %.3g%% (mode %zu, %.2f Hz), %s (coarse %zu DOF%s), extra %.2f s (%.0f%%)\n",
                  100.0 * error[worst], worst, bank.frequencyHz(worst), result.report.error_estimate_method.c_str(),
-                 result.report.error_estimate_coarse_dofs, result.report.error_estimate_ratio,
-                 result.report.error_estimate_seconds,
+                 result.report.error_estimate_coarse_dofs, ratio, result.report.error_estimate_seconds,
                  bank.total_seconds > 0 ? 100.0 * result.report.error_estimate_seconds / bank.total_seconds : 0.0);
+    if (!result.report.error_estimate_note.empty())
+      std::fprintf(stderr, "              %s\n", result.report.error_estimate_note.c_str());
   } else if (!result.report.error_estimate_note.empty()) {
     std::fprintf(stderr, "  est. error  none: %s\n", result.report.error_estimate_note.c_str());
   }

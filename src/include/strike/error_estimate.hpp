@@ -11,7 +11,9 @@
 //     e_i = Fs |f_c,i - f_f,i| / ((r^p - 1) f_f,i),
 // with the asymptotic order of the frequency error p = 2 for Tet4 and p = 4 for Tet10 (eigenvalue
 // error O(h^{2k}) for degree-k elements: Strang & Fix, "An Analysis of the Finite Element
-// Method", 1973, ch. 6) and the safety factor Fs of Roache's grid convergence index.
+// Method", 1973, ch. 6) -- but p = 2 for Tet10 on re-faceted curved primitives (sphere,
+// cylinder), whose straight-edged boundary error is O(h^2) -- and the safety factor Fs of
+// Roache's grid convergence index.
 // When the mesh cannot be regenerated coarser (a tet file), a Tet10 bank is compared with Tet4
 // on its corner nodes instead: e_i = |f_4,i - f_10,i| / f_10,i, an upper bound in practice
 // (the Tet4 error dominates) but pessimistic by one to two orders of magnitude.
@@ -46,6 +48,12 @@ bool canRemesh(const std::string& mesh_spec);
 Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, const PrecomputeSettings& settings,
                                                     const std::vector<double>& fine_eigenvalues,
                                                     std::vector<double>& estimate);
+
+/// Non-empty for Tet4 with a nearly incompressible material (nu > 0.45): linear tets lock
+/// volumetrically there (Hughes, "The Finite Element Method", 2000, sec. 4.1) and ring too high;
+/// measured on a rubber bar (tests/unit/extreme/extreme_test.cpp) Tet4/Tet10 = 1.49 at nu 0.49
+/// and 1.72 at nu 0.4999.
+std::string lockingWarning(int order, const Material& material);
 
 /// One candidate tried by computeModeBankToTolerance.
 struct ToleranceTrial {

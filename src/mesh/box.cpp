@@ -63,6 +63,13 @@ Result<TetMesh> makeBox(double lx, double ly, double lz, const MeshOptions& opti
       << kMaxNodes;
     return badInput(s.str());
   }
+  const int64_t num_tets = 6 * n[0] * n[1] * n[2];
+  if (num_tets > options.max_tets) {
+    std::ostringstream s;
+    s << "box: target edge " << edge_m << " m gives " << num_tets << " tets, more than the cap of " << options.max_tets
+      << " (--max-tets); use a larger --size, or raise the cap with --max-tets N";
+    return badInput(s.str());
+  }
 
   TetMesh mesh;
   mesh.order = 1;

@@ -90,6 +90,10 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
   }
   LoadedMesh loaded;
   auto finish = [&]() -> Result<LoadedMesh> {
+    const int64_t tets = static_cast<int64_t>(loaded.mesh.tets.rows());
+    if (tets > options.max_tets)
+      return badInput(spec + ": error: mesh has " + std::to_string(tets) + " tets, more than the cap of " +
+                      std::to_string(options.max_tets) + " (--max-tets); raise it with --max-tets N or use a coarser mesh");
     loaded.meshing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return std::move(loaded);
   };

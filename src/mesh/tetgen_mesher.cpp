@@ -27,7 +27,6 @@ namespace {
 
 // Refuse requests that could not be solved anyway: volume / maxvolume above this means TetGen
 // would make several million tets.
-constexpr double kMaxEstimatedTets = 1e6;
 // Default resolution: about this many "regular tet volumes" in the body. TetGen's quality
 // refinement produces roughly 2-4x more tets than volume / maxvolume, so this lands typical
 // objects in the low thousands of tets.
@@ -108,9 +107,11 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
   } else {
     max_volume = volume / kDefaultRegularTets;
   }
-  if (volume / max_volume > kMaxEstimatedTets) {
+  const double max_tets = static_cast<double>(options.max_tets);
+  if (volume / max_volume > max_tets) {
     return badInput(source + ": error: target edge " + num(options.target_edge_m) + " m would give more than " +
-                    num(kMaxEstimatedTets) + " tets for volume " + num(volume) + " m^3; use a larger --size");
+                    num(max_tets) + " tets (the --max-tets cap) for volume " + num(volume) +
+                    " m^3; use a larger --size, or raise the cap with --max-tets N");
   }
 
   tetgenio in, out;

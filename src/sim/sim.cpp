@@ -252,7 +252,7 @@ class Simulation {
   Simulation& operator=(const Simulation&) = delete;
 
   Status build(const std::vector<btQuaternion>& orientations);
-  SimResult run();
+  Result<SimResult> run();
 
  private:
   Status buildBody(size_t index, const btQuaternion& orientation);
@@ -689,7 +689,7 @@ void Simulation::postTick() {
   step_lifetimes_.clear();
 }
 
-SimResult Simulation::run() {
+Result<SimResult> Simulation::run() {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   auto last_report = start;
@@ -707,6 +707,10 @@ SimResult Simulation::run() {
     // maxSubSteps = 0: exactly one internal step of dt, no accumulator and no interpolation, so
     // the step count is exact and the run is deterministic.
     world_->stepSimulation(dt, 0, dt);
+    if (events_.size() > settings_.max_events)
+      return badInput("simulate: more than " + std::to_string(settings_.max_events) + " contact events by t = " +
+                      std::to_string(double(step_ + 1) * dt) +
+                      " s, the cap on contact events (memory); raise it with --max-events N or shorten the duration");
     result.energy_trace_j.push_back(energy(&kinetic));
     for (size_t i = 0; i < n; ++i) result.max_kinetic_energy_j[i] = std::max(result.max_kinetic_energy_j[i], kinetic[i]);
     if (settings_.progress) {

@@ -36,7 +36,8 @@ CommandSpec modesSpec() {
       {"--order", "1|2", "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default 1"},
       {"--size", "METRES", "target tet edge length; default: chosen from the object's size"},
       {"--max-freq", "HZ", "keep every mode up to this frequency; default 20000"},
-      {"--max-modes", "N", "but at most N modes (lowest first); default 200"},
+      {"--max-modes", "N", "but at most N modes (lowest first); default 200, cap 100000"},
+      {"--max-tets", "N", "refuse meshes with more tets than this (memory and time cap); default 2000000"},
       {"--error-estimate", "", "estimate each mode's frequency error (default: on for primitives and surfaces)"},
       {"--no-error-estimate", "", "skip the error estimate"},
       {"--tolerance", "PCT", "pick the cheapest order and --size whose estimated error is below PCT (e.g. 0.5%)"},
@@ -208,6 +209,10 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (*max_modes < 1 || *max_modes > 100000)
     return reportError("modes", badInput("--max-modes = " + args.text("--max-modes") + " (must be 1 to 100000)"));
   settings.max_modes = static_cast<int>(*max_modes);
+  Result<long long> max_tets = args.integer("--max-tets", kDefaultMaxTets);
+  if (!max_tets) return reportError("modes", max_tets.error());
+  if (*max_tets < 1) return reportError("modes", badInput("--max-tets = " + args.text("--max-tets") + " (must be >= 1)"));
+  settings.max_tets = *max_tets;
 
   if (args.has("--error-estimate") && args.has("--no-error-estimate"))
     return reportError("modes", badInput("--error-estimate and --no-error-estimate contradict each other"));

@@ -32,6 +32,8 @@ CommandSpec renderSpec() {
       {"--gain", "G", "multiply the output (1.0 full scale = 20 Pa); default 1"},
       {"--cache", "DIR", "mode bank cache folder; default $STRIKE_CACHE_DIR or ~/.cache/strike"},
       {"--no-cache", "", "compute every bank, read and write no cache"},
+      {"--max-tets", "N", "refuse object meshes with more tets than this (memory cap); default 2000000"},
+      {"--max-events", "N", "stop if the simulation records more contact events (memory cap); default 20000000"},
       {"--quiet", "", "no progress or summary on stderr"},
   };
   spec.examples =
@@ -93,6 +95,15 @@ int runRender(const std::vector<std::string>& raw_args) {
   settings.sample_rate_hz = *rate;
   settings.duration_s = *duration;
   settings.gain = *gain;
+  Result<long long> max_tets = args.integer("--max-tets", kDefaultMaxTets);
+  if (!max_tets) return reportError("render", max_tets.error());
+  if (*max_tets < 1) return reportError("render", badInput("--max-tets = " + args.text("--max-tets") + " (must be >= 1)"));
+  settings.max_tets = *max_tets;
+  Result<long long> max_events = args.integer("--max-events", static_cast<long long>(settings.max_events));
+  if (!max_events) return reportError("render", max_events.error());
+  if (*max_events < 1)
+    return reportError("render", badInput("--max-events = " + args.text("--max-events") + " (must be >= 1)"));
+  settings.max_events = static_cast<size_t>(*max_events);
   settings.cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
 
   const std::string output = args.text("-o");

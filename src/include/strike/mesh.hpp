@@ -38,11 +38,17 @@ struct TetMesh {
   Eigen::MatrixXi surface;
 };
 
+/// Default of MeshOptions::max_tets: a Tet10 mesh this size already needs tens of GB to solve.
+constexpr int64_t kDefaultMaxTets = 2'000'000;
+
 /// Options for turning a MESH argument into a TetMesh.
 struct MeshOptions {
   int order = 1;                  ///< 1: Tet4, 2: Tet10 (mid-edge nodes added, straight edges)
   double target_edge_m = 0.0;     ///< target tet edge length; 0 picks one from the bounding box
   double radius_edge_ratio = 1.4; ///< TetGen quality bound (-q), smaller = better shaped tets
+  /// Size cap (memory and time of the FEM and eigen-solve): a mesh with more tets, or a surface
+  /// whose TetGen estimate exceeds it, is refused with a message naming the cap (`--max-tets`).
+  int64_t max_tets = kDefaultMaxTets;
   ProgressFn progress;            ///< optional
 };
 

@@ -20,6 +20,7 @@ struct PrecomputeSettings {
   double target_edge_m = 0; ///< 0: automatic
   double max_freq_hz = 20000.0;
   int max_modes = 200;
+  int64_t max_tets = kDefaultMaxTets;  ///< size cap of the tet mesh (--max-tets), see MeshOptions
   ProgressFn progress;      ///< optional
   /// Estimate each mode's frequency error (src/scene/error_estimate.cpp) at extra cost;
   /// does not change the modes, so it is not part of the cache key.

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "strike/audio.hpp"
+#include "strike/mesh.hpp"
 #include "strike/progress.hpp"
 #include "strike/scene.hpp"
 #include "strike/sim.hpp"
@@ -26,6 +27,8 @@ struct RenderSettings {
   double duration_s = 0.0;       ///< 0: the scene's
   std::string cache_dir;         ///< where banks are cached by content hash; empty: no cache
   double gain = 1.0;             ///< output scale on top of kFullScalePascal
+  int64_t max_tets = kDefaultMaxTets;  ///< size cap of each object's tet mesh (PrecomputeSettings::max_tets)
+  size_t max_events = SimSettings{}.max_events;  ///< cap on recorded contact events (SimSettings::max_events)
   ProgressFn progress;
 };
 

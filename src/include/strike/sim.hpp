@@ -52,6 +52,9 @@ struct SimSettings {
   /// Let Bullet put bodies that have been still for 2 s to sleep. A sleeping body reports no
   /// contacts (no impulse is applied to it), which is what makes resting objects quiet and cheap.
   bool allow_sleep = true;
+  /// Memory cap: a run that records more contact events than this stops with an error naming
+  /// the cap (`strike render --max-events`). ~100 bytes each: the default is ~2 GB.
+  size_t max_events = 20'000'000;
   ProgressFn progress;  ///< phase "simulate", fraction of simulated time; every ~100 ms of wall time
 };
 

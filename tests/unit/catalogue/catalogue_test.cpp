@@ -214,6 +214,21 @@ std::vector<Case> buildCatalogue(const std::string& dir) {
   cases.push_back({"modes: --max-modes beyond the cap", "args", "modes box:0.1,0.02,0.02 --max-modes 10000000" + modes_out,
                    {"--max-modes = 10000000"}, "@/out.modes"});
 
+  spit(dir + "/good.json", goodScene(""));
+  // --- size caps: each names the cap and the flag that raises it ---
+  cases.push_back({"limit: box finer than --max-tets", "limit",
+                   "modes box:0.3,0.3,0.3 --size 0.001" + modes_out, {"box:", "--max-tets"}, "@/out.modes"});
+  cases.push_back({"limit: Gmsh file over --max-tets 5", "limit",
+                   "modes '" + std::string(STRIKE_SOURCE_DIR) + "/tests/data/mesh/bad/inverted.msh' --max-tets 5" + modes_out,
+                   {"inverted.msh", "6 tets, more than the cap of 5 (--max-tets)"}, "@/out.modes"});
+  spit(dir + "/tet.obj", kTetObj);
+  cases.push_back({"limit: surface whose TetGen estimate is over the cap", "limit",
+                   "modes '@/tet.obj' --size 0.001" + modes_out, {"tet.obj", "--max-tets"}, "@/out.modes"});
+  cases.push_back({"limit: --max-tets 0", "args", "modes box:0.1,0.1,0.1 --max-tets 0" + modes_out,
+                   {"--max-tets = 0"}, "@/out.modes"});
+  cases.push_back({"limit: render --max-events 0", "args", "render '@/good.json' --max-events 0 -o '@/out.wav'",
+                   {"--max-events = 0"}, "@/out.wav"});
+
   // --- scene JSON ---
   auto scene = [&](const std::string& name, const std::string& file, const std::string& text,
                    std::vector<std::string> expect) {

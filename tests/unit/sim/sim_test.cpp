@@ -498,5 +498,22 @@ TEST(SimBadInput, ErrorsNameTheBodyFieldAndValue) {
   }
 }
 
+// Memory cap: a run that records more contact events than SimSettings::max_events stops with a
+// message that names the cap and the flag that raises it.
+TEST(Sim, ContactEventCapNamesTheFlag) {
+  SimBodyDesc box = makeBox("block", {0.1, 0.1, 0.05}, 1.0);
+  box.position_m = {0, 0, 0.1};
+  SimSettings settings;
+  settings.duration_s = 1.0;
+  settings.max_events = 3;
+  Result<SimResult> r = simulate({box}, settings);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().kind, ErrorKind::BadInput);
+  EXPECT_NE(r.error().message.find("more than 3 contact events"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("--max-events"), std::string::npos) << r.error().message;
+  settings.max_events = SimSettings{}.max_events;
+  EXPECT_TRUE(simulate({box}, settings).ok());
+}
+
 }  // namespace
 }  // namespace strike

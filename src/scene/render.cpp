@@ -328,7 +328,11 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     ImpactDesc impact;
     impact.object = body.synth_id;
     impact.time_s = body.box_start_s;
+    // Ramped over one step and centred on the steps: the step forces are linearly interpolated,
+    // not held, so solver jitter does not ring at the 2 kHz step rate and its harmonics.
+    impact.time_s = body.box_start_s - 0.5 * kSubstep_s;
     impact.duration_s = body.box_steps * kSubstep_s;
+    impact.ramp_s = kSubstep_s;
     impact.shape = PulseShape::Box;
     impact.modal_impulse = body.box_force.data();
     synth.addImpact(impact);
@@ -416,8 +420,9 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     for (double& g : body.sustained_modal) g *= hold / kSubstep_s;  // same force, longer box
     ImpactDesc impact;
     impact.object = body.synth_id;
-    impact.time_s = hold_start;
+    impact.time_s = hold_start - 0.5 * kSubstep_s;
     impact.duration_s = hold;
+    impact.ramp_s = kSubstep_s;
     impact.shape = PulseShape::Box;
     impact.modal_impulse = body.sustained_modal.data();
     synth.addImpact(impact);

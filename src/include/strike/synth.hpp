@@ -68,6 +68,12 @@ struct ImpactDesc {
   double duration_s = 0.0;
   const double* modal_impulse = nullptr;  ///< one per mode of the object (N s / sqrt(kg))
   PulseShape shape = PulseShape::HalfSine;
+  /// Box only: edges ramped linearly over ramp_s (the box convolved with a unit-area box of
+  /// ramp_s), so a sequence of physics-step boxes becomes the linear interpolation of the step
+  /// forces instead of a staircase whose steps ring at the step rate and its harmonics. The pulse
+  /// spans [time_s, time_s + duration_s + ramp_s). 0 = sharp edges. Applied when every mode the
+  /// impact touches rings; an object with over-damped modes gets the sharp box.
+  double ramp_s = 0.0;
 };
 
 /// What addImpactNoAlloc() did with an impact.

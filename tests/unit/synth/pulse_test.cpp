@@ -164,6 +164,56 @@ TEST(ContactPulse, ContiguousBoxesAddUpToOneLongBox) {
   EXPECT_LT(err / test::peakAbs(one), 1e-6);
 }
 
+// A box with ramped edges is the box convolved with a unit box of the ramp: a trapezoid of area 1.
+TEST(ContactPulse, RampedBoxMatchesQuadratureOfTheTrapezoid) {
+  static const GaussLegendre gl(12);
+  const double rate = 48000.0, h = 1.0 / rate;
+  for (double f0 : {150.0, 3000.0, 15000.0}) {
+    const double c = 30.0, lambda = std::pow(2 * M_PI * f0, 2);
+    for (double tau_samples : {24.0, 300.0}) {
+      const double t0 = 10.25 * h, tau = tau_samples * h, r = 24.0 * h;
+      auto force = [&](double u) {  // trapezoid: ramps of r, plateau, total area 1
+        const double a = std::clamp(u, 0.0, r), b = std::clamp(u - tau, 0.0, r);
+        return (a - b) / (tau * r);
+      };
+      SynthSettings s;
+      s.sample_rate_hz = rate;
+      s.double_precision = true;
+      s.audibility_threshold = 0.0;
+      OscillatorBank bank(s);
+      bank.addObject(test::makeObject({f0}, 0.0, c));
+      const double g = 1.0;
+      ImpactDesc impact{0, t0, tau, &g, PulseShape::Box};
+      impact.ramp_s = r;
+      bank.addImpact(impact);
+      const std::vector<float> out = test::renderAll(bank, 800);
+      double peak = 0, err = 0;
+      for (size_t n = 0; n < out.size(); ++n) {
+        const double t = n * h;
+        // Response = convolution with the impulse response, plus the force's own feedthrough.
+        // Piecewise quadrature between the trapezoid's kinks (0, r, tau, tau + r), 64 panels each.
+        double ref = 0;
+        const double kinks[] = {0.0, r, tau, tau + r};
+        for (int piece = 0; piece < 3; ++piece) {
+          const double lo = kinks[piece], hi = std::min(kinks[piece + 1], t - t0);
+          if (hi <= lo) continue;
+          const int panels = 64;
+          const double width = (hi - lo) / panels;
+          for (int k = 0; k < panels; ++k)
+            for (size_t i = 0; i < gl.x.size(); ++i) {
+              const double u = lo + (k + 0.5) * width + 0.5 * width * gl.x[i];
+              ref += 0.5 * width * gl.w[i] * force(u) * test::generalImpulseResponse(lambda, c, t - t0 - u);
+            }
+        }
+        if (t >= t0) ref += force(t - t0);
+        peak = std::max(peak, std::fabs(ref));
+        err = std::max(err, std::fabs(out[n] - ref));
+      }
+      EXPECT_LT(err / peak, 1e-5) << "f0 " << f0 << " tau " << tau_samples;
+    }
+  }
+}
+
 TEST(ContactPulse, ShortPulseConvergesToIdealImpulse) {
   const double rate = 48000.0, h = 1.0 / rate, t0 = 10.25 * h;
   for (double c : {30.0, 6 * 2 * M_PI * 700.0}) {

@@ -22,6 +22,7 @@ const char kUsage[] =
     "  info BANK.modes [--json]       show a mode bank: frequencies, decay, T60, mass\n"
     "  hit BANK.modes -o OUT.wav      strike an object once and render the sound\n"
     "  analyze AUDIO.wav [--json]     spectral peaks, levels and decay rates of a sound\n"
+    "  bench accuracy -o DIR          accuracy study: FEM and synthesis error against run time (CSV, SVG)\n"
     "\n"
     "Run `strike COMMAND --help` for a command's options and examples. SI units everywhere.\n"
     "Exit codes: 0 success, 1 bad input (the message names the file, field and value), 2 internal error.\n";
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
   try {
     if (command == "render") return strike::cli::runRender(args);
     if (command == "modes") return strike::cli::runModes(args);
+    if (command == "bench") return strike::cli::runBench(args);
     if (command == "info") return strike::cli::runInfo(args);
     if (command == "hit") return strike::cli::runHit(args);
     if (command == "analyze") return strike::cli::runAnalyze(args);

@@ -15,6 +15,7 @@ int runInfo(const std::vector<std::string>& args);
 int runHit(const std::vector<std::string>& args);
 int runAnalyze(const std::vector<std::string>& args);
 int runRender(const std::vector<std::string>& args);
+int runBench(const std::vector<std::string>& args);
 
 /// Prints "strike <command>: error: <message>" and returns the exit code for the error's kind.
 int reportError(const std::string& command, const Error& error);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "strike/interrupt_cleanup.hpp"
 
 namespace {
 
@@ -38,6 +39,8 @@ int main(int argc, char** argv) {
     std::printf("strike %s\n", STRIKE_VERSION_STRING);
     return 0;
   }
+  // An interrupted run leaves no temporary output behind (outputs appear only by rename).
+  strike::installInterruptCleanup();
   const std::string command = argv[1];
   const std::vector<std::string> args(argv + 2, argv + argc);
   try {

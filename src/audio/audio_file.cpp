@@ -13,6 +13,7 @@
 #include <limits>
 
 #include "atomic_rename.hpp"
+#include "strike/interrupt_cleanup.hpp"
 #include "strike/audio.hpp"
 
 namespace strike {
@@ -91,6 +92,7 @@ Status writeAudio(const std::string& path, const AudioBuffer& audio, SampleEncod
                     " with " + std::to_string(audio.channels) + " channels at " + std::to_string(info.samplerate) + " Hz");
 
   const std::string temp = detail::audioTemporaryPathFor(path);
+  TemporaryRegistration registration(temp);  // removed if SIGINT/SIGTERM arrives mid-write
   SNDFILE* file = sf_open(temp.c_str(), SFM_WRITE, &info);
   if (!file) return badInput(path + ": error: cannot create output file: " + sf_strerror(nullptr));
 

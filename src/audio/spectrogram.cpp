@@ -11,7 +11,7 @@
 #include <limits>
 #include <mutex>
 
-#include "atomic_rename.hpp"
+#include "strike/atomic_file.hpp"
 #include "fftw_lock.hpp"
 #include "strike/audio.hpp"
 
@@ -259,22 +259,7 @@ Status writeSpectrogramPng(const std::string& path, const AudioBuffer& audio, co
   }
 
   const std::string png = encodePngRgb(image.width, image.height, image.rgb);
-  const std::string temp = detail::audioTemporaryPathFor(path);
-  std::FILE* file = std::fopen(temp.c_str(), "wb");
-  if (!file) return badInput(path + ": error: cannot create output file: " + std::strerror(errno));
-  const bool written = std::fwrite(png.data(), 1, png.size(), file) == png.size();
-  const int write_errno = errno;
-  const bool closed = std::fclose(file) == 0;  // reports delayed write errors (a full disk)
-  if (!written || !closed) {
-    std::remove(temp.c_str());
-    return badInput(path + ": error: writing failed: " + std::strerror(written ? errno : write_errno));
-  }
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
-    const int rename_errno = errno;
-    std::remove(temp.c_str());
-    return badInput(path + ": error: cannot move the output into place: " + std::strerror(rename_errno));
-  }
-  return {};
+  return writeFileAtomically(path, png.data(), png.size());
 }
 
 }  // namespace strike

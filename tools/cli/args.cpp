@@ -19,6 +19,15 @@ Result<double> parseNumber(const std::string& text, const std::string& what) {
   return value;
 }
 
+Result<SampleEncoding> sampleEncodingFor(const ParsedArgs& args, const std::string& output) {
+  const bool flac = output.size() >= 5 && output.compare(output.size() - 5, 5, ".flac") == 0;
+  const std::string format = args.text("--format", flac ? "pcm24" : "float");
+  if (format == "pcm16") return SampleEncoding::Pcm16;
+  if (format == "pcm24") return SampleEncoding::Pcm24;
+  if (format == "float") return SampleEncoding::Float32;
+  return badInput("--format = '" + format + "' (expected pcm16, pcm24 or float)");
+}
+
 std::string ParsedArgs::text(const std::string& name, const std::string& fallback) const {
   auto it = values_.find(name);
   return it == values_.end() ? fallback : it->second;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "strike/audio.hpp"
 #include "strike/result.hpp"
 
 namespace strike::cli {
@@ -44,6 +45,10 @@ class ParsedArgs {
 Result<ParsedArgs> parseArgs(const CommandSpec& spec, const std::vector<std::string>& args);
 bool wantsHelp(const std::vector<std::string>& args);
 std::string helpText(const CommandSpec& spec);
+
+/// The sample encoding from --format, defaulting by the output's extension: float for .wav
+/// (keeps levels above full scale), pcm24 for .flac (FLAC has no float).
+Result<SampleEncoding> sampleEncodingFor(const ParsedArgs& args, const std::string& output);
 
 /// Parses a number strictly: the whole text, finite. `what` names it in the error.
 Result<double> parseNumber(const std::string& text, const std::string& what);

@@ -183,13 +183,9 @@ int runHit(const std::vector<std::string>& raw_args) {
     if (std::fabs(s) >= 1.0f) ++clipped;
   }
   const std::string output = args.text("-o");
-  const bool flac = output.size() >= 5 && output.compare(output.size() - 5, 5, ".flac") == 0;
-  const std::string format = args.text("--format", flac ? "pcm24" : "float");
-  SampleEncoding encoding;
-  if (format == "pcm16") encoding = SampleEncoding::Pcm16;
-  else if (format == "pcm24") encoding = SampleEncoding::Pcm24;
-  else if (format == "float") encoding = SampleEncoding::Float32;
-  else return reportError("hit", badInput("--format = '" + format + "' (expected pcm16, pcm24 or float)"));
+  Result<SampleEncoding> encoding_result = sampleEncodingFor(args, output);
+  if (!encoding_result) return reportError("hit", encoding_result.error());
+  const SampleEncoding encoding = *encoding_result;
   Status written = writeAudio(output, audio, encoding);
   if (!written) return reportError("hit", written.error());
 
@@ -209,7 +205,7 @@ int runHit(const std::vector<std::string>& raw_args) {
     if (clipped > 0)
       std::fprintf(stderr, "  CLIPPING    %zu samples at or above full scale%s; lower --gain\n", clipped,
                    encoding == SampleEncoding::Float32 ? " (kept in the float file)" : " (clipped in the file)");
-    std::fprintf(stderr, "  wrote       %s (%.3g s at %.0f Hz, %s)\n", output.c_str(), *duration, *rate, format.c_str());
+    std::fprintf(stderr, "  wrote       %s (%.3g s at %.0f Hz, %s)\n", output.c_str(), *duration, *rate, args.text("--format", "default encoding").c_str());
   }
   return 0;
 }

@@ -107,13 +107,9 @@ int runRender(const std::vector<std::string>& raw_args) {
   settings.cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
 
   const std::string output = args.text("-o");
-  const bool flac = output.size() >= 5 && output.compare(output.size() - 5, 5, ".flac") == 0;
-  const std::string format = args.text("--format", flac ? "pcm24" : "float");
-  SampleEncoding encoding;
-  if (format == "pcm16") encoding = SampleEncoding::Pcm16;
-  else if (format == "pcm24") encoding = SampleEncoding::Pcm24;
-  else if (format == "float") encoding = SampleEncoding::Float32;
-  else return reportError("render", badInput("--format = '" + format + "' (expected pcm16, pcm24 or float)"));
+  Result<SampleEncoding> encoding_result = sampleEncodingFor(args, output);
+  if (!encoding_result) return reportError("render", encoding_result.error());
+  const SampleEncoding encoding = *encoding_result;
 
   const bool quiet = args.has("--quiet");
   ProgressReporter progress(quiet);

@@ -101,6 +101,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   body.precompute.target_edge_m = object.size_m;
   body.precompute.max_freq_hz = max_freq_hz;
   body.precompute.max_modes = scene.max_modes;
+  body.precompute.max_tets = settings.max_tets;
   body.precompute.progress = settings.progress;
   Result<uint64_t> hash = meshHash(object.mesh);
   if (!hash) return hash.error();
@@ -128,6 +129,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   MeshOptions mesh_options;
   mesh_options.order = object.order;
   mesh_options.target_edge_m = object.size_m;
+  mesh_options.max_tets = settings.max_tets;
   mesh_options.progress = settings.progress;
   Result<LoadedMesh> loaded = loadTetMesh(object.mesh, mesh_options);
   if (!loaded) return badInput("objects \"" + object.name + "\": " + loaded.error().message);
@@ -207,6 +209,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   sim.duration_s = duration;
   sim.gravity_m_s2 = scene.gravity_m_s2;
   sim.substep_s = kSubstep_s;
+  sim.max_events = settings.max_events;
   sim.ground = scene.has_ground;
   sim.ground_height_m = scene.ground_height_m;
   const ContactProperties ground_contact = builtinMaterials().contactProperties(scene.ground_material.name);

@@ -2,7 +2,7 @@
 // `strike bench accuracy -o DIR`: the reproducible accuracy study of issue 6.
 //  - accuracy-fem.csv / .svg: mode frequency error (true, against Timoshenko theory, and the
 //    bank's own estimate) against precompute time, Tet4 and Tet10, 4 resolutions each, on the
-//    free-free steel bar 0.3 x 0.02 x 0.02 m;
+//    free-free steel bar 0.3 x 0.02 x 0.02 m, and on a solid sphere R = 5 cm against Lamb's modes;
 //  - accuracy-synth.csv: float vs double oscillator state and culling thresholds against a
 //    double-precision reference render of the same impact (time-domain error, run time);
 //  - accuracy-euler.csv: symplectic Euler on the modal ODE at the audio step h = 1/fs against the
@@ -18,7 +18,8 @@
 
 #include "args.hpp"
 #include "commands.hpp"
-#include "common/beam_theory.hpp"  // tests/unit/common: the Timoshenko free-free bar reference
+#include "common/beam_theory.hpp"   // tests/unit/common: the Timoshenko free-free bar reference
+#include "extreme/lamb_sphere.hpp"   // tests/unit/extreme: Lamb's free-sphere modes
 #include "strike/precompute.hpp"
 #include "strike/synth.hpp"
 
@@ -37,8 +38,8 @@ CommandSpec benchSpec() {
   spec.summary =
       "Runs the accuracy study and writes DIR/accuracy-fem.csv (+ .svg plot), accuracy-synth.csv and\n"
       "accuracy-euler.csv: FEM frequency error against precompute time (Tet4, Tet10, 4 sizes, free-free\n"
-      "bar vs Timoshenko), synthesis error against time (float vs double state, culling thresholds),\n"
-      "and symplectic Euler against the exact update at the audio step. Takes ~20 s.";
+      "bar vs Timoshenko, sphere vs Lamb), synthesis error against time (float vs double state, culling thresholds),\n"
+      "and symplectic Euler against the exact update at the audio step. Takes ~35 s (2 cores).";
   spec.options = {{"-o", "DIR", "output directory (must exist)"}};
   spec.min_positional = 1;
   spec.max_positional = 1;
@@ -46,6 +47,7 @@ CommandSpec benchSpec() {
 }
 
 struct FemRow {
+  std::string object;  ///< "bar" or "sphere"
   int order;
   double edge_m;
   size_t dofs;
@@ -73,7 +75,7 @@ Result<std::vector<FemRow>> femStudy() {
     s.error_estimate = true;
     Result<PrecomputeResult> r = computeModeBank(s);
     if (!r) return r.error();
-    FemRow row{order, edge, r->report.dofs, r->bank.total_seconds, r->report.error_estimate_seconds, {}, {}};
+    FemRow row{"bar", order, edge, r->report.dofs, r->bank.total_seconds, r->report.error_estimate_seconds, {}, {}};
     // Each Timoshenko bending frequency is a degenerate pair on the square bar: take the two
     // nearest FEM modes and report the worse.
     for (double ref : reference) {
@@ -93,6 +95,44 @@ Result<std::vector<FemRow>> femStudy() {
                  order == 2 ? 10 : 4, edge, row.dofs, row.seconds, 100 * row.true_error[0]);
     rows.push_back(std::move(row));
   }
+  // Solid sphere, nu = 0.25: the 28 lowest modes sorted against Lamb's roots (each repeated
+  // 2n + 1 times); reported per degenerate group (T2, S2, S1, T3, S3) as the group's worst.
+  Material sphere_material;
+  sphere_material.name = "steel-like";
+  sphere_material.youngs_pa = 2.0e11;
+  sphere_material.poisson = 0.25;
+  sphere_material.density_kg_m3 = 7850;
+  const double R = 0.05;
+  const double cs = std::sqrt(sphere_material.youngs_pa / (2 * (1 + sphere_material.poisson)) / sphere_material.density_kg_m3);
+  const std::vector<double> etas = test::lambSphereEtas(sphere_material.poisson, 7.0);
+  for (int order : {1, 2})
+    for (double edge : {0.03, 0.02, 0.015, 0.01}) {
+      PrecomputeSettings s;
+      s.mesh_spec = "sphere:0.05";
+      s.material = sphere_material;
+      s.order = order;
+      s.target_edge_m = edge;
+      s.max_freq_hz = 1e9;
+      s.max_modes = 28;
+      s.error_estimate = true;
+      Result<PrecomputeResult> r = computeModeBank(s);
+      if (!r) return r.error();
+      FemRow row{"sphere", order, edge, r->report.dofs, r->bank.total_seconds, r->report.error_estimate_seconds, {}, {}};
+      const size_t groups[][2] = {{0, 5}, {5, 10}, {10, 13}, {13, 20}, {20, 27}};
+      for (const auto& g : groups) {
+        double worst = 0, est = 0;
+        for (size_t i = g[0]; i < g[1] && i < r->bank.modeCount(); ++i) {
+          const double ref = etas[i] * cs / (2 * kPi * R);
+          worst = std::max(worst, std::abs(r->bank.frequencyHz(i) - ref) / ref);
+          if (i < r->bank.frequency_error_estimate.size()) est = std::max(est, r->bank.frequency_error_estimate[i]);
+        }
+        row.true_error.push_back(worst);
+        row.estimate.push_back(est);
+      }
+      std::fprintf(stderr, "strike bench: sphere Tet%d size %.4g m, %zu DOF, %.2f s, first group error %.3g%%\n",
+                   order == 2 ? 10 : 4, edge, row.dofs, row.seconds, 100 * row.true_error[0]);
+      rows.push_back(std::move(row));
+    }
   return rows;
 }
 
@@ -120,13 +160,18 @@ std::string femSvg(const std::vector<FemRow>& rows) {
       << "' stroke='#ddd'/><text x='8' y='" << y(std::pow(10, d)) + 4 << "'>1e" << d << "</text>\n";
   s << "<text x='" << (W / 2 - 60) << "' y='" << H - 12 << "'>precompute time (s)</text>\n";
   const char* colours[3] = {"", "#c0392b", "#2471a3"};
+  int line = 0;
+  for (const char* object : {"bar", "sphere"})
   for (int order : {1, 2}) {
-    s << "<polyline fill='none' stroke='" << colours[order] << "' stroke-width='2' points='";
+    ++line;
+    const bool bar = std::string(object) == "bar";
+    s << "<polyline fill='none' stroke='" << colours[order] << "' stroke-width='2'"
+      << (bar ? "" : " stroke-dasharray='6,4'") << " points='";
     for (const FemRow& r : rows)
-      if (r.order == order)
+      if (r.order == order && r.object == object)
         s << x(r.seconds) << "," << y(std::max(*std::max_element(r.true_error.begin(), r.true_error.end()), 1e-7)) << " ";
-    s << "'/>\n<text x='" << W - 120 << "' y='" << T + 20 * order << "' fill='" << colours[order] << "'>Tet"
-      << (order == 2 ? 10 : 4) << "</text>\n";
+    s << "'/>\n<text x='" << W - 150 << "' y='" << T + 18 * line << "' fill='" << colours[order] << "'>" << object
+      << " Tet" << (order == 2 ? 10 : 4) << (bar ? "" : " (dashed)") << "</text>\n";
   }
   s << "</svg>\n";
   return s.str();
@@ -218,14 +263,14 @@ int runBench(const std::vector<std::string>& raw_args) {
   if (!fem) return reportError("bench", fem.error());
   std::ofstream csv;
   if (Status ok = open("accuracy-fem.csv", csv); !ok) return reportError("bench", ok.error());
-  csv << "element,edge_m,dofs,precompute_s,estimate_s,mode,reference_hz,true_rel_error,estimated_rel_error\n";
-  const std::vector<double> reference =
-      test::timoshenkoFreeFreeHz(test::BarProperties{2.0e11, 0.29, 7850, 0.3, 0.02, 0.02}, 3);
+  csv << "object,element,edge_m,dofs,precompute_s,estimate_s,mode,true_rel_error,estimated_rel_error\n";
+  const char* sphere_groups[] = {"T2", "S2", "S1", "T3", "S3"};
   for (const FemRow& r : *fem)
     for (size_t m = 0; m < r.true_error.size(); ++m)
-      csv << (r.order == 2 ? "Tet10" : "Tet4") << "," << r.edge_m << "," << r.dofs << "," << r.seconds << ","
-          << r.estimate_seconds << ",bending" << m + 1 << "," << reference[m] << "," << r.true_error[m] << ","
-          << r.estimate[m] << "\n";
+      csv << r.object << "," << (r.order == 2 ? "Tet10" : "Tet4") << "," << r.edge_m << "," << r.dofs << "," << r.seconds
+          << "," << r.estimate_seconds << ","
+          << (r.object == "bar" ? "bending" + std::to_string(m + 1) : std::string(sphere_groups[m])) << ","
+          << r.true_error[m] << "," << r.estimate[m] << "\n";
   csv.close();
   std::ofstream svg;
   if (Status ok = open("accuracy-fem.svg", svg); !ok) return reportError("bench", ok.error());

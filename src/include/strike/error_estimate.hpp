@@ -40,6 +40,10 @@ struct ErrorEstimateReport {
 /// validation tests in tests/unit/extreme/accuracy_test.cpp state how often it holds.
 constexpr double kRichardsonSafety = 3.0;
 
+/// The coarse problem must have at least this many unknowns per mode (counting the 6 rigid
+/// ones) for mode i to get an estimate: coarse DOF >= 20 (i + 7). Below that, 1.0 ("unknown").
+constexpr size_t kMinCoarseDofsPerMode = 20;
+
 /// True when `mesh_spec` can be meshed again at another resolution (a primitive or a surface).
 bool canRemesh(const std::string& mesh_spec);
 

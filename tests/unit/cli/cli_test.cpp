@@ -41,6 +41,7 @@ TEST(Cli, HelpTeachesEveryCommand) {
 }
 
 TEST(CliModes, UnknownMaterialListsKnownOnes) {
+  std::filesystem::remove(temp("x.modes"));
   CliResult r = runCli("modes box:0.1,0.1,0.1 --material unobtainium -o '" + temp("x.modes") + "'");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("unknown material 'unobtainium'"), std::string::npos) << r.err;
@@ -63,6 +64,7 @@ TEST(CliModes, BadMaterialNumbersNameTheOption) {
       {"--material steel --size abc", "--size = 'abc'"},
       {"--material steel --bogus 1", "unknown option '--bogus'"},
   };
+  std::filesystem::remove(temp("bad.modes"));
   for (const Case& c : cases) {
     CliResult r = runCli("modes box:0.1,0.1,0.1 " + c.args + " -o '" + temp("bad.modes") + "'");
     EXPECT_EQ(r.exit_code, 1) << c.args;
@@ -233,6 +235,7 @@ TEST_F(SteelBar, AFixedHitRendersTheSameBytesEveryTime) {
 }
 
 TEST_F(SteelBar, HitRejectsBadStrikePoints) {
+  std::filesystem::remove(temp("x.wav"));  // the temp folder is shared between runs
   CliResult r = runCli("hit '" + bank_ + "' -o '" + temp("x.wav") + "' --vertex 99999999");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--vertex = 99999999"), std::string::npos) << r.err;

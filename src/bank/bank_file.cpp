@@ -91,7 +91,8 @@ class ByteReader {
       return false;
     }
     values.resize(count);
-    std::memcpy(values.data(), data_ + pos_, count * sizeof(T));
+    // memcpy from/to a null pointer is undefined even for 0 bytes (an empty chunk; found by fuzz_bank).
+    if (count > 0) std::memcpy(values.data(), data_ + pos_, count * sizeof(T));
     pos_ += count * sizeof(T);
     return true;
   }

@@ -79,7 +79,10 @@ Result<MaterialTable> parseMaterialTable(const std::string& json_text, const std
   }
   if (!doc.contains("materials") || !doc["materials"].is_object())
     return badInput(source + ": error: missing the 'materials' object");
-  for (const auto& [name, entry] : doc["materials"].items()) {
+  for (const auto& item : doc["materials"].items()) {
+    // Not a structured binding: C++17 lambdas may not capture those (clang refuses; see `number`).
+    const std::string& name = item.key();
+    const auto& entry = item.value();
     const std::string where = source + ": materials." + name;
     if (!entry.is_object()) return badInput(where + ": expected an object");
     Material m;
@@ -101,13 +104,13 @@ Result<MaterialTable> parseMaterialTable(const std::string& json_text, const std
     } else if (!number("rayleigh_stiffness", m.rayleigh_stiffness) || !number("rayleigh_mass", m.rayleigh_mass)) {
       return badInput(where + ": needs loss_factor, or rayleigh_stiffness and rayleigh_mass");
     }
-    for (const auto& [key, value] : entry.items()) {
+    for (const auto& field : entry.items()) {
+      const std::string& key = field.key();
       static const char* const kKnown[] = {"youngs_pa", "poisson", "density_kg_m3", "loss_factor",
                                            "rayleigh_stiffness", "rayleigh_mass", "source",
                                            "restitution", "friction"};
       if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return key == k; }) == std::end(kKnown))
         return badInput(where + ": unknown key '" + key + "'");
-      (void)value;
     }
     Status valid = validateMaterial(m, where);
     if (!valid) return valid.error();

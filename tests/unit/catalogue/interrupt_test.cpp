@@ -103,14 +103,16 @@ TEST_F(Interrupt, HandlerUnlinksRegisteredTemporariesAndDiesByTheSignal) {
 }
 
 struct KillReport {
-  int runs = 0, killed = 0, killed_mid_write = 0, finished = 0;
+  int runs = 0, killed = 0, killed_mid_write = 0, killed_after_rename = 0, finished = 0;
 };
 
 /// Starts the command `attempts` times and sends `signal_number` after delays spread over
 /// [first_s, last_s]. After each run: killed by the signal with no output and no temporary, or
-/// finished with a complete output.
+/// finished with a complete output. A signal that lands between the rename and the exit kills a
+/// process whose output is already whole: then the output must equal `complete` (when given).
 KillReport killRepeatedly(const std::vector<std::string>& args, const std::string& output, const std::string& dir,
-                          int signal_number, double first_s, double last_s, int attempts) {
+                          int signal_number, double first_s, double last_s, int attempts,
+                          const std::string* complete = nullptr) {
   KillReport report;
   for (int i = 0; i < attempts; ++i) {
     fs::remove(output);
@@ -125,7 +127,12 @@ KillReport killRepeatedly(const std::vector<std::string>& args, const std::strin
     ++report.runs;
     if (WIFSIGNALED(status)) {
       EXPECT_EQ(WTERMSIG(status), signal_number);
-      EXPECT_FALSE(fs::exists(output)) << "killed at " << delay << " s but the output exists";
+      if (complete && fs::exists(output)) {
+        EXPECT_TRUE(slurp(output) == *complete) << "killed at " << delay << " s: the output exists but is not whole";
+        ++report.killed_after_rename;
+      } else {
+        EXPECT_FALSE(fs::exists(output)) << "killed at " << delay << " s but the output exists";
+      }
       ++report.killed;
       if (writing) ++report.killed_mid_write;
     } else {
@@ -140,8 +147,9 @@ KillReport killRepeatedly(const std::vector<std::string>& args, const std::strin
 }
 
 void print(const char* what, const KillReport& r) {
-  std::printf("[ interrupt ] %-44s %2d runs: %2d killed (%d while writing the output), %2d finished; no partial output, no temporary\n",
-              what, r.runs, r.killed, r.killed_mid_write, r.finished);
+  std::printf("[ interrupt ] %-42s %2d runs: %2d killed (%d mid-write, %d after the rename), %2d finished; "
+              "no partial output, no temporary\n",
+              what, r.runs, r.killed, r.killed_mid_write, r.killed_after_rename, r.finished);
 }
 
 TEST_F(Interrupt, SigintDuringModesLeavesNothing) {
@@ -164,9 +172,10 @@ TEST_F(Interrupt, SignalsDuringHitNeverLeaveAPartialWav) {
   ASSERT_EQ(runCli(args), 0);
   const double full_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("[ interrupt ] uninterrupted hit: %.2f s, %.0f MB\n", full_s, fs::file_size(out) / 1e6);
-  KillReport r = killRepeatedly(args, out, dir_, SIGINT, 0.1 * full_s, 1.05 * full_s, 10);
+  const std::string complete = slurp(out);
+  KillReport r = killRepeatedly(args, out, dir_, SIGINT, 0.1 * full_s, 1.05 * full_s, 10, &complete);
   print("SIGINT across strike hit (600 s of audio)", r);
-  const KillReport t = killRepeatedly(args, out, dir_, SIGTERM, 0.3 * full_s, 0.98 * full_s, 5);
+  const KillReport t = killRepeatedly(args, out, dir_, SIGTERM, 0.3 * full_s, 0.98 * full_s, 5, &complete);
   print("SIGTERM across strike hit", t);
   EXPECT_GT(r.killed + t.killed, 0);
 }

@@ -1,0 +1,15 @@
+// SPDX-License-Identifier: MIT
+// libFuzzer target: the mode bank decoder (magic, version, chunks, checksum) on arbitrary bytes.
+#include "strike/bank.hpp"
+
+// STRIKE_FUZZ_ENTRY renames the entry so that the unit tests can link every target into one
+// program and replay the corpus and the kept crashers (tests/unit/catalogue/fuzz_replay_test.cpp).
+#ifndef STRIKE_FUZZ_ENTRY
+#define STRIKE_FUZZ_ENTRY LLVMFuzzerTestOneInput
+#endif
+
+extern "C" int STRIKE_FUZZ_ENTRY(const uint8_t* data, size_t size) {
+  strike::Result<strike::ModeBank> bank = strike::decodeBank(data, size, "fuzz.modes");
+  if (bank) (void)bank->checkConsistency();
+  return 0;
+}

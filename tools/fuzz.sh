@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# Builds the libFuzzer targets (clang, ASan + UBSan) and runs each for SECONDS over its seed
+# corpus (tests/fuzz/corpus/<target without fuzz_>/, read only; new inputs go to build-fuzz/corpus/<target>/).
+# Findings are written to build-fuzz/findings/<target>/; the script exits 1 if any target failed.
+#   usage: tools/fuzz.sh [SECONDS (default 60)] [TARGET...]    e.g. tools/fuzz.sh 10   (CI smoke)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds="${1:-60}"
+shift || true
+all=(fuzz_obj fuzz_stl fuzz_ply fuzz_gmsh fuzz_tetgen fuzz_scene fuzz_bank fuzz_capi_bank)
+targets=("${@:-${all[@]}}")
+[ $# -eq 0 ] && targets=("${all[@]}")
+build="${STRIKE_FUZZ_BUILD_DIR:-build-fuzz}"
+if [ ! -f "$build/CMakeCache.txt" ]; then
+  CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTRIKE_BUILD_FUZZERS=ON \
+    -DSTRIKE_BUILD_TESTS=OFF -DSTRIKE_BUILD_TOOLS=OFF -DSTRIKE_BUILD_EXAMPLES=OFF -DSTRIKE_INSTALL=OFF >/dev/null
+fi
+cmake --build "$build" --target "${targets[@]}"
+failed=0
+for t in "${targets[@]}"; do
+  mkdir -p "$build/corpus/$t" "$build/findings/$t"
+  log="$build/findings/$t/log.txt"
+  # -rss_limit_mb and -timeout: a slow or greedy input is a finding, like a crash.
+  if "$build/tests/fuzz/$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+       -print_final_stats=1 -artifact_prefix="$build/findings/$t/" "$build/corpus/$t" "tests/fuzz/corpus/${t#fuzz_}" >"$log" 2>&1; then
+    status=ok
+  else
+    status=FAILED
+    failed=1
+  fi
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
+  cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*' || echo "?")
+  ft=$(grep -o 'ft: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*' || echo "?")
+  printf '%-16s %-6s %8s s  %10s execs  %7s exec/s  cov %6s  ft %6s\n' "$t" "$status" "$seconds" "$execs" \
+    "$(( execs / (seconds > 0 ? seconds : 1) ))" "$cov" "$ft"
+  [ "$status" = ok ] || tail -30 "$log"
+done
+exit $failed

@@ -16,6 +16,7 @@ packages=(
   libgtest-dev           # tests
   lv2-dev                # examples/lv2 plugin headers (ISC)
   liblilv-dev lilv-utils # examples/lv2 host test, lv2ls/lv2info (ISC)
+  clang libclang-rt-14-dev # libFuzzer + ASan/UBSan for the fuzz smoke run (tools/fuzz.sh)
 )
 [ "${STRIKE_BENCHMARKS:-0}" = 1 ] && packages+=(libbenchmark-dev)
 

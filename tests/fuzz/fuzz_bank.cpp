@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: MIT
-// libFuzzer target: the mode bank decoder (magic, version, chunks, checksum) on arbitrary bytes.
+// libFuzzer target: the mode bank decoder (magic, version, chunks, checksum) on arbitrary bytes,
+// and on the same bytes with a repaired checksum.
+#include "fuzz_util.hpp"
 #include "strike/bank.hpp"
 
 // STRIKE_FUZZ_ENTRY renames the entry so that the unit tests can link every target into one
@@ -11,5 +13,9 @@
 extern "C" int STRIKE_FUZZ_ENTRY(const uint8_t* data, size_t size) {
   strike::Result<strike::ModeBank> bank = strike::decodeBank(data, size, "fuzz.modes");
   if (bank) (void)bank->checkConsistency();
+  // The same bytes with the checksum repaired: exercises the chunk decoder on mutated payloads.
+  const std::vector<uint8_t> fixed = strike::fuzz::withValidChecksum(data, size);
+  strike::Result<strike::ModeBank> decoded = strike::decodeBank(fixed.data(), fixed.size(), "fuzz.modes");
+  if (decoded) (void)decoded->checkConsistency();
   return 0;
 }

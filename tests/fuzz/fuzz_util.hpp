@@ -8,7 +8,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <string>
+#include <vector>
 
 namespace strike::fuzz {
 
@@ -23,6 +25,20 @@ inline bool writeBytes(const std::string& path, const uint8_t* data, size_t size
   if (!file) return false;
   const bool ok = size == 0 || std::fwrite(data, 1, size, file) == size;
   return std::fclose(file) == 0 && ok;
+}
+
+/// A copy of a mode bank file with its header's payload size and FNV-1a checksum made to match
+/// the payload (docs/bank-format.md: 32-byte header, u64 size at 16, u64 checksum at 24), so that
+/// mutations reach the chunk decoder instead of stopping at the checksum.
+inline std::vector<uint8_t> withValidChecksum(const uint8_t* data, size_t size) {
+  std::vector<uint8_t> bytes(data, data + size);
+  if (bytes.size() < 32) return bytes;
+  const uint64_t payload_size = bytes.size() - 32;
+  uint64_t hash = 1469598103934665603ull;
+  for (size_t i = 32; i < bytes.size(); ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
+  std::memcpy(bytes.data() + 16, &payload_size, 8);
+  std::memcpy(bytes.data() + 24, &hash, 8);
+  return bytes;
 }
 
 }  // namespace strike::fuzz

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -27,8 +28,10 @@ inline std::string slurp(const std::string& path) {
 
 /// Runs `strike ARGS` (ARGS is shell text; quote paths yourself) in the test's temp directory.
 inline CliResult runCli(const std::string& args) {
+  // ctest runs tests as parallel processes: the pid keeps their capture files apart.
   static int counter = 0;
-  const std::string base = testing::TempDir() + "/cli_" + std::to_string(++counter);
+  const std::string base =
+      testing::TempDir() + "/cli_" + std::to_string(static_cast<long>(getpid())) + "_" + std::to_string(++counter);
   const std::string command = std::string("'") + STRIKE_CLI + "' " + args + " >'" + base + ".out' 2>'" + base + ".err'";
   const int status = std::system(command.c_str());
   CliResult result;

@@ -118,15 +118,19 @@ ModeBank massAndSurfaceBank(const LoadedMesh& loaded, const PrecomputeSettings& 
   return bank;
 }
 
+MeshOptions meshOptionsFor(const PrecomputeSettings& settings) {
+  MeshOptions options;
+  options.order = settings.order;
+  options.target_edge_m = settings.target_edge_m;
+  options.max_tets = settings.max_tets;
+  options.progress = settings.progress;
+  return options;
+}
+
 Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings) {
   Status valid = checkSettings(settings);
   if (!valid) return valid.error();
-  MeshOptions mesh_options;
-  mesh_options.order = settings.order;
-  mesh_options.target_edge_m = settings.target_edge_m;
-  mesh_options.max_tets = settings.max_tets;
-  mesh_options.progress = settings.progress;
-  Result<LoadedMesh> loaded = loadTetMesh(settings.mesh_spec, mesh_options);
+  Result<LoadedMesh> loaded = loadTetMesh(settings.mesh_spec, meshOptionsFor(settings));
   if (!loaded) return loaded.error();
   return computeModeBankForMesh(*loaded, settings);
 }

@@ -126,12 +126,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
       }
     }
   }
-  MeshOptions mesh_options;
-  mesh_options.order = object.order;
-  mesh_options.target_edge_m = object.size_m;
-  mesh_options.max_tets = settings.max_tets;
-  mesh_options.progress = settings.progress;
-  Result<LoadedMesh> loaded = loadTetMesh(object.mesh, mesh_options);
+  Result<LoadedMesh> loaded = loadTetMesh(object.mesh, meshOptionsFor(body.precompute));
   if (!loaded) return badInput("objects \"" + object.name + "\": " + loaded.error().message);
   body.bank = massAndSurfaceBank(*loaded, body.precompute);
   body.mesh = std::move(*loaded);

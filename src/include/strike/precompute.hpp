@@ -45,6 +45,9 @@ struct PrecomputeResult {
   PrecomputeReport report;
 };
 
+/// The meshing options these settings ask for (order, size, cap, progress).
+MeshOptions meshOptionsFor(const PrecomputeSettings& settings);
+
 /// Runs the precompute. Errors name the mesh, the material field or the solver failure.
 Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings);
 /// The same from a mesh already loaded (settings.mesh_spec is recorded, not read again).

@@ -10,6 +10,7 @@ packages=(
   libopenblas-dev        # BLAS under CHOLMOD
   libarpack2-dev         # shift-invert Lanczos (BSD)
   libtet1.5-dev          # TetGen tetrahedralization (AGPL: command-line tool only)
+  libbullet-dev          # rigid-body simulation, double-precision libraries (zlib)
   libsndfile1-dev        # WAV/FLAC (LGPL)
   libfftw3-dev           # FFT analysis (GPL: tool and tests only)
   nlohmann-json3-dev     # JSON (MIT)

@@ -15,17 +15,14 @@
 #include <string>
 #include <vector>
 
+#include "cli/run_cli.hpp"
+
 namespace strike {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::slurp;  // tests/unit/cli/run_cli.hpp
 
 void spit(const std::string& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary);

@@ -20,6 +20,8 @@
 
 #include "strike/interrupt_cleanup.hpp"
 
+#include "cli/run_cli.hpp"
+
 extern char** environ;
 
 namespace strike {
@@ -27,12 +29,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::slurp;  // tests/unit/cli/run_cli.hpp
 
 std::vector<std::string> temporariesIn(const std::string& dir) {
   std::vector<std::string> found;

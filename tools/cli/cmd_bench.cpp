@@ -3,8 +3,9 @@
 //  - accuracy-fem.csv / .svg: mode frequency error (true, against Timoshenko theory, and the
 //    bank's own estimate) against precompute time, Tet4 and Tet10, 4 resolutions each, on the
 //    free-free steel bar 0.3 x 0.02 x 0.02 m, and on a solid sphere R = 5 cm against Lamb's modes;
-//  - accuracy-synth.csv: float vs double oscillator state and culling thresholds against a
-//    double-precision reference render of the same impact (time-domain error, run time);
+//  - accuracy-synth.csv: float vs double oscillator state at 16-192 kHz, and culling thresholds at
+//    48 kHz, against a double-precision reference render of the same impact at the same rate:
+//    time-domain error, spectral error (FFT peak frequency and level) and run time;
 //  - accuracy-euler.csv: symplectic Euler on the modal ODE at the audio step h = 1/fs against the
 //    exact exponential update, per mode frequency, and the frequency where Euler goes unstable.
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <sstream>
 
 #include "args.hpp"
+#include "bench_studies.hpp"
 #include "commands.hpp"
 #include "common/beam_theory.hpp"   // tests/unit/common: the Timoshenko free-free bar reference
 #include "extreme/lamb_sphere.hpp"   // tests/unit/extreme: Lamb's free-sphere modes
@@ -34,15 +36,18 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 
 CommandSpec benchSpec() {
   CommandSpec spec;
-  spec.usage = "strike bench accuracy -o DIR";
+  spec.usage = "strike bench accuracy -o DIR | strike bench leftout SCENE.json -o DIR";
   spec.summary =
       "Runs the accuracy study and writes DIR/accuracy-fem.csv (+ .svg plot), accuracy-synth.csv and\n"
       "accuracy-euler.csv: FEM frequency error against precompute time (Tet4, Tet10, 4 sizes, free-free\n"
       "bar vs Timoshenko, sphere vs Lamb), synthesis error against time (float vs double state, culling thresholds),\n"
-      "and symplectic Euler against the exact update at the audio step. Takes ~35 s (2 cores).";
+      "and symplectic Euler against the exact update at the audio step. Takes ~35 s (2 cores).\n"
+      "`leftout` renders SCENE three times (nothing left out; as normal from an empty cache; from the warm\n"
+      "cache), writes DIR/leftout.csv and prints the time ratios and the audio difference.";
   spec.options = {{"-o", "DIR", "output directory (must exist)"}};
+  spec.examples = "  strike bench accuracy -o study/\n  strike bench leftout examples/scenes/bar-drop.json -o study/\n";
   spec.min_positional = 1;
-  spec.max_positional = 1;
+  spec.max_positional = 2;
   return spec;
 }
 
@@ -178,11 +183,12 @@ std::string femSvg(const std::vector<FemRow>& rows) {
 }
 
 struct SynthRun {
-  std::vector<float> out;
+  AudioBuffer audio;
   double seconds;
 };
 
-SynthRun synthRender(bool double_precision, double threshold) {
+/// 300 modes between 50 Hz and 15 kHz, struck once, 5 s at `rate`.
+SynthRun synthRender(double rate, bool double_precision, double threshold) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> freq(50.0, 15000.0), gain(-1.0, 1.0);
   ModalObjectDesc object;
@@ -194,14 +200,15 @@ SynthRun synthRender(bool double_precision, double threshold) {
   object.rayleigh_stiffness = 1e-8;
   object.rayleigh_mass = 1.0;
   SynthSettings s;
+  s.sample_rate_hz = rate;
   s.double_precision = double_precision;
   s.audibility_threshold = threshold;
   OscillatorBank bank(s);
   bank.addObject(object);
   bank.addImpact(ImpactDesc{0, 0.01, 5e-5, g.data()});
-  SynthRun run{std::vector<float>(48000 * 5), 0};
+  SynthRun run{AudioBuffer{rate, 1, std::vector<float>(static_cast<size_t>(rate * 5))}, 0};
   const auto start = std::chrono::steady_clock::now();
-  bank.render(run.out.data(), run.out.size());
+  bank.render(run.audio.samples.data(), run.audio.samples.size());
   run.seconds = secondsSince(start);
   return run;
 }
@@ -249,10 +256,16 @@ int runBench(const std::vector<std::string>& raw_args) {
   }
   Result<ParsedArgs> parsed = parseArgs(spec, raw_args);
   if (!parsed) return reportError("bench", parsed.error());
-  if (parsed->positional[0] != "accuracy")
-    return reportError("bench", badInput("unknown study '" + parsed->positional[0] + "' (known: accuracy)"));
   if (!parsed->has("-o")) return reportError("bench", badInput("missing -o DIR"));
   const std::string dir = parsed->text("-o");
+  const std::string& study = parsed->positional[0];
+  if (study == "leftout") {
+    if (parsed->positional.size() != 2) return reportError("bench", badInput("bench leftout needs SCENE.json"));
+    Status ok = benchLeftOut(parsed->positional[1], dir);
+    return ok ? 0 : reportError("bench", ok.error());
+  }
+  if (study != "accuracy" || parsed->positional.size() != 1)
+    return reportError("bench", badInput("unknown study '" + study + "' (known: accuracy, leftout SCENE.json)"));
   auto open = [&](const std::string& name, std::ofstream& file) -> Status {
     file.open(dir + "/" + name);
     if (!file) return badInput(dir + "/" + name + ": error: cannot create file");
@@ -277,30 +290,45 @@ int runBench(const std::vector<std::string>& raw_args) {
   svg << femSvg(*fem);
   svg.close();
 
-  // Synthesis: a 300-mode bank, 5 s at 48 kHz, one impact.
+  // Synthesis: a 300-mode bank, 5 s, one impact, against the double-precision render at the same
+  // rate: float state at 16-192 kHz, then culling thresholds at 48 kHz.
   std::ofstream synth;
   if (Status ok = open("accuracy-synth.csv", synth); !ok) return reportError("bench", ok.error());
-  synth << "state,threshold_db,render_s,max_abs_error_rel_peak,rms_error_rel_rms\n";
-  const SynthRun reference_run = synthRender(true, 0.0);
-  double peak = 0, rms = 0;
-  for (float v : reference_run.out) peak = std::max(peak, double(std::abs(v))), rms += double(v) * v;
-  rms = std::sqrt(rms / double(reference_run.out.size()));
+  synth << "sample_rate,state,threshold_db,render_s,max_abs_error_rel_peak,rms_error_rel_rms,"
+           "peak_freq_rel_error,peak_level_error_db,unmatched_peaks\n";
   struct Case {
+    double rate;
     const char* state;
     bool dp;
     double db;
   };
-  for (const Case& c : {Case{"double", true, -999}, Case{"float", false, -999}, Case{"float", false, -100},
-                        Case{"float", false, -80}, Case{"float", false, -60}, Case{"float", false, -40}}) {
+  const Case cases[] = {{16000, "float", false, -999}, {44100, "float", false, -999}, {48000, "double", true, -999},
+                        {48000, "float", false, -999}, {96000, "float", false, -999}, {192000, "float", false, -999},
+                        {48000, "float", false, -100}, {48000, "float", false, -80},  {48000, "float", false, -60},
+                        {48000, "float", false, -40}};
+  double reference_rate = 0;
+  SynthRun reference_run;
+  double peak = 0, rms = 0;
+  for (const Case& c : cases) {
+    if (c.rate != reference_rate) {
+      reference_run = synthRender(c.rate, true, 0.0);
+      reference_rate = c.rate;
+      peak = 0, rms = 0;
+      for (float v : reference_run.audio.samples) peak = std::max(peak, double(std::abs(v))), rms += double(v) * v;
+      rms = std::sqrt(rms / double(reference_run.audio.samples.size()));
+    }
     const double threshold = c.db < -900 ? 0.0 : peak * std::pow(10.0, c.db / 20.0);
-    const SynthRun run = synthRender(c.dp, threshold);
+    const SynthRun run = synthRender(c.rate, c.dp, threshold);
     double max_err = 0, sq = 0;
-    for (size_t n = 0; n < run.out.size(); ++n) {
-      const double d = double(run.out[n]) - reference_run.out[n];
+    const std::vector<float>& out = run.audio.samples;
+    for (size_t n = 0; n < out.size(); ++n) {
+      const double d = double(out[n]) - reference_run.audio.samples[n];
       max_err = std::max(max_err, std::abs(d)), sq += d * d;
     }
-    synth << c.state << "," << (c.db < -900 ? std::string("none") : std::to_string(int(c.db))) << "," << run.seconds
-          << "," << max_err / peak << "," << std::sqrt(sq / double(run.out.size())) / rms << "\n";
+    const SpectralDifference spectral = spectralDifference(reference_run.audio, run.audio);
+    synth << c.rate << "," << c.state << "," << (c.db < -900 ? std::string("none") : std::to_string(int(c.db))) << ","
+          << run.seconds << "," << max_err / peak << "," << std::sqrt(sq / double(out.size())) / rms << ","
+          << spectral.max_freq_rel << "," << spectral.max_level_db << "," << spectral.unmatched_peaks << "\n";
   }
   synth.close();
 

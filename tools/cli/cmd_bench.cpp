@@ -55,6 +55,11 @@ CommandSpec benchSpec() {
   return spec;
 }
 
+/// The bank's error estimate for mode i; 1.0 ("unknown", as the bank writes it) when it has none.
+double estimateOf(const ModeBank& bank, size_t i) {
+  return i < bank.frequency_error_estimate.size() ? bank.frequency_error_estimate[i] : 1.0;
+}
+
 struct FemRow {
   std::string object;  ///< "bar" or "sphere"
   int order;
@@ -105,7 +110,7 @@ Status plateStudy(std::vector<FemRow>& rows) {
     for (size_t i = 0; i < 8 && i < r->bank.modeCount() && i < reference->bank.modeCount(); ++i) {
       const double ref = reference->bank.frequencyHz(i);
       row.true_error.push_back(std::abs(r->bank.frequencyHz(i) - ref) / ref);
-      row.estimate.push_back(i < r->bank.frequency_error_estimate.size() ? r->bank.frequency_error_estimate[i] : 0.0);
+      row.estimate.push_back(estimateOf(r->bank, i));
     }
     std::fprintf(stderr, "strike bench: plate Tet%d size %.4g m, %zu DOF, %.2f s, first mode error %.3g%%\n",
                  order == 2 ? 10 : 4, edge, row.dofs, row.seconds, 100 * row.true_error[0]);
@@ -145,7 +150,7 @@ Result<std::vector<FemRow>> femStudy(bool plate) {
       for (size_t k = 0; k < 2 && k < near.size(); ++k) {
         const size_t i = near[k].second;
         worst = std::max(worst, near[k].first / ref);
-        if (i < r->bank.frequency_error_estimate.size()) est = std::max(est, r->bank.frequency_error_estimate[i]);
+        est = std::max(est, estimateOf(r->bank, i));
       }
       row.true_error.push_back(worst);
       row.estimate.push_back(est);
@@ -183,7 +188,7 @@ Result<std::vector<FemRow>> femStudy(bool plate) {
         for (size_t i = g[0]; i < g[1] && i < r->bank.modeCount(); ++i) {
           const double ref = etas[i] * cs / (2 * kPi * R);
           worst = std::max(worst, std::abs(r->bank.frequencyHz(i) - ref) / ref);
-          if (i < r->bank.frequency_error_estimate.size()) est = std::max(est, r->bank.frequency_error_estimate[i]);
+          est = std::max(est, estimateOf(r->bank, i));
         }
         row.true_error.push_back(worst);
         row.estimate.push_back(est);

@@ -69,8 +69,9 @@ TEST(CliAccuracy, BenchAccuracyWritesItsTables) {
 // Expectation: `bench leftout` renders the steel bar drop with nothing left out, as normal and
 // from the warm cache. Leaving out costs nothing audible: every spectral peak of the everything
 // render is found in the normal one within 0.1 dB (measured 0.023 dB), and the largest sample
-// difference stays 50 dB below the peak (measured -60 dB: a ~1 ms burst at a contact 0.295 s in,
-// cause not traced); sleeping saves oscillator work (measured 4.8x fewer mode-samples) and the cache
+// difference stays 50 dB below the peak (measured -60 dB: a 0.4 ms half-sine-shaped burst at the
+// impact 0.2915 s in, most likely the in-contact response of modes whose ringing after the pulse
+// is below the threshold, dropped with it); sleeping saves oscillator work (measured 4.8x fewer mode-samples) and the cache
 // saves the eigen-solve (the cached run is faster than the everything run).
 TEST(CliAccuracy, BenchLeftOutCostsNothingAudible) {
   const std::string dir = ::testing::TempDir();

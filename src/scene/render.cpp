@@ -231,9 +231,9 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   std::map<uint64_t, size_t> computed_by_key;  // identical objects share one eigen-solve
   for (size_t i = 0; i < bodies.size(); ++i) {
     Body& body = bodies[i];
-    if (body.max_velocity_change_m_s == 0.0) continue;
-    ++report.objects_struck;
-    if (body.max_velocity_change_m_s < kInaudibleVelocityChange_m_s) {
+    if (body.max_velocity_change_m_s == 0.0 && !settings.leave_nothing_out) continue;
+    if (body.max_velocity_change_m_s > 0.0) ++report.objects_struck;
+    if (body.max_velocity_change_m_s < kInaudibleVelocityChange_m_s && !settings.leave_nothing_out) {
       ++report.objects_inaudible;
       continue;
     }
@@ -265,6 +265,10 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   SynthSettings synth_settings;
   synth_settings.sample_rate_hz = rate;
   synth_settings.max_freq_hz = std::min(20000.0, max_freq_hz);
+  if (settings.leave_nothing_out) {
+    synth_settings.max_freq_hz = max_freq_hz;
+    synth_settings.audibility_threshold = 0.0;
+  }
   OscillatorBank synth(synth_settings);
   for (Body& body : bodies) {
     if (!body.sounded) continue;

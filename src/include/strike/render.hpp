@@ -29,6 +29,13 @@ struct RenderSettings {
   double gain = 1.0;             ///< output scale on top of kFullScalePascal
   int64_t max_tets = kDefaultMaxTets;  ///< size cap of each object's tet mesh (PrecomputeSettings::max_tets)
   size_t max_events = SimSettings{}.max_events;  ///< cap on recorded contact events (SimSettings::max_events)
+  /// For `strike bench leftout` only: leave nothing out, to measure what leaving out saves. Every
+  /// object gets a bank and an oscillator (struck or not, however softly), every mode of the
+  /// banks is synthesized up to 0.45 x the sample rate (no 20 kHz synth cap), and the synth's
+  /// audibility threshold drops to its floor (1e-30 full scale, -600 dB): no mode is culled and
+  /// none sleeps. The eigen-solve's cut-off stays the scene's: a bank solved to another cut-off
+  /// has other eigenvector signs, which the sign-less radiation weight hears (README).
+  bool leave_nothing_out = false;
   ProgressFn progress;
 };
 

@@ -1,0 +1,26 @@
+// SPDX-License-Identifier: MIT
+// Studies of `strike bench` besides the accuracy study in cmd_bench.cpp.
+#pragma once
+
+#include <string>
+
+#include "strike/audio.hpp"
+#include "strike/result.hpp"
+
+namespace strike::cli {
+
+/// `strike bench leftout SCENE -o DIR` (bench_leftout.cpp): the scene rendered with nothing left
+/// out, as normal, and as normal from a warm cache; times, ratios, audio difference.
+Status benchLeftOut(const std::string& scene_path, const std::string& dir);
+
+/// How far `test`'s spectral peaks are from `reference`'s (analyzeAudio, default floor -60 dB):
+/// each reference peak against the nearest test peak; a nearest peak more than 1 % away counts
+/// as unmatched.
+struct SpectralDifference {
+  size_t peaks = 0, unmatched_peaks = 0;
+  double max_freq_rel = 0.0;  ///< largest |f_test - f_ref| / f_ref over matched peaks
+  double max_level_db = 0.0;  ///< largest |level_test - level_ref| (dBFS) over matched peaks
+};
+SpectralDifference spectralDifference(const AudioBuffer& reference, const AudioBuffer& test);
+
+}  // namespace strike::cli

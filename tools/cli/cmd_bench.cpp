@@ -242,6 +242,7 @@ double exactUpdateError(double f_hz, double c, double rate) {
 }  // namespace
 
 int runBench(const std::vector<std::string>& raw_args) {
+  if (!raw_args.empty() && raw_args[0] == "render") return runBenchRender({raw_args.begin() + 1, raw_args.end()});
   const CommandSpec spec = benchSpec();
   if (wantsHelp(raw_args)) {
     std::fputs(helpText(spec).c_str(), stdout);
@@ -250,7 +251,7 @@ int runBench(const std::vector<std::string>& raw_args) {
   Result<ParsedArgs> parsed = parseArgs(spec, raw_args);
   if (!parsed) return reportError("bench", parsed.error());
   if (parsed->positional[0] != "accuracy")
-    return reportError("bench", badInput("unknown study '" + parsed->positional[0] + "' (known: accuracy)"));
+    return reportError("bench", badInput("unknown study '" + parsed->positional[0] + "' (known: accuracy, render)"));
   if (!parsed->has("-o")) return reportError("bench", badInput("missing -o DIR"));
   const std::string dir = parsed->text("-o");
   auto open = [&](const std::string& name, std::ofstream& file) -> Status {

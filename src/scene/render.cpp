@@ -201,7 +201,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   SimSettings sim;
   sim.duration_s = duration;
   sim.gravity_m_s2 = scene.gravity_m_s2;
-  sim.substep_s = settings.substep_s;
+  sim.substep_s = substep;
   sim.max_events = settings.max_events;
   sim.ground = scene.has_ground;
   sim.ground_height_m = scene.ground_height_m;

@@ -24,6 +24,8 @@ const char kUsage[] =
     "  hit BANK.modes -o OUT.wav      strike an object once and render the sound\n"
     "  analyze AUDIO.wav [--json]     spectral peaks, levels and decay rates of a sound\n"
     "  bench accuracy -o DIR          accuracy study: FEM and synthesis error against run time (CSV, SVG)\n"
+    "  bench leftout SCENE.json -o DIR what leaving out saves: time and audio against rendering everything\n"
+    "  bench render SCENE.json -o DIR render speed per phase against a baseline run (CSV)\n"
     "\n"
     "Run `strike COMMAND --help` for a command's options and examples. SI units everywhere.\n"
     "Exit codes: 0 success, 1 bad input (the message names the file, field and value), 2 internal error.\n";

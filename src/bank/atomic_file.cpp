@@ -52,6 +52,7 @@ Result<std::string> readWholeFile(const std::string& path, uint64_t max_bytes) {
   std::FILE* file = std::fopen(path.c_str(), "rb");
   if (!file) return badInput(path + ": error: cannot open: " + std::strerror(errno));
   std::string bytes;
+  bytes.reserve(static_cast<size_t>(info.st_size));  // no regrowth copies of a 17 MB bank
   char buffer[1 << 16];
   size_t got = 0;
   while ((got = std::fread(buffer, 1, sizeof buffer, file)) > 0) {

@@ -2,11 +2,16 @@
 // The mode bank file: see docs/bank-format.md. Little-endian, chunked, checksummed.
 //
 //   header (32 bytes): magic "STRKBANK", u32 format_version, u32 header_size (32),
-//                      u64 payload_size, u64 payload_checksum (FNV-1a 64 of the payload)
+//                      u64 payload_size, u64 payload_checksum (bankPayloadChecksum)
 //   payload: chunks, each: char[4] tag, u32 flags (0), u64 size, then `size` bytes.
 //
 // Unknown chunks are skipped, so a reader of the same major format can read files that carry
 // more. Every read is bounds-checked: a hostile file can make decoding fail, never overrun.
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -95,6 +100,17 @@ class ByteReader {
     if (count > 0) std::memcpy(values.data(), data_ + pos_, count * sizeof(T));
     pos_ += count * sizeof(T);
     return true;
+  }
+  /// A reader over the next `count` bytes (no copy: a 17 MB MODE chunk is read in place), which
+  /// this reader skips.
+  ByteReader take(uint64_t count) {
+    if (count > remaining()) {
+      failed_ = true;
+      return ByteReader(data_ + size_, 0);
+    }
+    ByteReader part(data_ + pos_, count);
+    pos_ += count;
+    return part;
   }
   std::string getString() {
     const uint32_t length = get<uint32_t>();
@@ -200,10 +216,30 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank) {
 
   std::vector<uint8_t>& bytes = w.data();
   const uint64_t payload_size = bytes.size() - kHeaderSize;
-  const uint64_t checksum = fnv1a64(bytes.data() + kHeaderSize, payload_size);
+  const uint64_t checksum = bankPayloadChecksum(kBankFormatVersion, bytes.data() + kHeaderSize, payload_size);
   std::memcpy(bytes.data() + 16, &payload_size, 8);
   std::memcpy(bytes.data() + 24, &checksum, 8);
   return std::move(bytes);
+}
+
+uint64_t bankPayloadChecksum(uint32_t format_version, const uint8_t* payload, size_t size) {
+  if (format_version < 2) return fnv1a64(payload, size);
+  // Format 2: FNV-1a 64 steps on little-endian 64-bit words, word k into lane k mod 4, so four
+  // independent multiply chains run at once (~16x the byte-wise speed, memory bound); then the
+  // four lanes (32 bytes) and the tail of fewer than 32 bytes through byte-wise FNV-1a. Each step
+  // is a bijection of the lane state, so any single changed word changes its lane.
+  constexpr uint64_t kBasis = 0xcbf29ce484222325ull, kPrime = 0x100000001b3ull;
+  uint64_t lanes[4] = {kBasis, kBasis, kBasis, kBasis};
+  const size_t blocks = size / 32;
+  for (size_t b = 0; b < blocks; ++b) {
+    for (int k = 0; k < 4; ++k) {
+      uint64_t word;
+      std::memcpy(&word, payload + 32 * b + 8 * k, 8);  // little-endian host (static_assert above)
+      lanes[k] = (lanes[k] ^ word) * kPrime;
+    }
+  }
+  const uint64_t hash = fnv1a64(lanes, sizeof lanes);
+  return fnv1a64(payload + 32 * blocks, size - 32 * blocks, hash);
 }
 
 Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string& source) {
@@ -227,7 +263,7 @@ Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string&
   if (payload_size != size - kHeaderSize)
     return corrupt(source, "header says " + std::to_string(payload_size) + " payload bytes, file has " +
                                std::to_string(size - kHeaderSize) + (payload_size > size - kHeaderSize ? " (truncated)" : ""));
-  if (fnv1a64(data + kHeaderSize, payload_size) != checksum)
+  if (bankPayloadChecksum(bank.format_version, data + kHeaderSize, payload_size) != checksum)
     return corrupt(source, "checksum mismatch (the file is damaged)");
 
   ByteReader payload(data + kHeaderSize, payload_size);
@@ -241,9 +277,7 @@ Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string&
     if (payload.failed() || chunk_size > payload.remaining())
       return corrupt(source, "chunk '" + std::string(tag_chars, 4) + "' runs past the end of the file");
     const std::string tag(tag_chars, 4);
-    std::vector<uint8_t> chunk_bytes;
-    payload.getArray(chunk_bytes, chunk_size);
-    ByteReader r(chunk_bytes.data(), chunk_bytes.size());
+    ByteReader r = payload.take(chunk_size);
     if (tag == "MATL") {
       bank.material.name = r.getString();
       bank.material.youngs_pa = r.get<double>();
@@ -317,6 +351,26 @@ Status writeBank(const std::string& path, const ModeBank& bank) {
 }
 
 Result<ModeBank> readBank(const std::string& path) {
+  // A regular file is mapped, not read into a buffer: a cached 17 MB bank is then decoded straight
+  // from the page cache, without faulting in and copying a second 17 MB (340 MB for the 20-plate
+  // render benchmark). Bank files are replaced by rename, never rewritten in place, so a mapping
+  // does not shrink under the decoder. Anything else (or a failed map) takes the buffered path,
+  // which also words the errors.
+  const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  struct stat info {};
+  if (fd >= 0 && fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0 &&
+      static_cast<uint64_t>(info.st_size) <= kMaxBankBytes) {
+    const size_t size = static_cast<size_t>(info.st_size);
+    void* mapped = mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+    close(fd);
+    if (mapped != MAP_FAILED) {
+      Result<ModeBank> bank = decodeBank(static_cast<const uint8_t*>(mapped), size, path);
+      munmap(mapped, size);
+      return bank;
+    }
+  } else if (fd >= 0) {
+    close(fd);
+  }
   Result<std::string> bytes = readWholeFile(path, kMaxBankBytes);
   if (!bytes) return bytes.error();
   return decodeBank(reinterpret_cast<const uint8_t*>(bytes->data()), bytes->size(), path);

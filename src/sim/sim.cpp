@@ -88,6 +88,10 @@ Status checkSettings(const SimSettings& settings) {
       return badInput(std::string("sim settings: ") + name + " = " + fmt(value) + " (must be finite and >= 0)");
     }
   }
+  if (!(settings.sleep_after_still_s >= 0.0 && settings.sleep_after_still_s <= 2.0)) {
+    return badInput("sim settings: sleep_after_still_s = " + fmt(settings.sleep_after_still_s) +
+                    " (must be in [0, 2] s)");
+  }
   if (settings.solver_iterations < 1 || settings.solver_iterations > 10000) {
     return badInput("sim settings: solver_iterations = " + std::to_string(settings.solver_iterations) +
                     " (must be in [1, 10000])");
@@ -259,6 +263,7 @@ class Simulation {
   void preTick();
   void postTick();
   double energy(std::vector<double>* kinetic) const;
+  void hastenSleep();
   static void preTickThunk(btDynamicsWorld* world, btScalar) {
     static_cast<Simulation*>(world->getWorldUserInfo())->preTick();
   }
@@ -524,6 +529,20 @@ Status Simulation::build(const std::vector<btQuaternion>& orientations) {
   return {};
 }
 
+void Simulation::hastenSleep() {
+  // Bullet sleeps a body still for longer than gDeactivationTime (2 s), a process global that a
+  // library must not change; each body's still-time is its own, so a body still for
+  // sleep_after_still_s has its clock moved past the global's limit instead. Bullet resets the
+  // clock whenever the body moves, and sleeps an island only when all its bodies are still.
+  for (auto& b : bodies_) {
+    btRigidBody& rigid = *b->rigid;
+    if (b->is_static || !rigid.isActive()) continue;
+    const btScalar still_s = rigid.getDeactivationTime();
+    if (still_s >= settings_.sleep_after_still_s && still_s <= gDeactivationTime)
+      rigid.setDeactivationTime(gDeactivationTime + settings_.substep_s);
+  }
+}
+
 double Simulation::energy(std::vector<double>* kinetic) const {
   const btVector3 gravity = toBt(settings_.gravity_m_s2);
   double total = 0.0;
@@ -707,6 +726,7 @@ Result<SimResult> Simulation::run() {
     // maxSubSteps = 0: exactly one internal step of dt, no accumulator and no interpolation, so
     // the step count is exact and the run is deterministic.
     world_->stepSimulation(dt, 0, dt);
+    if (settings_.allow_sleep) hastenSleep();
     if (events_.size() > settings_.max_events)
       return badInput("simulate: more than " + std::to_string(settings_.max_events) + " contact events by t = " +
                       std::to_string(double(step_ + 1) * dt) +

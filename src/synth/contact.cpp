@@ -232,6 +232,53 @@ void SurfaceLocator::projectImpulseInto(const double point[3], const double impu
   }
 }
 
+ContactProjector::ContactProjector(const ModeBank& bank, size_t max_points)
+    : locator_(bank), bank_(&bank), max_points_(std::max<size_t>(max_points, 1)) {}
+
+void ContactProjector::projectImpulseInto(const double point[3], const double impulse[3], double* out) {
+  const ModeBank& bank = *bank_;
+  const size_t nm = bank.modeCount();
+  if (bank.shapes.size() < nm * bank.surfaceVertexCount() * 3 || !locator_.hasTriangles()) {
+    locator_.projectImpulseInto(point, impulse, out);  // degenerate banks: the plain path handles them
+    return;
+  }
+  const size_t remembered = points_.size() / 3;
+  size_t slot = remembered;
+  for (size_t p = 0; p < remembered; ++p)
+    if (points_[3 * p] == point[0] && points_[3 * p + 1] == point[1] && points_[3 * p + 2] == point[2]) {
+      slot = p;
+      break;
+    }
+  if (slot == remembered) {
+    uint32_t v[3];
+    double w[3];
+    locator_.nearest(point, v, w);
+    if (remembered < max_points_) {
+      points_.resize(points_.size() + 3);
+      weights_.resize(weights_.size() + 3);
+      shapes_.resize(shapes_.size() + nm * 9);
+    } else {
+      slot = next_;
+      next_ = (next_ + 1) % max_points_;
+    }
+    float* row = shapes_.data() + slot * nm * 9;
+    for (size_t m = 0; m < nm; ++m)
+      for (int k = 0; k < 3; ++k) std::copy_n(bank.shapeAt(m, v[k]), 3, row + m * 9 + 3 * k);
+    for (int c = 0; c < 3; ++c) points_[3 * slot + c] = point[c], weights_[3 * slot + c] = w[c];
+  }
+  const double* w = &weights_[3 * slot];
+  const float* row = shapes_.data() + slot * nm * 9;
+  // The same sums in the same order as SurfaceLocator::projectImpulseInto.
+  for (size_t m = 0; m < nm; ++m) {
+    double s = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const float* phi = row + m * 9 + 3 * k;
+      s += w[k] * (phi[0] * impulse[0] + phi[1] * impulse[1] + phi[2] * impulse[2]);
+    }
+    out[m] = s;
+  }
+}
+
 std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]) {
   std::vector<double> g(bank.modeCount(), 0.0);
   projectImpulseAtVertexInto(bank, vertex, impulse, g.data());

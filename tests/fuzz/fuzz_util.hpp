@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "strike/bank.hpp"
+
 namespace strike::fuzz {
 
 inline std::string scratchPath(const char* name) {
@@ -34,8 +36,9 @@ inline std::vector<uint8_t> withValidChecksum(const uint8_t* data, size_t size) 
   std::vector<uint8_t> bytes(data, data + size);
   if (bytes.size() < 32) return bytes;
   const uint64_t payload_size = bytes.size() - 32;
-  uint64_t hash = 1469598103934665603ull;
-  for (size_t i = 32; i < bytes.size(); ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
+  uint32_t version = 0;
+  std::memcpy(&version, bytes.data() + 8, 4);
+  const uint64_t hash = strike::bankPayloadChecksum(version, bytes.data() + 32, payload_size);
   std::memcpy(bytes.data() + 16, &payload_size, 8);
   std::memcpy(bytes.data() + 24, &hash, 8);
   return bytes;

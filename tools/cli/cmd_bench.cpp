@@ -38,14 +38,15 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 
 CommandSpec benchSpec() {
   CommandSpec spec;
-  spec.usage = "strike bench accuracy -o DIR | strike bench leftout SCENE.json -o DIR";
+  spec.usage = "strike bench accuracy -o DIR | strike bench leftout SCENE.json -o DIR | strike bench render SCENE.json -o DIR";
   spec.summary =
       "Runs the accuracy study and writes DIR/accuracy-fem.csv (+ .svg plot), accuracy-synth.csv and\n"
       "accuracy-euler.csv: FEM frequency error against precompute time (Tet4, Tet10, 4 sizes, free-free\n"
       "bar vs Timoshenko, sphere vs Lamb), synthesis error against time (float vs double state, culling thresholds),\n"
       "and symplectic Euler against the exact update at the audio step. Takes ~35 s (2 cores).\n"
       "`leftout` renders SCENE three times (nothing left out; as normal from an empty cache; from the warm\n"
-      "cache), writes DIR/leftout.csv and prints the time ratios and the audio difference.";
+      "cache), writes DIR/leftout.csv and prints the time ratios and the audio difference.\n"
+      "`render` times a render phase by phase against a baseline run (see `strike bench render --help`).";
   spec.options = {{"-o", "DIR", "output directory (must exist)"},
                   {"--plate", "", "accuracy: also the free thick plate (Tet4/Tet10 at 4 sizes against a fine Tet10\n"
                                   "reference; ~45 s more, 1.9 GB peak)"}};
@@ -311,6 +312,7 @@ double exactUpdateError(double f_hz, double c, double rate) {
 }  // namespace
 
 int runBench(const std::vector<std::string>& raw_args) {
+  if (!raw_args.empty() && raw_args[0] == "render") return runBenchRender({raw_args.begin() + 1, raw_args.end()});
   const CommandSpec spec = benchSpec();
   if (wantsHelp(raw_args)) {
     std::fputs(helpText(spec).c_str(), stdout);
@@ -327,7 +329,7 @@ int runBench(const std::vector<std::string>& raw_args) {
     return ok ? 0 : reportError("bench", ok.error());
   }
   if (study != "accuracy" || parsed->positional.size() != 1)
-    return reportError("bench", badInput("unknown study '" + study + "' (known: accuracy, leftout SCENE.json)"));
+    return reportError("bench", badInput("unknown study '" + study + "' (known: accuracy, leftout SCENE.json, render SCENE.json)"));
   auto open = [&](const std::string& name, std::ofstream& file) -> Status {
     file.open(dir + "/" + name);
     if (!file) return badInput(dir + "/" + name + ": error: cannot create file");

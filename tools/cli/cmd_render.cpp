@@ -18,7 +18,7 @@ CommandSpec renderSpec() {
   spec.usage = "strike render SCENE.json -o OUT.wav [--rate HZ] [--duration S] [--events EVENTS.csv] [options]";
   spec.summary =
       "Renders a collision scene to sound in two phases. First the rigid bodies are simulated with Bullet\n"
-      "(0.5 ms steps, continuous collision detection) and every contact is recorded. Then mode banks are\n"
+      "(1 ms steps, continuous collision detection) and every contact is recorded. Then mode banks are\n"
       "loaded from the cache or computed, only for objects struck hard enough to be heard; each contact\n"
       "impulse is projected onto the struck body's modes (impacts as Hertz pulses, resting contact as a\n"
       "force over the step, so it is silent when steady) and the oscillator bank renders the listener's\n"

@@ -118,6 +118,20 @@ TEST(BankFile, RefusesForeignAndNewerFiles) {
   EXPECT_NE(read.error().message.find("version " + std::to_string(version)), std::string::npos) << read.error().message;
 }
 
+// Format 1 (byte-wise FNV-1a checksum) is still read: the same payload under a version-1 header.
+TEST(BankFile, ReadsFormatOneFiles) {
+  std::vector<uint8_t> bytes = encodeBank(makeTestBank());
+  const uint32_t version = 1;
+  const uint64_t checksum = fnv1a64(bytes.data() + 32, bytes.size() - 32);
+  EXPECT_NE(checksum, bankPayloadChecksum(2, bytes.data() + 32, bytes.size() - 32));
+  std::memcpy(bytes.data() + 8, &version, 4);
+  std::memcpy(bytes.data() + 24, &checksum, 8);
+  Result<ModeBank> read = decodeBank(bytes.data(), bytes.size(), "v1.modes");
+  ASSERT_TRUE(read) << read.error().message;
+  EXPECT_EQ(read->format_version, 1u);
+  EXPECT_EQ(read->eigenvalues, makeTestBank().eigenvalues);
+}
+
 TEST(BankFile, ChecksumCatchesEveryFlippedPayloadByte) {
   const std::vector<uint8_t> bytes = encodeBank(makeTestBank());
   for (size_t i = 32; i < bytes.size(); ++i) {
@@ -144,7 +158,7 @@ TEST(BankFile, MutatedPayloadsWithValidChecksumNeverCrash) {
     }
     if (random() % 8 == 0) mutated.resize(32 + random() % (mutated.size() - 32));
     const uint64_t payload_size = mutated.size() - 32;
-    const uint64_t checksum = fnv1a64(mutated.data() + 32, payload_size);
+    const uint64_t checksum = bankPayloadChecksum(kBankFormatVersion, mutated.data() + 32, payload_size);
     std::memcpy(mutated.data() + 16, &payload_size, 8);
     std::memcpy(mutated.data() + 24, &checksum, 8);
     Result<ModeBank> read = decodeBank(mutated.data(), mutated.size(), "m.modes");

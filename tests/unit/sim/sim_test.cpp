@@ -232,7 +232,9 @@ TEST(SimResting, ConstantForceAndNoNewContacts) {
   const double m = 1.0, dt = 1e-3;
   SimBodyDesc box = makeBox("block", {0.1, 0.1, 0.05}, m);
   box.position_m = {0, 0, 0.025};
-  const SimResult r = run({box}, settingsFor(1.0), "resting box");
+  SimSettings settings = settingsFor(1.0);
+  settings.sleep_after_still_s = 2.0;  // awake for the whole second: the resting force every step
+  const SimResult r = run({box}, settings, "resting box");
   const double t_settled = 0.2;
   std::map<long, double> per_step;
   for (const ContactEvent& e : r.events) {
@@ -255,6 +257,9 @@ TEST(SimResting, SleepingBodyIsQuiet) {
   const SimResult r = run({box}, settingsFor(4.0), "settling box, 4 s");
   ASSERT_FALSE(r.events.empty());
   EXPECT_LT(r.events.back().time_s, 3.5) << "a resting body should fall asleep and stop reporting";
+  // Still from ~0.1 s on, asleep sleep_after_still_s (0.5 s) later, not after Bullet's 2 s.
+  EXPECT_LT(r.events.back().time_s, 1.0);
+  EXPECT_GT(r.events.back().time_s, SimSettings{}.sleep_after_still_s);
 }
 
 TEST(SimMeshFrame, PointsLieOnTheBoxSurfaceInMeshCoordinates) {

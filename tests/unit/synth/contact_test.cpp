@@ -2,6 +2,8 @@
 // Hertz contact duration and modal projection of an impulse.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -75,6 +77,30 @@ TEST(ModalProjection, ExactAtVerticesAndLinearInsideTriangles) {
   EXPECT_NEAR(g[0], s * j[0] + 2 * s * j[1] - s * j[2], 1e-7);
   // Bad vertex index: zeros, no crash.
   EXPECT_EQ(projectImpulseAtVertex(mb, 99, j), std::vector<double>(3, 0.0));
+}
+
+// The projector remembers points: repeated points (a resting body's corners), new points, and
+// more points than it remembers (round-robin eviction) must all give the locator's values, to the
+// bit, and the linear shapes' closed form.
+TEST(ModalProjection, ContactProjectorMatchesTheLocatorWhileRemembering) {
+  const ModeBank mb = linearShapeBank();
+  const SurfaceLocator locator(mb);
+  ContactProjector projector(mb, 2);
+  const double j[3] = {0.1, -0.2, 0.3};
+  const std::array<double, 3> points[] = {{0.2, 0.3, 0.0}, {0.7, 0.8, 0.05}, {0.2, 0.3, 0.0}, {0.5, 0.1, -0.3},
+                                          {0.7, 0.8, 0.05}, {0.2, 0.3, 0.0}, {0.2, 0.3, 0.0}, {2.0, 0.5, 0.0}};
+  for (int pass = 0; pass < 2; ++pass)
+    for (const auto& p : points) {
+      double from_projector[3], from_locator[3];
+      projector.projectImpulseInto(p.data(), j, from_projector);
+      locator.projectImpulseInto(p.data(), j, from_locator);
+      const double x = std::min(p[0], 1.0);  // (2, 0.5) clamps to the edge point (1, 0.5)
+      for (size_t m = 0; m < 3; ++m) {
+        EXPECT_EQ(from_projector[m], from_locator[m]) << "point " << p[0] << "," << p[1] << " mode " << m;
+        const double s = (m + 1) * (0.25 + 0.5 * x - 0.75 * p[1]);
+        EXPECT_NEAR(from_projector[m], s * j[0] + 2 * s * j[1] - s * j[2], 1e-7);
+      }
+    }
 }
 
 }  // namespace

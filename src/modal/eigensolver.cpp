@@ -86,13 +86,23 @@ double secondsSince(Clock::time_point t0) {
 
 using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
+/// work(begin, end, part) over [0, count): see TwoParts::run; one part without `parts`.
+template <class Index, class Work>
+void inParts(TwoParts* parts, Index count, Index split, const Work& work) {
+  if (parts != nullptr) {
+    parts->run(count, split, TwoParts::Alone::WholeRange, work);
+  } else {
+    work(Index{0}, count, 0);
+  }
+}
+
 /// Y = A X for a SYMMETRIC sparse A (K or M) and a block X of a few to a few hundred columns.
 /// Column j of A is row j, so each row of Y gathers rows of X: with X and Y row-major the
 /// inner loop runs over the block's columns, contiguous, and A is read once instead of once
 /// per column (Eigen's sparse * dense product; measured 2x faster at 16 and 100 columns).
-/// Rows of Y are independent: with `parallel` two threads fill one half each.
+/// Rows of Y are independent: with `parts`, two threads fill one half each.
 void symmetricTimesBlock(const SpMat& A, const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd& Y,
-                         bool parallel = false) {
+                         TwoParts* parts = nullptr) {
   const RowMajorMatrix Xr = X;
   RowMajorMatrix Yr(X.rows(), X.cols());
   const int* outer = A.outerIndexPtr();
@@ -101,7 +111,7 @@ void symmetricTimesBlock(const SpMat& A, const Eigen::Ref<const Eigen::MatrixXd>
   const int* nnz = A.innerNonZeroPtr();  // null when compressed
   const Eigen::Index b = X.cols();
   const Eigen::Index rows = A.outerSize();
-  inTwoParts(rows, rows / 2, parallel, [&](Eigen::Index begin, Eigen::Index end_row, int) {
+  inParts(parts, rows, rows / 2, [&](Eigen::Index begin, Eigen::Index end_row, int) {
     for (Eigen::Index j = begin; j < end_row; ++j) {
       double* y = Yr.data() + j * b;
       std::fill(y, y + b, 0.0);
@@ -199,20 +209,19 @@ class CholmodSolver {
   double factorNonZeros() const { return common_.lnz; }
 
   /// x = A^{-1} b for ncols right-hand sides stored column-major with leading dimension n.
-  /// With `parallel`, a helper thread solves the second half of the columns with its own
+  /// With `parts`, a helper thread solves the second half of the columns with its own
   /// CHOLMOD workspace (cholmod_solve2 only reads the factor). Two threads of 8 right-hand
   /// sides each take ~70% of the time of one thread of 16 (per-thread cost 3.7 vs 2.6 ms per
   /// right-hand side at 29k DOF, tests/bench/modal).
-  bool solve(const double* b, double* x, int ncols, bool parallel = false) {
-    parallel = parallel && ncols >= 2;
-    if (parallel && !helper_started_) {
+  bool solve(const double* b, double* x, int ncols, TwoParts* parts = nullptr) {
+    if (parts != nullptr && !helper_started_) {
       cholmod_start(&helper_common_);
       helper_common_.print = 0;
       helper_started_ = true;
     }
     const size_t n = factor_->n;
     bool ok[2] = {true, true};
-    inTwoParts(ncols, ncols / 2, parallel, [&](int first, int end, int part) {
+    inParts(parts, ncols, ncols / 2, [&](int first, int end, int part) {
       ok[part] = solveColumns(b + n * static_cast<size_t>(first), x + n * static_cast<size_t>(first), end - first,
                               part == 0 ? common_ : helper_common_, part == 0 ? x_ : helper_x_,
                               part == 0 ? y_ : helper_y_, part == 0 ? e_ : helper_e_);
@@ -276,7 +285,7 @@ struct Context {
   CholmodSolver& solver;
   double sigma;
   const ModalSettings& settings;
-  bool parallel = false;  // block stage: solves and products in two parts on two threads
+  TwoParts* parts = nullptr;  // block stage: solves and products in two parts on two threads
   int applications = 0;
   double solve_seconds = 0.0;
   double orthogonalize_seconds = 0.0;
@@ -474,18 +483,24 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   MQ.leftCols(b) = MW;
 
   // One classical Gram-Schmidt pass against basis columns [first, first + width):
-  // h = (M Q)^T W, W -= Q h, both products split by rows over two threads with ctx.parallel
+  // h = (M Q)^T W, W -= Q h, both products split by rows over two threads with ctx.parts
   // (each thread streams half of Q and M Q; h is the sum of the two parts' products).
   Eigen::MatrixXd h_parts[2];
   auto gramSchmidt = [&](Eigen::Index first, Eigen::Index width, Eigen::MatrixXd& h_out) {
     for (Eigen::MatrixXd& part : h_parts) part.resize(width, b);
-    const Eigen::Index split = ctx.parallel ? n / 2 : n;
-    inTwoParts(n, split, ctx.parallel, [&](Eigen::Index r0, Eigen::Index r1, int part) {
+    const Eigen::Index split = ctx.parts != nullptr ? n / 2 : n;
+    auto partial = [&](Eigen::Index r0, Eigen::Index r1, int part) {
       h_parts[part].noalias() = MQ.block(r0, first, r1 - r0, width).transpose() * W.middleRows(r0, r1 - r0);
-    });
+    };
+    if (ctx.parts != nullptr) {
+      // A sum over rows: always the same two parts, whoever computes them.
+      ctx.parts->run(n, split, TwoParts::Alone::BothParts, partial);
+    } else {
+      partial(0, n, 0);
+    }
     h_out = h_parts[0];
     if (split < n) h_out += h_parts[1];
-    inTwoParts(n, split, ctx.parallel, [&](Eigen::Index r0, Eigen::Index r1, int) {
+    inParts(ctx.parts, n, split, [&](Eigen::Index r0, Eigen::Index r1, int) {
       W.middleRows(r0, r1 - r0).noalias() -= Q.block(r0, first, r1 - r0, width) * h_out;
     });
   };
@@ -500,7 +515,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   for (Eigen::Index j = 0; j < max_steps; ++j) {
     const Eigen::Index k = (j + 1) * b;  // basis size after this step's block
     auto t0 = Clock::now();
-    if (!ctx.solver.solve(MQ.middleCols(j * b, b).data(), W.data(), static_cast<int>(b), ctx.parallel)) {
+    if (!ctx.solver.solve(MQ.middleCols(j * b, b).data(), W.data(), static_cast<int>(b), ctx.parts)) {
       return internalError("eigensolver: CHOLMOD block solve failed");
     }
     ctx.solve_seconds += secondsSince(t0);
@@ -524,7 +539,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
     for (int pass = 0; pass < 3; ++pass) {
       gramSchmidt(0, k, h);
       H += h;
-      symmetricTimesBlock(ctx.M, W, MW, ctx.parallel);
+      symmetricTimesBlock(ctx.M, W, MW, ctx.parts);
       const Eigen::ArrayXd after = W.cwiseProduct(MW).colwise().sum().transpose().array();
       const Eigen::ArrayXd removed = h.colwise().squaredNorm().transpose().array();
       // ||w_after||_M < 0.717 ||w_before||_M: the pass cancelled, rounding may remain.
@@ -582,7 +597,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   const Eigen::Index total = locked + num_converged;
   found.vectors.conservativeResize(n, total);
   found.m_vectors.conservativeResize(n, total);
-  inTwoParts(n, n / 2, ctx.parallel, [&](Eigen::Index r0, Eigen::Index r1, int) {
+  inParts(ctx.parts, n, n / 2, [&](Eigen::Index r0, Eigen::Index r1, int) {
     found.vectors.block(r0, locked, r1 - r0, num_converged).noalias() = Q.block(r0, 0, r1 - r0, kb) * S.topRows(kb);
   });
   Q.resize(0, 0);  // the basis is not needed any more: release it before the temporaries below
@@ -590,7 +605,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   // M (Q S) by the sparse product, not (M Q) S: a third of the cost at 86k DOF (an n x kb x
   // num_converged GEMM against a 9-nonzeros-per-row M), and the refinement reuses it.
   Eigen::MatrixXd m_fresh;
-  symmetricTimesBlock(ctx.M, found.vectors.rightCols(num_converged), m_fresh, ctx.parallel);
+  symmetricTimesBlock(ctx.M, found.vectors.rightCols(num_converged), m_fresh, ctx.parts);
   found.m_vectors.rightCols(num_converged) = m_fresh;
   for (double l : converged) found.lambdas.push_back(l);
   return static_cast<int>(num_converged);
@@ -669,6 +684,11 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   // All modes from one block Lanczos run: M-orthonormal and ascending by construction.
   bool single_block_round = false;
   std::unique_ptr<CholmodSolver> solver;
+  // A helper thread for the block stage and the refinement when OpenBLAS runs single-threaded
+  // there (the default; see two_parts.hpp) and the machine has two cores or more.
+  const bool block_stage = n > 600 && settings.method != ModalMethod::ArpackOnly && settings.max_modes + 7 > kArpackModes;
+  TwoParts parts(block_stage && settings.blas_threads == 1 && std::thread::hardware_concurrency() >= 2);
+  TwoParts* const parts_or_null = parts.active() ? &parts : nullptr;
   if (n <= 600) {
     // Tiny problems (a few cells): LAPACK on dense matrices is exact and faster than setting
     // up Lanczos, and ARPACK needs ncv < n anyway.
@@ -688,9 +708,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     const auto t_lanczos = Clock::now();
     const BlasThreadsScope blas_threads(settings.blas_threads);
     Context ctx{K, M_pruned, *solver, out.sigma, settings};
-    // Two threads of our own in the block stage when OpenBLAS runs single-threaded in it
-    // (the default; see two_parts.hpp) and the machine has two cores or more.
-    ctx.parallel = settings.blas_threads == 1 && std::thread::hardware_concurrency() >= 2;
+    ctx.parts = parts_or_null;
     Found found;
     // A small request (at most kArpackModes pairs): ARPACK alone, to full accuracy. A larger
     // one: block Lanczos from scratch (rigid modes included), then, only if it fell short,
@@ -790,13 +808,12 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   all_vectors = Eigen::MatrixXd();
   if (p > 0) {
     Eigen::MatrixXd KX, MX;
-    const bool parallel = settings.blas_threads == 1 && std::thread::hardware_concurrency() >= 2;
-    symmetricTimesBlock(K, X, KX, parallel);
+    symmetricTimesBlock(K, X, KX, parts_or_null);
     if (all_m_vectors.cols() == all_lambdas.size()) {
       MX.resize(n, p);
       for (Eigen::Index k = 0; k < p; ++k) MX.col(k) = all_m_vectors.col(kept[static_cast<size_t>(k)]);
     } else {
-      symmetricTimesBlock(M_pruned, X, MX, parallel);
+      symmetricTimesBlock(M_pruned, X, MX, parts_or_null);
     }
     all_m_vectors = Eigen::MatrixXd();
     if (single_block_round) {

@@ -19,7 +19,8 @@
 //     short (ModalMethod::ArpackOnly instead grows ARPACK requests, single-vector). OpenBLAS
 //     runs single-threaded in this stage by default (ModalSettings::blas_threads), and the
 //     block solves, Gram-Schmidt products and M products are then split in two halves over
-//     two threads of our own (two_parts.hpp; measured 1.6x on this stage at 29k DOF);
+//     two threads of our own (two_parts.hpp; 1.6x on this stage at 29k DOF with both cores
+//     free, tests/bench/modal);
 //  5. Rayleigh-Ritz on the kept vectors: exact M-orthonormality and ascending order (modes
 //     from a single block Lanczos run already are: Rayleigh quotients only); the residuals
 //     ||K x - lambda M x|| are measured and reported.
@@ -602,8 +603,9 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   });
   Q.resize(0, 0);  // the basis is not needed any more: release it before the temporaries below
   MQ.resize(0, 0);
-  // M (Q S) by the sparse product, not (M Q) S: a third of the cost at 86k DOF (an n x kb x
-  // num_converged GEMM against a 9-nonzeros-per-row M), and the refinement reuses it.
+  // M (Q S) by the sparse product, not (M Q) S: 2 nnz(M) p flops instead of 2 n kb p (M has
+  // at most a few tens of nonzeros per row, against kb ~ 450 basis vectors), and the
+  // refinement reuses it.
   Eigen::MatrixXd m_fresh;
   symmetricTimesBlock(ctx.M, found.vectors.rightCols(num_converged), m_fresh, ctx.parts);
   found.m_vectors.rightCols(num_converged) = m_fresh;

@@ -17,7 +17,10 @@
 //     pass against the basis, and top-Ritz-pair checks by LAPACK dsyevr, until the cut-off or
 //     the cap is passed; a second round, deflated against what was found, if the first falls
 //     short (ModalMethod::ArpackOnly instead grows ARPACK requests, single-vector). OpenBLAS
-//     runs single-threaded in this stage by default (ModalSettings::blas_threads);
+//     runs single-threaded in this stage by default (ModalSettings::blas_threads), and the
+//     block solves, Gram-Schmidt products and M products are then split in two halves over
+//     two threads of our own (two_parts.hpp; 1.6x on this stage at 29k DOF with both cores
+//     free, tests/bench/modal);
 //  5. Rayleigh-Ritz on the kept vectors: exact M-orthonormality and ascending order (modes
 //     from a single block Lanczos run already are: Rayleigh quotients only); the residuals
 //     ||K x - lambda M x|| are measured and reported.
@@ -38,9 +41,11 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "strike/modal.hpp"
+#include "two_parts.hpp"
 
 extern "C" void dsyevr_(const char* jobz, const char* range, const char* uplo, const int* n, double* a, const int* lda,
                         const double* vl, const double* vu, const int* il, const int* iu, const double* abstol, int* m,
@@ -82,11 +87,23 @@ double secondsSince(Clock::time_point t0) {
 
 using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
+/// work(begin, end, part) over [0, count): see TwoParts::run; one part without `parts`.
+template <class Index, class Work>
+void inParts(TwoParts* parts, Index count, Index split, const Work& work) {
+  if (parts != nullptr) {
+    parts->run(count, split, TwoParts::Alone::WholeRange, work);
+  } else {
+    work(Index{0}, count, 0);
+  }
+}
+
 /// Y = A X for a SYMMETRIC sparse A (K or M) and a block X of a few to a few hundred columns.
 /// Column j of A is row j, so each row of Y gathers rows of X: with X and Y row-major the
 /// inner loop runs over the block's columns, contiguous, and A is read once instead of once
 /// per column (Eigen's sparse * dense product; measured 2x faster at 16 and 100 columns).
-void symmetricTimesBlock(const SpMat& A, const Eigen::MatrixXd& X, Eigen::MatrixXd& Y) {
+/// Rows of Y are independent: with `parts`, two threads fill one half each.
+void symmetricTimesBlock(const SpMat& A, const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd& Y,
+                         TwoParts* parts = nullptr) {
   const RowMajorMatrix Xr = X;
   RowMajorMatrix Yr(X.rows(), X.cols());
   const int* outer = A.outerIndexPtr();
@@ -94,16 +111,19 @@ void symmetricTimesBlock(const SpMat& A, const Eigen::MatrixXd& X, Eigen::Matrix
   const double* values = A.valuePtr();
   const int* nnz = A.innerNonZeroPtr();  // null when compressed
   const Eigen::Index b = X.cols();
-  for (Eigen::Index j = 0; j < A.outerSize(); ++j) {
-    double* y = Yr.data() + j * b;
-    std::fill(y, y + b, 0.0);
-    const int end = nnz != nullptr ? outer[j] + nnz[j] : outer[j + 1];
-    for (int q = outer[j]; q < end; ++q) {
-      const double a = values[q];
-      const double* x = Xr.data() + static_cast<Eigen::Index>(inner[q]) * b;
-      for (Eigen::Index c = 0; c < b; ++c) y[c] += a * x[c];
+  const Eigen::Index rows = A.outerSize();
+  inParts(parts, rows, rows / 2, [&](Eigen::Index begin, Eigen::Index end_row, int) {
+    for (Eigen::Index j = begin; j < end_row; ++j) {
+      double* y = Yr.data() + j * b;
+      std::fill(y, y + b, 0.0);
+      const int end = nnz != nullptr ? outer[j] + nnz[j] : outer[j + 1];
+      for (int q = outer[j]; q < end; ++q) {
+        const double a = values[q];
+        const double* x = Xr.data() + static_cast<Eigen::Index>(inner[q]) * b;
+        for (Eigen::Index c = 0; c < b; ++c) y[c] += a * x[c];
+      }
     }
-  }
+  });
   Y = Yr;
 }
 
@@ -141,6 +161,12 @@ class CholmodSolver {
     if (y_ != nullptr) cholmod_free_dense(&y_, &common_);
     if (e_ != nullptr) cholmod_free_dense(&e_, &common_);
     cholmod_finish(&common_);
+    if (helper_started_) {
+      if (helper_x_ != nullptr) cholmod_free_dense(&helper_x_, &helper_common_);
+      if (helper_y_ != nullptr) cholmod_free_dense(&helper_y_, &helper_common_);
+      if (helper_e_ != nullptr) cholmod_free_dense(&helper_e_, &helper_common_);
+      cholmod_finish(&helper_common_);
+    }
   }
   CholmodSolver(const CholmodSolver&) = delete;
   CholmodSolver& operator=(const CholmodSolver&) = delete;
@@ -184,7 +210,29 @@ class CholmodSolver {
   double factorNonZeros() const { return common_.lnz; }
 
   /// x = A^{-1} b for ncols right-hand sides stored column-major with leading dimension n.
-  bool solve(const double* b, double* x, int ncols) {
+  /// With `parts`, a helper thread solves the second half of the columns with its own
+  /// CHOLMOD workspace (cholmod_solve2 only reads the factor). Two threads of 8 right-hand
+  /// sides each take ~70% of the time of one thread of 16 (per-thread cost 3.7 vs 2.6 ms per
+  /// right-hand side at 29k DOF, tests/bench/modal).
+  bool solve(const double* b, double* x, int ncols, TwoParts* parts = nullptr) {
+    if (parts != nullptr && !helper_started_) {
+      cholmod_start(&helper_common_);
+      helper_common_.print = 0;
+      helper_started_ = true;
+    }
+    const size_t n = factor_->n;
+    bool ok[2] = {true, true};
+    inParts(parts, ncols, ncols / 2, [&](int first, int end, int part) {
+      ok[part] = solveColumns(b + n * static_cast<size_t>(first), x + n * static_cast<size_t>(first), end - first,
+                              part == 0 ? common_ : helper_common_, part == 0 ? x_ : helper_x_,
+                              part == 0 ? y_ : helper_y_, part == 0 ? e_ : helper_e_);
+    });
+    return ok[0] && ok[1];
+  }
+
+ private:
+  bool solveColumns(const double* b, double* x, int ncols, cholmod_common& common, cholmod_dense*& x_work,
+                    cholmod_dense*& y_work, cholmod_dense*& e_work) {
     cholmod_dense rhs{};
     rhs.nrow = factor_->n;
     rhs.ncol = static_cast<size_t>(ncols);
@@ -193,17 +241,22 @@ class CholmodSolver {
     rhs.x = const_cast<double*>(b);
     rhs.xtype = CHOLMOD_REAL;
     rhs.dtype = CHOLMOD_DOUBLE;
-    if (!cholmod_solve2(CHOLMOD_A, factor_, &rhs, nullptr, &x_, nullptr, &y_, &e_, &common_)) return false;
-    std::memcpy(x, x_->x, sizeof(double) * rhs.nzmax);
+    if (!cholmod_solve2(CHOLMOD_A, factor_, &rhs, nullptr, &x_work, nullptr, &y_work, &e_work, &common)) return false;
+    std::memcpy(x, x_work->x, sizeof(double) * rhs.nzmax);
     return true;
   }
 
- private:
   cholmod_common common_{};
   cholmod_factor* factor_ = nullptr;
   cholmod_dense* x_ = nullptr;
   cholmod_dense* y_ = nullptr;
   cholmod_dense* e_ = nullptr;
+  // Workspace of the helper thread of a parallel solve (started on first use).
+  bool helper_started_ = false;
+  cholmod_common helper_common_{};
+  cholmod_dense* helper_x_ = nullptr;
+  cholmod_dense* helper_y_ = nullptr;
+  cholmod_dense* helper_e_ = nullptr;
 };
 
 /// Eigenpairs found so far (M-orthonormal columns), used to deflate later Lanczos chunks.
@@ -233,6 +286,7 @@ struct Context {
   CholmodSolver& solver;
   double sigma;
   const ModalSettings& settings;
+  TwoParts* parts = nullptr;  // block stage: solves and products in two parts on two threads
   int applications = 0;
   double solve_seconds = 0.0;
   double orthogonalize_seconds = 0.0;
@@ -429,6 +483,29 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   Q.leftCols(b) = W;
   MQ.leftCols(b) = MW;
 
+  // One classical Gram-Schmidt pass against basis columns [first, first + width):
+  // h = (M Q)^T W, W -= Q h, both products split by rows over two threads with ctx.parts
+  // (each thread streams half of Q and M Q; h is the sum of the two parts' products).
+  Eigen::MatrixXd h_parts[2];
+  auto gramSchmidt = [&](Eigen::Index first, Eigen::Index width, Eigen::MatrixXd& h_out) {
+    for (Eigen::MatrixXd& part : h_parts) part.resize(width, b);
+    const Eigen::Index split = ctx.parts != nullptr ? n / 2 : n;
+    auto partial = [&](Eigen::Index r0, Eigen::Index r1, int part) {
+      h_parts[part].noalias() = MQ.block(r0, first, r1 - r0, width).transpose() * W.middleRows(r0, r1 - r0);
+    };
+    if (ctx.parts != nullptr) {
+      // A sum over rows: always the same two parts, whoever computes them.
+      ctx.parts->run(n, split, TwoParts::Alone::BothParts, partial);
+    } else {
+      partial(0, n, 0);
+    }
+    h_out = h_parts[0];
+    if (split < n) h_out += h_parts[1];
+    inParts(ctx.parts, n, split, [&](Eigen::Index r0, Eigen::Index r1, int) {
+      W.middleRows(r0, r1 - r0).noalias() -= Q.block(r0, first, r1 - r0, width) * h_out;
+    });
+  };
+
   Eigen::Index steps = 0;
   std::vector<double> converged;
   Eigen::MatrixXd S;
@@ -439,7 +516,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   for (Eigen::Index j = 0; j < max_steps; ++j) {
     const Eigen::Index k = (j + 1) * b;  // basis size after this step's block
     auto t0 = Clock::now();
-    if (!ctx.solver.solve(MQ.middleCols(j * b, b).data(), W.data(), static_cast<int>(b))) {
+    if (!ctx.solver.solve(MQ.middleCols(j * b, b).data(), W.data(), static_cast<int>(b), ctx.parts)) {
       return internalError("eigensolver: CHOLMOD block solve failed");
     }
     ctx.solve_seconds += secondsSince(t0);
@@ -452,8 +529,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
     {
       const Eigen::Index first = j > 0 ? (j - 1) * b : 0;
       const Eigen::Index width = j > 0 ? 2 * b : b;
-      h.noalias() = MQ.middleCols(first, width).transpose() * W;
-      W.noalias() -= Q.middleCols(first, width) * h;
+      gramSchmidt(first, width, h);
       H.middleRows(first, width) = h;
     }
     // Full reorthogonalization: one classical Gram-Schmidt pass (two BLAS-3 products), a
@@ -462,10 +538,9 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
     // product costs less than updating it with M Q), and the norm before a pass follows from
     // Pythagoras: Q is M-orthonormal.
     for (int pass = 0; pass < 3; ++pass) {
-      h.noalias() = MQ.leftCols(k).transpose() * W;
-      W.noalias() -= Q.leftCols(k) * h;
+      gramSchmidt(0, k, h);
       H += h;
-      symmetricTimesBlock(ctx.M, W, MW);
+      symmetricTimesBlock(ctx.M, W, MW, ctx.parts);
       const Eigen::ArrayXd after = W.cwiseProduct(MW).colwise().sum().transpose().array();
       const Eigen::ArrayXd removed = h.colwise().squaredNorm().transpose().array();
       // ||w_after||_M < 0.717 ||w_before||_M: the pass cancelled, rounding may remain.
@@ -523,8 +598,17 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   const Eigen::Index total = locked + num_converged;
   found.vectors.conservativeResize(n, total);
   found.m_vectors.conservativeResize(n, total);
-  found.vectors.rightCols(num_converged).noalias() = Q.leftCols(kb) * S.topRows(kb);
-  found.m_vectors.rightCols(num_converged).noalias() = MQ.leftCols(kb) * S.topRows(kb);
+  inParts(ctx.parts, n, n / 2, [&](Eigen::Index r0, Eigen::Index r1, int) {
+    found.vectors.block(r0, locked, r1 - r0, num_converged).noalias() = Q.block(r0, 0, r1 - r0, kb) * S.topRows(kb);
+  });
+  Q.resize(0, 0);  // the basis is not needed any more: release it before the temporaries below
+  MQ.resize(0, 0);
+  // M (Q S) by the sparse product, not (M Q) S: 2 nnz(M) p flops instead of 2 n kb p (M has
+  // at most a few tens of nonzeros per row, against kb ~ 450 basis vectors), and the
+  // refinement reuses it.
+  Eigen::MatrixXd m_fresh;
+  symmetricTimesBlock(ctx.M, found.vectors.rightCols(num_converged), m_fresh, ctx.parts);
+  found.m_vectors.rightCols(num_converged) = m_fresh;
   for (double l : converged) found.lambdas.push_back(l);
   return static_cast<int>(num_converged);
 }
@@ -598,10 +682,15 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   SpMat M_pruned = M;
   M_pruned.prune(0.0, 0.0);
   Eigen::VectorXd all_lambdas;
-  Eigen::MatrixXd all_vectors;
+  Eigen::MatrixXd all_vectors, all_m_vectors;  // all_m_vectors = M all_vectors, if known
   // All modes from one block Lanczos run: M-orthonormal and ascending by construction.
   bool single_block_round = false;
   std::unique_ptr<CholmodSolver> solver;
+  // A helper thread for the block stage and the refinement when OpenBLAS runs single-threaded
+  // there (the default; see two_parts.hpp) and the machine has two cores or more.
+  const bool block_stage = n > 600 && settings.method != ModalMethod::ArpackOnly && settings.max_modes + 7 > kArpackModes;
+  TwoParts parts(block_stage && settings.blas_threads == 1 && std::thread::hardware_concurrency() >= 2);
+  TwoParts* const parts_or_null = parts.active() ? &parts : nullptr;
   if (n <= 600) {
     // Tiny problems (a few cells): LAPACK on dense matrices is exact and faster than setting
     // up Lanczos, and ARPACK needs ncv < n anyway.
@@ -621,6 +710,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     const auto t_lanczos = Clock::now();
     const BlasThreadsScope blas_threads(settings.blas_threads);
     Context ctx{K, M_pruned, *solver, out.sigma, settings};
+    ctx.parts = parts_or_null;
     Found found;
     // A small request (at most kArpackModes pairs): ARPACK alone, to full accuracy. A larger
     // one: block Lanczos from scratch (rigid modes included), then, only if it fell short,
@@ -692,6 +782,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     out.reorthogonalizations = ctx.reorthogonalizations;
     all_lambdas = Eigen::Map<Eigen::VectorXd>(found.lambdas.data(), static_cast<Eigen::Index>(found.lambdas.size()));
     all_vectors = std::move(found.vectors);
+    all_m_vectors = std::move(found.m_vectors);
   }
 
   // Classify: rigid, kept elastic (ascending, capped), above the cut-off.
@@ -719,8 +810,14 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   all_vectors = Eigen::MatrixXd();
   if (p > 0) {
     Eigen::MatrixXd KX, MX;
-    symmetricTimesBlock(K, X, KX);
-    symmetricTimesBlock(M_pruned, X, MX);
+    symmetricTimesBlock(K, X, KX, parts_or_null);
+    if (all_m_vectors.cols() == all_lambdas.size()) {
+      MX.resize(n, p);
+      for (Eigen::Index k = 0; k < p; ++k) MX.col(k) = all_m_vectors.col(kept[static_cast<size_t>(k)]);
+    } else {
+      symmetricTimesBlock(M_pruned, X, MX, parts_or_null);
+    }
+    all_m_vectors = Eigen::MatrixXd();
     if (single_block_round) {
       // The Ritz vectors Q S of one block Lanczos run are M-orthonormal to round-off and
       // ordered: the eigenvalues are their Rayleigh quotients (as accurate as a Rayleigh-Ritz

@@ -33,7 +33,10 @@ struct ModalSettings {
   /// OpenBLAS threads during the Lanczos stage, restored afterwards (the setting is process
   /// wide: do not run other BLAS work concurrently); 0 leaves OpenBLAS alone. One thread is
   /// the default: the stage's dense products are thin, and on a shared 2-core machine idle
-  /// OpenBLAS threads spin (sched_yield) instead of working (tests/bench/modal).
+  /// OpenBLAS threads spin (sched_yield) instead of working (tests/bench/modal). With 1, on
+  /// a machine of two cores or more, the block stage splits its solves and dense products
+  /// with one helper thread of its own, which sleeps between parts and is used only when it
+  /// starts promptly (the numbers do not depend on it).
   int blas_threads = 1;
 };
 

@@ -127,7 +127,11 @@ int runRender(const std::vector<std::string>& raw_args) {
   if (!written) return reportError("render", written.error());
   if (args.has("--events")) {
     Status events = writeEventsCsv(args.text("--events"), *result);
-    if (!events) return reportError("render", events.error());
+    if (!events) {
+      // A failed command leaves no output (issue 7): the WAV is whole, but the run is not.
+      std::remove(output.c_str());
+      return reportError("render", events.error());
+    }
   }
   if (!quiet) printSummary(*result, output, result->audio.sample_rate_hz, result->audio.frames() / result->audio.sample_rate_hz);
   return 0;

@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: MIT
 // The mode bank file: see docs/bank-format.md. Little-endian, chunked, checksummed.
 //
-//   header (32 bytes): magic "STRKBANK", u32 format_version, u32 header_size (32),
-//                      u64 payload_size, u64 payload_checksum (bankPayloadChecksum)
+//   header: magic "STRKBANK", u32 format_version, u32 header_size (32; 40 in format 3),
+//           u64 payload_size, u64 payload_checksum (bankPayloadChecksum),
+//           format 3 only: u64 head_size (the checksum covers the payload's first head_size bytes)
 //   payload: chunks, each: char[4] tag, u32 flags (0), u64 size, then `size` bytes.
+//   format 3: the last chunk is MODV, whose shapes ([vertex][mode][xyz], f32) are the payload's
+//   tail after head_size, in blocks of vertices with one checksum each (kept in the head), so a
+//   reader verifies only the blocks it reads.
 //
 // Unknown chunks are skipped, so a reader of the same major format can read files that carry
 // more. Every read is bounds-checked: a hostile file can make decoding fail, never overrun.
@@ -12,6 +16,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -23,7 +28,11 @@ namespace strike {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'T', 'R', 'K', 'B', 'A', 'N', 'K'};
-constexpr uint32_t kHeaderSize = 32;
+constexpr uint32_t kHeaderSize = 32;    // formats 1 and 2
+constexpr uint32_t kHeaderSizeV3 = 40;  // format 3 adds u64 head_size
+// Format 3 shape blocks hold about this many bytes: 13 vertices of a 100-mode bank. A render
+// touching a few hundred vertices then reads and verifies ~2% of a 14,000-vertex plate's shapes.
+constexpr size_t kShapeBlockBytes = 16384;
 // A bank larger than this is not a bank: refuse it before allocating (10^8 floats of shapes).
 constexpr uint64_t kMaxBankBytes = uint64_t(1) << 31;
 
@@ -112,6 +121,13 @@ class ByteReader {
     pos_ += count;
     return part;
   }
+  /// Where the next byte is; skip() moves past `count` bytes.
+  const uint8_t* here() const { return data_ + pos_; }
+  bool skip(uint64_t count) {
+    if (count > remaining()) return failed_ = true, false;
+    pos_ += count;
+    return true;
+  }
   std::string getString() {
     const uint32_t length = get<uint32_t>();
     if (failed_ || length > remaining()) {
@@ -134,15 +150,32 @@ Error corrupt(const std::string& source, const std::string& what) {
   return badInput(source + ": error: not a valid mode bank: " + what);
 }
 
+uint32_t verticesPerBlock(size_t modes, size_t vertices) {
+  if (vertices == 0) return 1;
+  if (modes == 0) return static_cast<uint32_t>(std::min<size_t>(vertices, UINT32_MAX));
+  return static_cast<uint32_t>(std::clamp<size_t>(kShapeBlockBytes / (modes * 3 * sizeof(float)), 1, vertices));
+}
+
+/// Block b of format 3 shapes: its bytes' bankPayloadChecksum, seeded into FNV-1a of the block
+/// number so that two swapped blocks do not pass.
+uint64_t shapeBlockChecksum(const uint8_t* shapes, size_t modes, size_t vertices, size_t per_block, size_t block) {
+  const size_t row_bytes = modes * 3 * sizeof(float);
+  const size_t first = block * per_block;
+  const size_t count = std::min(per_block, vertices - first);
+  const uint64_t index = block;
+  return fnv1a64(&index, sizeof index, bankPayloadChecksum(3, shapes + first * row_bytes, count * row_bytes));
+}
+
 }  // namespace
 
 std::vector<uint8_t> encodeBank(const ModeBank& bank) {
   ByteWriter w;
   w.data().insert(w.data().end(), kMagic, kMagic + 8);
   w.put<uint32_t>(kBankFormatVersion);
-  w.put<uint32_t>(kHeaderSize);
+  w.put<uint32_t>(kHeaderSizeV3);
   w.put<uint64_t>(0);  // payload size, patched below
   w.put<uint64_t>(0);  // checksum, patched below
+  w.put<uint64_t>(0);  // head size, patched below
 
   size_t at = w.beginChunk("MATL");
   w.putString(bank.material.name);
@@ -182,13 +215,6 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank) {
   w.putArray(bank.surface_node_index);
   w.endChunk(at);
 
-  at = w.beginChunk("MODE");
-  w.put<uint32_t>(static_cast<uint32_t>(bank.modeCount()));
-  w.put<uint32_t>(static_cast<uint32_t>(bank.surfaceVertexCount()));
-  w.putArray(bank.eigenvalues);
-  w.putArray(bank.shapes);
-  w.endChunk(at);
-
   if (!bank.frequency_error_estimate.empty()) {
     at = w.beginChunk("FERR");
     w.put<uint32_t>(static_cast<uint32_t>(bank.frequency_error_estimate.size()));
@@ -214,11 +240,39 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank) {
   w.putString(bank.tool_version);
   w.endChunk(at);
 
+  // MODV last: its shapes are the payload's tail, outside the head checksum.
+  const size_t modes = bank.modeCount();
+  const size_t vertices = bank.surfaceVertexCount();
+  const uint32_t per_block = verticesPerBlock(modes, vertices);
+  const size_t blocks = per_block > 0 ? (vertices + per_block - 1) / per_block : 0;
+  at = w.beginChunk("MODV");
+  w.put<uint32_t>(static_cast<uint32_t>(modes));
+  w.put<uint32_t>(static_cast<uint32_t>(vertices));
+  w.put<uint32_t>(per_block);
+  w.put<uint32_t>(0);  // reserved
+  w.putArray(bank.eigenvalues);
+  const size_t checksums_at = w.data().size();
+  for (size_t b = 0; b < blocks; ++b) w.put<uint64_t>(0);  // patched below
+  const size_t shapes_at = w.data().size();
+  // Transposed from the in-memory [mode][vertex][xyz]: a vertex's row is contiguous in the file.
+  std::vector<float> row(modes * 3);
+  for (size_t v = 0; v < vertices; ++v) {
+    for (size_t m = 0; m < modes; ++m) std::memcpy(&row[m * 3], bank.shapeAt(m, v), 3 * sizeof(float));
+    w.putArray(row);
+  }
+  w.endChunk(at);
   std::vector<uint8_t>& bytes = w.data();
-  const uint64_t payload_size = bytes.size() - kHeaderSize;
-  const uint64_t checksum = bankPayloadChecksum(kBankFormatVersion, bytes.data() + kHeaderSize, payload_size);
+  for (size_t b = 0; b < blocks; ++b) {
+    const uint64_t checksum = shapeBlockChecksum(bytes.data() + shapes_at, modes, vertices, per_block, b);
+    std::memcpy(bytes.data() + checksums_at + 8 * b, &checksum, 8);
+  }
+
+  const uint64_t payload_size = bytes.size() - kHeaderSizeV3;
+  const uint64_t head_size = shapes_at - kHeaderSizeV3;
+  const uint64_t checksum = bankPayloadChecksum(kBankFormatVersion, bytes.data() + kHeaderSizeV3, head_size);
   std::memcpy(bytes.data() + 16, &payload_size, 8);
   std::memcpy(bytes.data() + 24, &checksum, 8);
+  std::memcpy(bytes.data() + 32, &head_size, 8);
   return std::move(bytes);
 }
 
@@ -242,14 +296,33 @@ uint64_t bankPayloadChecksum(uint32_t format_version, const uint8_t* payload, si
   return fnv1a64(payload + 32 * blocks, size - 32 * blocks, hash);
 }
 
-Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string& source) {
+struct BankFile::Source {
+  const uint8_t* data = nullptr;
+  size_t size = 0;
+  std::string name;
+  void* mapped = nullptr;  ///< unmapped with the last copy
+  std::string buffer;      ///< the bytes, when the file was read instead of mapped
+  Source() = default;
+  Source(const Source&) = delete;
+  Source& operator=(const Source&) = delete;
+  ~Source() {
+    if (mapped != nullptr) munmap(mapped, size);
+  }
+};
+
+Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
+  const Source& src = *source_ptr;
+  const uint8_t* data = src.data;
+  const size_t size = src.size;
+  const std::string& source = src.name;
   if (size < kHeaderSize || std::memcmp(data, kMagic, 8) != 0) {
     if (size >= 8 && std::memcmp(data, kMagic, 8) == 0)
       return corrupt(source, "file is " + std::to_string(size) + " bytes, shorter than the 32-byte header (truncated)");
     return corrupt(source, "wrong magic number (expected a file written by `strike modes`)");
   }
-  ByteReader header(data + 8, kHeaderSize - 8);
-  ModeBank bank;
+  BankFile file;
+  ModeBank& bank = file.bank_;
+  ByteReader header(data + 8, size - 8);
   bank.format_version = header.get<uint32_t>();
   const uint32_t header_size = header.get<uint32_t>();
   const uint64_t payload_size = header.get<uint64_t>();
@@ -258,17 +331,26 @@ Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string&
     return badInput(source + ": error: mode bank format version " + std::to_string(bank.format_version) +
                     " is not supported by this build (reads versions 1 to " + std::to_string(kBankFormatVersion) +
                     "); recompute it with `strike modes` or update strike");
-  if (header_size != kHeaderSize)
-    return corrupt(source, "header size " + std::to_string(header_size) + ", expected " + std::to_string(kHeaderSize));
-  if (payload_size != size - kHeaderSize)
+  const uint32_t expected_header = bank.format_version >= 3 ? kHeaderSizeV3 : kHeaderSize;
+  if (header_size != expected_header)
+    return corrupt(source, "header size " + std::to_string(header_size) + ", expected " + std::to_string(expected_header));
+  if (size < header_size)
+    return corrupt(source, "file is " + std::to_string(size) + " bytes, shorter than the " + std::to_string(header_size) +
+                               "-byte header (truncated)");
+  if (payload_size != size - header_size)
     return corrupt(source, "header says " + std::to_string(payload_size) + " payload bytes, file has " +
-                               std::to_string(size - kHeaderSize) + (payload_size > size - kHeaderSize ? " (truncated)" : ""));
-  if (bankPayloadChecksum(bank.format_version, data + kHeaderSize, payload_size) != checksum)
+                               std::to_string(size - header_size) + (payload_size > size - header_size ? " (truncated)" : ""));
+  const uint64_t head_size = bank.format_version >= 3 ? header.get<uint64_t>() : payload_size;
+  if (head_size > payload_size)
+    return corrupt(source, "header says the checked head is " + std::to_string(head_size) + " bytes, the payload has " +
+                               std::to_string(payload_size));
+  const uint8_t* payload_start = data + header_size;
+  if (bankPayloadChecksum(bank.format_version, payload_start, head_size) != checksum)
     return corrupt(source, "checksum mismatch (the file is damaged)");
 
-  ByteReader payload(data + kHeaderSize, payload_size);
+  ByteReader payload(payload_start, payload_size);
   bool seen_modes = false, seen_surface = false;
-  uint32_t surface_vertices = 0;
+  uint32_t surface_vertices = 0, mode_vertices = 0;
   while (payload.remaining() > 0) {
     char tag_chars[4];
     for (char& c : tag_chars) c = static_cast<char>(payload.get<uint8_t>());
@@ -309,14 +391,41 @@ Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string&
       r.getArray(bank.surface_triangles, uint64_t(triangles) * 3);
       if (has_node_index) r.getArray(bank.surface_node_index, surface_vertices);
       seen_surface = true;
-    } else if (tag == "MODE") {
+    } else if (tag == "MODE" || tag == "MODV") {
+      const bool vertex_major = tag == "MODV";
+      if (vertex_major != (bank.format_version >= 3))
+        return corrupt(source, "a '" + tag + "' chunk in a format " + std::to_string(bank.format_version) + " file");
+      if (seen_modes) return corrupt(source, "two '" + tag + "' chunks");
       const uint32_t modes = r.get<uint32_t>();
-      const uint32_t vertices = r.get<uint32_t>();
-      if (seen_surface && vertices != surface_vertices)
-        return corrupt(source, "modes are sampled on " + std::to_string(vertices) + " vertices, the surface has " +
-                                   std::to_string(surface_vertices));
+      mode_vertices = r.get<uint32_t>();
+      uint64_t blocks = 0;
+      if (vertex_major) {
+        file.vertices_per_block_ = r.get<uint32_t>();
+        r.get<uint32_t>();  // reserved
+        if (!r.failed() && file.vertices_per_block_ == 0) return corrupt(source, "'MODV' has 0 vertices per block");
+        if (file.vertices_per_block_ > 0) blocks = (uint64_t(mode_vertices) + file.vertices_per_block_ - 1) / file.vertices_per_block_;
+      }
       r.getArray(bank.eigenvalues, modes);
-      r.getArray(bank.shapes, uint64_t(modes) * vertices * 3);
+      if (vertex_major) {
+        file.block_checksums_ = r.here();
+        if (blocks > r.remaining() / 8) return corrupt(source, "chunk 'MODV' is shorter than its block checksums");
+        r.skip(blocks * 8);
+      }
+      // The shapes are not copied here: readAll() or readShapeRows() read them when asked.
+      const uint64_t values = uint64_t(modes) * 3;
+      if (!r.failed() && (mode_vertices != 0 && values > r.remaining() / 4 / mode_vertices))
+        return corrupt(source, "chunk '" + tag + "' is shorter than its " + std::to_string(modes) + " modes x " +
+                                   std::to_string(mode_vertices) + " vertices of shapes");
+      file.shape_bytes_ = r.here();
+      r.skip(values * mode_vertices * 4);
+      if (vertex_major) {
+        // The shapes must be exactly the unchecked tail: nothing after them escapes both checksums.
+        const uint64_t shapes_offset = static_cast<uint64_t>(file.shape_bytes_ - payload_start);
+        if (!r.failed() && (shapes_offset != head_size || r.remaining() != 0 || payload.remaining() != 0))
+          return corrupt(source, "the shapes of chunk 'MODV' are not the file's tail after the checked head");
+        file.block_verified_.assign(blocks, 0);
+      }
+      file.vertex_major_ = vertex_major;
       seen_modes = true;
     } else if (tag == "FERR") {
       const uint32_t count = r.get<uint32_t>();
@@ -337,10 +446,130 @@ Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string&
     if (r.failed()) return corrupt(source, "chunk '" + tag + "' is shorter than its contents");
   }
   if (!seen_modes || !seen_surface)
-    return corrupt(source, std::string("missing the ") + (seen_modes ? "SURF" : "MODE") + " chunk");
-  const std::string problem = bank.checkConsistency();
+    return corrupt(source, std::string("missing the ") + (seen_modes ? "SURF" : bank.format_version >= 3 ? "MODV" : "MODE") +
+                               " chunk");
+  if (mode_vertices != surface_vertices)
+    return corrupt(source, "modes are sampled on " + std::to_string(mode_vertices) + " vertices, the surface has " +
+                               std::to_string(surface_vertices));
+  const std::string problem = bank.checkConsistency(/*shapes_loaded=*/false);
   if (!problem.empty()) return corrupt(source, problem);
+  file.source_ = std::move(source_ptr);
+  return file;
+}
+
+Status BankFile::verifyBlock(size_t block) {
+  if (!vertex_major_ || block_verified_[block]) return {};
+  uint64_t expected = 0;
+  std::memcpy(&expected, block_checksums_ + 8 * block, 8);
+  if (shapeBlockChecksum(shape_bytes_, bank_.modeCount(), bank_.surfaceVertexCount(), vertices_per_block_, block) != expected)
+    return corrupt(source_->name, "checksum mismatch in the shapes of vertices " +
+                                      std::to_string(block * vertices_per_block_) + " and on (the file is damaged)");
+  block_verified_[block] = 1;
+  return {};
+}
+
+Result<ShapeRows> BankFile::readShapeRows(std::vector<uint32_t> vertices) {
+  const size_t modes = bank_.modeCount();
+  const size_t nv = bank_.surfaceVertexCount();
+  std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  if (!vertices.empty() && vertices.back() >= nv)
+    return badInput(source_->name + ": error: surface vertex " + std::to_string(vertices.back()) +
+                    " is out of range, the bank has " + std::to_string(nv));
+  ShapeRows rows;
+  rows.modes = modes;
+  rows.values.resize(vertices.size() * modes * 3);
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    const size_t v = vertices[i];
+    float* row = rows.values.data() + i * modes * 3;
+    if (vertex_major_) {
+      Status verified = verifyBlock(v / vertices_per_block_);
+      if (!verified) return verified.error();
+      std::memcpy(row, shape_bytes_ + v * modes * 3 * sizeof(float), modes * 3 * sizeof(float));
+    } else {
+      for (size_t m = 0; m < modes; ++m)
+        std::memcpy(row + m * 3, shape_bytes_ + (m * nv + v) * 3 * sizeof(float), 3 * sizeof(float));
+    }
+    for (size_t k = 0; k < modes * 3; ++k)
+      if (!std::isfinite(row[k])) return corrupt(source_->name, "a mode shape value is not finite");
+  }
+  rows.vertices = std::move(vertices);
+  return rows;
+}
+
+Result<ModeBank> BankFile::readAll() {
+  ModeBank bank = bank_;
+  const size_t modes = bank.modeCount();
+  const size_t nv = bank.surfaceVertexCount();
+  bank.shapes.resize(modes * nv * 3);
+  if (vertex_major_) {
+    for (size_t b = 0; b < block_verified_.size(); ++b) {
+      Status verified = verifyBlock(b);
+      if (!verified) return verified.error();
+    }
+    // [vertex][mode][xyz] in the file, [mode][vertex][xyz] in memory.
+    for (size_t v = 0; v < nv; ++v) {
+      const uint8_t* row = shape_bytes_ + v * modes * 3 * sizeof(float);
+      for (size_t m = 0; m < modes; ++m)
+        std::memcpy(bank.shapes.data() + (m * nv + v) * 3, row + m * 3 * sizeof(float), 3 * sizeof(float));
+    }
+  } else if (!bank.shapes.empty()) {
+    std::memcpy(bank.shapes.data(), shape_bytes_, bank.shapes.size() * sizeof(float));
+  }
+  const std::string problem = bank.checkConsistency();
+  if (!problem.empty()) return corrupt(source_->name, problem);
   return bank;
+}
+
+Result<BankFile> BankFile::openBytes(const uint8_t* data, size_t size, const std::string& source) {
+  auto bytes = std::make_shared<Source>();
+  bytes->data = data;
+  bytes->size = size;
+  bytes->name = source;
+  return parse(std::move(bytes));
+}
+
+Result<BankFile> BankFile::open(const std::string& path) {
+  // A regular file is mapped, not read into a buffer: only the pages a reader touches are read
+  // (the head, and the shape blocks of the vertices a render strikes). Bank files are replaced
+  // by rename, never rewritten in place, so a mapping does not shrink under the reader. Anything
+  // else (or a failed map) takes the buffered path, which also words the errors.
+  auto bytes = std::make_shared<Source>();
+  bytes->name = path;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  struct stat info {};
+  if (fd >= 0 && fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0 &&
+      static_cast<uint64_t>(info.st_size) <= kMaxBankBytes) {
+    const size_t size = static_cast<size_t>(info.st_size);
+    void* mapped = mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+    close(fd);
+    if (mapped != MAP_FAILED) {
+      bytes->mapped = mapped;
+      bytes->data = static_cast<const uint8_t*>(mapped);
+      bytes->size = size;
+      return parse(std::move(bytes));
+    }
+  } else if (fd >= 0) {
+    close(fd);
+  }
+  Result<std::string> read = readWholeFile(path, kMaxBankBytes);
+  if (!read) return read.error();
+  bytes->buffer = std::move(*read);
+  bytes->data = reinterpret_cast<const uint8_t*>(bytes->buffer.data());
+  bytes->size = bytes->buffer.size();
+  return parse(std::move(bytes));
+}
+
+Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string& source) {
+  Result<BankFile> file = BankFile::openBytes(data, size, source);
+  if (!file) return file.error();
+  return file->readAll();
+}
+
+Result<ModeBank> readBank(const std::string& path) {
+  Result<BankFile> file = BankFile::open(path);
+  if (!file) return file.error();
+  return file->readAll();
 }
 
 Status writeBank(const std::string& path, const ModeBank& bank) {
@@ -348,32 +577,6 @@ Status writeBank(const std::string& path, const ModeBank& bank) {
   if (!problem.empty()) return internalError("refusing to write an inconsistent mode bank to " + path + ": " + problem);
   const std::vector<uint8_t> bytes = encodeBank(bank);
   return writeFileAtomically(path, bytes.data(), bytes.size());
-}
-
-Result<ModeBank> readBank(const std::string& path) {
-  // A regular file is mapped, not read into a buffer: a cached 17 MB bank is then decoded straight
-  // from the page cache, without faulting in and copying a second 17 MB (340 MB for the 20-plate
-  // render benchmark). Bank files are replaced by rename, never rewritten in place, so a mapping
-  // does not shrink under the decoder. Anything else (or a failed map) takes the buffered path,
-  // which also words the errors.
-  const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  struct stat info {};
-  if (fd >= 0 && fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0 &&
-      static_cast<uint64_t>(info.st_size) <= kMaxBankBytes) {
-    const size_t size = static_cast<size_t>(info.st_size);
-    void* mapped = mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
-    close(fd);
-    if (mapped != MAP_FAILED) {
-      Result<ModeBank> bank = decodeBank(static_cast<const uint8_t*>(mapped), size, path);
-      munmap(mapped, size);
-      return bank;
-    }
-  } else if (fd >= 0) {
-    close(fd);
-  }
-  Result<std::string> bytes = readWholeFile(path, kMaxBankBytes);
-  if (!bytes) return bytes.error();
-  return decodeBank(reinterpret_cast<const uint8_t*>(bytes->data()), bytes->size(), path);
 }
 
 }  // namespace strike

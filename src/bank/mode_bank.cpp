@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // ModeBank helpers that do not touch files.
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -17,11 +18,12 @@ double ModeBank::dampingCoefficient(size_t mode) const {
   return rayleighDamping(material.rayleigh_stiffness, material.rayleigh_mass, eigenvalues[mode]);
 }
 
-std::string ModeBank::checkConsistency() const {
+std::string ModeBank::checkConsistency(bool shapes_loaded) const {
   const size_t modes = eigenvalues.size();
   const size_t vertices = surfaceVertexCount();
   if (surface_positions.size() % 3 != 0) return "surface positions are not a multiple of 3";
-  if (shapes.size() != modes * vertices * 3)
+  if (!shapes_loaded && !shapes.empty()) return "mode shapes are loaded where none were expected";
+  if (shapes_loaded && shapes.size() != modes * vertices * 3)
     return "mode shapes hold " + std::to_string(shapes.size()) + " values, expected " +
            std::to_string(modes) + " modes x " + std::to_string(vertices) + " vertices x 3";
   if (!surface_normals.empty() && surface_normals.size() != vertices * 3)
@@ -58,6 +60,12 @@ std::string ModeBank::checkConsistency() const {
     if (!std::isfinite(v)) return "a material value is not finite";
   if (!(mass_kg >= 0.0) || !std::isfinite(mass_kg)) return "mass is " + std::to_string(mass_kg);
   return {};
+}
+
+const float* ShapeRows::row(uint32_t vertex) const {
+  const auto it = std::lower_bound(vertices.begin(), vertices.end(), vertex);
+  if (it == vertices.end() || *it != vertex) return nullptr;
+  return values.data() + static_cast<size_t>(it - vertices.begin()) * modes * 3;
 }
 
 uint64_t fnv1a64(const void* data, size_t size, uint64_t seed) {

@@ -235,10 +235,16 @@ void SurfaceLocator::projectImpulseInto(const double point[3], const double impu
 ContactProjector::ContactProjector(const ModeBank& bank, size_t max_points)
     : locator_(bank), bank_(&bank), max_points_(std::max<size_t>(max_points, 1)) {}
 
+void ContactProjector::useRows(ShapeRows rows) {
+  rows_ = std::move(rows);
+  use_rows_ = true;
+}
+
 void ContactProjector::projectImpulseInto(const double point[3], const double impulse[3], double* out) {
   const ModeBank& bank = *bank_;
   const size_t nm = bank.modeCount();
-  if (bank.shapes.size() < nm * bank.surfaceVertexCount() * 3 || !locator_.hasTriangles()) {
+  const bool has_shapes = use_rows_ ? rows_.modes == nm : bank.shapes.size() >= nm * bank.surfaceVertexCount() * 3;
+  if (!has_shapes || !locator_.hasTriangles()) {
     locator_.projectImpulseInto(point, impulse, out);  // degenerate banks: the plain path handles them
     return;
   }
@@ -262,8 +268,15 @@ void ContactProjector::projectImpulseInto(const double point[3], const double im
       next_ = (next_ + 1) % max_points_;
     }
     float* row = shapes_.data() + slot * nm * 9;
-    for (size_t m = 0; m < nm; ++m)
-      for (int k = 0; k < 3; ++k) std::copy_n(bank.shapeAt(m, v[k]), 3, row + m * 9 + 3 * k);
+    for (int k = 0; k < 3; ++k) {
+      const float* read = use_rows_ ? rows_.row(v[k]) : nullptr;
+      for (size_t m = 0; m < nm; ++m) {
+        float* to = row + m * 9 + 3 * k;
+        if (!use_rows_) std::copy_n(bank.shapeAt(m, v[k]), 3, to);
+        else if (read != nullptr) std::copy_n(read + m * 3, 3, to);
+        else std::fill_n(to, 3, 0.0f);
+      }
+    }
     for (int c = 0; c < 3; ++c) points_[3 * slot + c] = point[c], weights_[3 * slot + c] = w[c];
   }
   const double* w = &weights_[3 * slot];

@@ -17,5 +17,12 @@ extern "C" int STRIKE_FUZZ_ENTRY(const uint8_t* data, size_t size) {
   const std::vector<uint8_t> fixed = strike::fuzz::withValidChecksum(data, size);
   strike::Result<strike::ModeBank> decoded = strike::decodeBank(fixed.data(), fixed.size(), "fuzz.modes");
   if (decoded) (void)decoded->checkConsistency();
+  // The render's path: open, then shape rows at a few vertices (first, middle, last, out of range).
+  strike::Result<strike::BankFile> file = strike::BankFile::openBytes(fixed.data(), fixed.size(), "fuzz.modes");
+  if (file) {
+    const uint32_t vertices = static_cast<uint32_t>(file->bank().surfaceVertexCount());
+    (void)file->readShapeRows({0, vertices / 2, vertices > 0 ? vertices - 1 : 0, vertices});
+    (void)file->readShapeRows({vertices / 3});
+  }
   return 0;
 }

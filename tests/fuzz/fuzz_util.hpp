@@ -29,16 +29,25 @@ inline bool writeBytes(const std::string& path, const uint8_t* data, size_t size
   return std::fclose(file) == 0 && ok;
 }
 
-/// A copy of a mode bank file with its header's payload size and FNV-1a checksum made to match
-/// the payload (docs/bank-format.md: 32-byte header, u64 size at 16, u64 checksum at 24), so that
-/// mutations reach the chunk decoder instead of stopping at the checksum.
+/// A copy of a mode bank file with its header's payload size and checksum made to match the
+/// payload (docs/bank-format.md: u64 size at 16, u64 checksum at 24; format 3 has a 40-byte
+/// header whose u64 head_size at 32 says how much of the payload the checksum covers), so that
+/// mutations reach the chunk decoder instead of stopping at the checksum. Format 3 shape blocks
+/// keep their own checksums: mutations there are refused when the block is read.
 inline std::vector<uint8_t> withValidChecksum(const uint8_t* data, size_t size) {
   std::vector<uint8_t> bytes(data, data + size);
   if (bytes.size() < 32) return bytes;
-  const uint64_t payload_size = bytes.size() - 32;
   uint32_t version = 0;
   std::memcpy(&version, bytes.data() + 8, 4);
-  const uint64_t hash = strike::bankPayloadChecksum(version, bytes.data() + 32, payload_size);
+  const size_t header = version >= 3 ? 40 : 32;
+  if (bytes.size() < header) return bytes;
+  const uint64_t payload_size = bytes.size() - header;
+  uint64_t covered = payload_size;
+  if (version >= 3) {
+    std::memcpy(&covered, bytes.data() + 32, 8);
+    covered = covered < payload_size ? covered : payload_size;
+  }
+  const uint64_t hash = strike::bankPayloadChecksum(version, bytes.data() + header, covered);
   std::memcpy(bytes.data() + 16, &payload_size, 8);
   std::memcpy(bytes.data() + 24, &hash, 8);
   return bytes;

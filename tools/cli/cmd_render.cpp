@@ -51,6 +51,9 @@ void printSummary(const RenderResult& result, const std::string& output, double 
                r.objects, r.objects_struck, r.objects_sounded, r.objects_inaudible, r.objects - r.objects_struck);
   std::fprintf(stderr, "  banks       %zu given, %zu from the cache, %zu computed, %zu shared between identical objects\n",
                r.banks_given, r.banks_cached, r.banks_computed, r.banks_shared);
+  if (r.shape_vertices_total > 0)
+    std::fprintf(stderr, "  shapes      read at %zu of the bank files' %zu surface vertices (%.1f%%: where contacts landed)\n",
+                 r.shape_vertices_read, r.shape_vertices_total, 100.0 * double(r.shape_vertices_read) / double(r.shape_vertices_total));
   std::fprintf(stderr, "  events      %zu contacts: %zu impacts, %zu sustained-contact steps\n", r.events, r.impacts,
                r.sustained_contacts);
   std::fprintf(stderr, "  modes       %llu in the banks, %llu out of the audible band, at most %llu ringing at once\n",

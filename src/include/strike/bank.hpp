@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,8 +16,10 @@
 namespace strike {
 
 /// The file format version this build writes. Readers accept versions <= this. Version 2 differs
-/// from 1 only in the payload checksum (bankPayloadChecksum).
-constexpr uint32_t kBankFormatVersion = 2;
+/// from 1 only in the payload checksum (bankPayloadChecksum); version 3 stores the shapes by
+/// vertex in separately checksummed blocks, so a render reads only the vertices it strikes
+/// (docs/bank-format.md).
+constexpr uint32_t kBankFormatVersion = 3;
 
 struct ModeBank {
   uint32_t format_version = kBankFormatVersion;
@@ -73,15 +76,60 @@ struct ModeBank {
   const float* shapeAt(size_t mode, size_t vertex) const {
     return shapes.data() + (mode * surfaceVertexCount() + vertex) * 3;
   }
-  /// Empty when consistent, else a description of the first inconsistency.
-  std::string checkConsistency() const;
+  /// Empty when consistent, else a description of the first inconsistency. With
+  /// `shapes_loaded` false, `shapes` must be empty and is not checked (BankFile::bank()).
+  std::string checkConsistency(bool shapes_loaded = true) const;
+};
+
+/// Mode shapes at some of a bank's surface vertices: what a render reads of a cached bank (its
+/// contacts touch a few hundred of a plate's 14,000 vertices).
+struct ShapeRows {
+  size_t modes = 0;
+  std::vector<uint32_t> vertices;  ///< ascending, no repeats
+  std::vector<float> values;       ///< per vertex of `vertices`: #modes x 3 ([mode][xyz])
+  /// The #modes x 3 shape values at `vertex`, or nullptr when they were not read.
+  const float* row(uint32_t vertex) const;
+};
+
+/// A bank file opened to be read in parts. open() reads and verifies everything but the mode
+/// shapes (about 1 MB of a 17 MB plate bank); readShapeRows() reads the shapes at chosen
+/// vertices, verifying each block of the file they lie in against its own checksum the first
+/// time it is read. Files of formats 1 and 2 (one checksum over everything) are verified whole at
+/// open. Copies share the mapping; a file replaced by rename keeps its old contents readable.
+class BankFile {
+ public:
+  static Result<BankFile> open(const std::string& path);
+  /// The same over bytes in memory (not copied: they must outlive the BankFile).
+  static Result<BankFile> openBytes(const uint8_t* data, size_t size, const std::string& source);
+
+  /// Everything but the shapes (`shapes` is empty).
+  const ModeBank& bank() const { return bank_; }
+  /// The shapes at `vertices` (any order, repeats allowed). Fails, naming the file, on a damaged
+  /// block, a non-finite value or a vertex out of range.
+  Result<ShapeRows> readShapeRows(std::vector<uint32_t> vertices);
+  /// The whole bank, shapes included, every block verified.
+  Result<ModeBank> readAll();
+
+ private:
+  struct Source;
+  BankFile() = default;
+  std::shared_ptr<const Source> source_;  ///< the bytes (a mapping or a buffer) and their name
+  ModeBank bank_;
+  bool vertex_major_ = false;             ///< format 3 (MODV) or 1-2 (MODE, [mode][vertex][xyz])
+  uint32_t vertices_per_block_ = 0;
+  const uint8_t* block_checksums_ = nullptr;  ///< u64 per block (format 3)
+  const uint8_t* shape_bytes_ = nullptr;      ///< the f32 shapes inside the file
+  std::vector<uint8_t> block_verified_;       ///< per block: 1 once its checksum matched
+  static Result<BankFile> parse(std::shared_ptr<const Source> source);
+  Status verifyBlock(size_t block);
 };
 
 /// Writes atomically: to PATH.tmp-XXXX in the same directory, then rename().
 Status writeBank(const std::string& path, const ModeBank& bank);
 /// Serializes to bytes (what writeBank writes).
 std::vector<uint8_t> encodeBank(const ModeBank& bank);
-/// Reads and verifies magic, version, size and checksum; errors name the file and the problem.
+/// Reads and verifies magic, version, size and checksums; errors name the file and the problem.
+/// BankFile::open(path) then readAll().
 Result<ModeBank> readBank(const std::string& path);
 /// Parses bytes; `source` names them in messages.
 Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string& source);

@@ -47,6 +47,9 @@ struct RenderReport {
   size_t objects = 0, objects_struck = 0, objects_sounded = 0;
   size_t objects_inaudible = 0;  ///< struck, but too softly to hear: no eigen-solve
   size_t banks_given = 0, banks_cached = 0, banks_computed = 0, banks_shared = 0;
+  /// Surface vertices whose mode shapes were read from given or cached bank files, of all theirs
+  /// (a render reads shapes only where its contacts land).
+  size_t shape_vertices_read = 0, shape_vertices_total = 0;
   size_t events = 0, impacts = 0, sustained_contacts = 0;
   uint64_t modes_total = 0, modes_out_of_band = 0, mode_samples = 0, max_active_modes = 0;
   double peak = 0.0;

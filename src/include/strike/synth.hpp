@@ -184,11 +184,18 @@ class SurfaceLocator {
 class ContactProjector {
  public:
   explicit ContactProjector(const ModeBank& bank, size_t max_points = 64);
+  /// Projects with these shape rows instead of bank.shapes (a bank opened with BankFile, whose
+  /// shapes are read only at the vertices its contacts touch). The rows must hold every vertex
+  /// locator().nearest() gives for the points projected; a missing vertex projects to zero.
+  void useRows(ShapeRows rows);
+  const SurfaceLocator& locator() const { return locator_; }
   void projectImpulseInto(const double point[3], const double impulse[3], double* out);
 
  private:
   SurfaceLocator locator_;
   const ModeBank* bank_;
+  bool use_rows_ = false;
+  ShapeRows rows_;
   size_t max_points_;
   size_t next_ = 0;                      ///< slot to overwrite when full (round robin)
   std::vector<double> points_;           ///< 3 per remembered point

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -346,6 +347,39 @@ TEST_F(BarDrop, RendersAreDeterministicAndTheCacheChangesNothing) {
   r = runCli("render '" + kBarDrop + "' -o '" + uncached + "' --no-cache --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(test::slurp(uncached), test::slurp(wav_)) << "a render from the cache differs from one without";
+}
+
+// A cached bank's shapes are read only where the contacts land, each block checked on reading
+// (docs/bank-format.md). A cache entry whose shapes are all damaged still opens (its head is
+// intact), so the damage is found in the middle of the render: the bank must be recomputed, the
+// audio must not change, and the cache entry must be repaired.
+TEST_F(BarDrop, DamagedShapesInTheCacheAreRecomputedNotTrusted) {
+  const std::string cache = temp("render-cache-damaged");
+  std::filesystem::remove_all(cache);
+  std::filesystem::create_directories(cache);
+  std::string bank;
+  for (const auto& entry : std::filesystem::directory_iterator(cache_)) {
+    bank = cache + "/" + entry.path().filename().string();
+    std::filesystem::copy_file(entry.path(), bank);
+  }
+  ASSERT_FALSE(bank.empty());
+  std::string bytes = test::slurp(bank);
+  uint64_t head_size = 0;
+  std::memcpy(&head_size, bytes.data() + 32, 8);  // format 3: the shapes follow the checked head
+  ASSERT_LT(40 + head_size, bytes.size());
+  for (size_t at = 40 + head_size; at < bytes.size(); at += 256) bytes[at] = static_cast<char>(bytes[at] ^ 0x5a);
+  std::ofstream(bank, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+
+  const std::string wav = temp("bar-drop-damaged-cache.wav");
+  CliResult r = runCli("render '" + kBarDrop + "' -o '" + wav + "' --cache '" + cache + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("0 from the cache, 1 computed"), std::string::npos) << r.err;
+  EXPECT_EQ(test::slurp(wav), test::slurp(wav_)) << "a render from a repaired cache differs";
+  EXPECT_NE(test::slurp(bank), bytes) << "the damaged cache entry was not rewritten";
+  r = runCli("render '" + kBarDrop + "' -o '" + wav + "' --cache '" + cache + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("1 from the cache, 0 computed"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("shapes      read at"), std::string::npos) << r.err;
 }
 
 TEST(CliRender, MalformedScenesFailNamingTheKeyAndWriteNothing) {

@@ -103,5 +103,44 @@ TEST(ModalProjection, ContactProjectorMatchesTheLocatorWhileRemembering) {
     }
 }
 
+// A render projects a cached bank's contacts through shape rows read from the file at the
+// vertices the locator finds (BankFile::readShapeRows): the same values, to the bit, as the whole
+// bank; a vertex whose row was not read projects to zero rather than to garbage.
+TEST(ModalProjection, ContactProjectorWithShapeRowsMatchesTheWholeBank) {
+  const ModeBank mb = linearShapeBank();
+  const std::vector<uint8_t> bytes = encodeBank(mb);
+  Result<BankFile> file = BankFile::openBytes(bytes.data(), bytes.size(), "linear.modes");
+  ASSERT_TRUE(file) << file.error().message;
+  const ModeBank without_shapes = file->bank();
+  ContactProjector whole(mb, 2), from_rows(without_shapes, 2);
+  const std::array<double, 3> points[] = {{0.2, 0.3, 0.0}, {0.7, 0.8, 0.05}, {0.5, 0.1, -0.3}, {2.0, 0.5, 0.0}};
+  std::vector<uint32_t> vertices;
+  for (const auto& p : points) {
+    uint32_t v[3];
+    double w[3];
+    from_rows.locator().nearest(p.data(), v, w);
+    vertices.insert(vertices.end(), v, v + 3);
+  }
+  Result<ShapeRows> rows = file->readShapeRows(vertices);
+  ASSERT_TRUE(rows) << rows.error().message;
+  from_rows.useRows(*rows);
+  const double j[3] = {0.1, -0.2, 0.3};
+  for (const auto& p : points) {
+    double a[3], b[3];
+    whole.projectImpulseInto(p.data(), j, a);
+    from_rows.projectImpulseInto(p.data(), j, b);
+    for (int m = 0; m < 3; ++m) EXPECT_EQ(a[m], b[m]) << p[0] << "," << p[1] << " mode " << m;
+  }
+  // Only vertex 3's row: a point on triangle (0, 1, 2) sees zeros.
+  ContactProjector partial(without_shapes, 2);
+  Result<ShapeRows> one = file->readShapeRows({3});
+  ASSERT_TRUE(one);
+  partial.useRows(*one);
+  double g[3];
+  const double inside[3] = {0.2, 0.2, 0.0};
+  partial.projectImpulseInto(inside, j, g);
+  for (double value : g) EXPECT_EQ(value, 0.0);
+}
+
 }  // namespace
 }  // namespace strike

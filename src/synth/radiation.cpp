@@ -90,6 +90,14 @@ std::vector<std::array<double, 3>> icosphereDirections() {
   return v;  // 12 + 30 + 120 = 162 directions
 }
 
+/// The cell of a patch `offset` metres from the box corner. Clamped, so that a hostile bank
+/// (finite but absurd positions, 1e249 m: found by fuzz_capi_bank) cannot overflow the integer;
+/// 2^40 cells span any physical body at any audible wavelength.
+int64_t cellIndex(double offset_m, double cell_m) {
+  const double index = std::floor(offset_m / cell_m);
+  return index >= 0.0 ? static_cast<int64_t>(std::min(index, 1099511627776.0)) : 0;  // NaN -> 0
+}
+
 }  // namespace
 
 std::vector<double> radiationWeights(const ModeBank& bank, double distance_m) {
@@ -152,9 +160,8 @@ std::vector<double> radiationStrengths(const ModeBank& bank) {
       const float* p2 = bank.shapeAt(m, p.tri[2]);
       double s = 0.0;
       for (int c = 0; c < 3; ++c) s += p.an[c] * (static_cast<double>(p0[c]) + p1[c] + p2[c]) / 3.0;
-      const std::array<int64_t, 3> key = {static_cast<int64_t>(std::floor((p.centre[0] - lo[0]) / cell)),
-                                          static_cast<int64_t>(std::floor((p.centre[1] - lo[1]) / cell)),
-                                          static_cast<int64_t>(std::floor((p.centre[2] - lo[2]) / cell))};
+      const std::array<int64_t, 3> key = {cellIndex(p.centre[0] - lo[0], cell), cellIndex(p.centre[1] - lo[1], cell),
+                                          cellIndex(p.centre[2] - lo[2], cell)};
       auto [it, inserted] = cell_of.emplace(key, cell_strength.size());
       if (inserted) {
         cell_strength.push_back(0.0);

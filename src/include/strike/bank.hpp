@@ -134,9 +134,9 @@ Result<ModeBank> readBank(const std::string& path);
 /// Parses bytes; `source` names them in messages.
 Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string& source);
 
-/// The header's payload checksum for a file of `format_version`: 1, FNV-1a 64 of the bytes; 2, the
-/// faster word-lane variant (docs/bank-format.md). Byte-wise FNV-1a is one serial multiply per
-/// byte, ~20 ms for a 17 MB bank: most of the load time of a render from cached banks.
+/// The header's payload checksum for a file of `format_version`: 1, FNV-1a 64 of the bytes; 2 and 3,
+/// the faster word-lane variant (docs/bank-format.md; format 3 checksums the head and each shape
+/// block with it). Byte-wise FNV-1a is one serial multiply per byte, ~20 ms for a 17 MB bank.
 uint64_t bankPayloadChecksum(uint32_t format_version, const uint8_t* payload, size_t size);
 
 /// FNV-1a 64-bit hash, used for mesh hashes and cache keys.

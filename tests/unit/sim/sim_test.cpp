@@ -595,5 +595,57 @@ TEST(Sim, ContactEventCapNamesTheFlag) {
   EXPECT_TRUE(simulate({box}, settings).ok());
 }
 
+
+/// A geodesic sphere of radius r (an icosahedron subdivided `levels` times, vertices pushed onto
+/// the sphere) centred at the mesh origin, with a solid sphere's mass properties. From one level
+/// on its hull fills >= 90% of the sphere, so the simulator uses Bullet's exact sphere shape.
+SimBodyDesc makeSphere(const std::string& name, double r, double mass_kg, int levels = 2) {
+  SimBodyDesc body = makeBall(name, 1.0, mass_kg);
+  for (int level = 0; level < levels; ++level) {
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoints;
+    auto midpoint = [&](uint32_t a, uint32_t b) {
+      const auto key = std::minmax(a, b);
+      if (auto it = midpoints.find(key); it != midpoints.end()) return it->second;
+      Vec3 m{};
+      for (int k = 0; k < 3; ++k) m[k] = 0.5 * (body.surface_positions[3 * a + k] + body.surface_positions[3 * b + k]);
+      const double n = std::sqrt(dot(m, m));
+      const uint32_t index = uint32_t(body.surface_positions.size() / 3);
+      body.surface_positions.insert(body.surface_positions.end(), {m[0] / n, m[1] / n, m[2] / n});
+      midpoints.emplace(key, index);
+      return index;
+    };
+    std::vector<uint32_t> finer;
+    for (size_t t = 0; t < body.surface_triangles.size(); t += 3) {
+      const uint32_t a = body.surface_triangles[t], b = body.surface_triangles[t + 1], c = body.surface_triangles[t + 2];
+      const uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+      finer.insert(finer.end(), {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca});
+    }
+    body.surface_triangles = std::move(finer);
+  }
+  for (double& x : body.surface_positions) x *= r;
+  const double i = 0.4 * mass_kg * r * r;
+  body.inertia_kg_m2 = {i, 0, 0, 0, i, 0, 0, 0, i};
+  return body;
+}
+
+TEST(SimScratch, Drop) {
+  for (double h : {0.1, 0.2, 0.3}) {
+    SimBodyDesc ball = makeSphere("ball", 0.02, 0.26);
+    ball.position_m = {0, 0, h + 0.019772};
+    ball.restitution = 0.8;
+    SimSettings settings = settingsFor(1.0);
+    settings.ground_restitution = 1.0;
+    const SimResult r = run({ball}, settings, "drop");
+    std::printf("h %.3f closed %.6f\n", h, std::sqrt(2 * h / kG));
+    double v = std::sqrt(2 * kG * h), t = std::sqrt(2 * h / kG);
+    for (const ContactEvent& e : r.events) {
+      if (e.normal_speed_m_s < 0.05) continue;
+      const double vc = e.normal_speed_m_s + kG * (0.5e-3 + e.time_s - e.step_time_s);
+      std::printf("  t %.6f step %.3f vpre %.5f vc %.5f  closed t %.6f v %.5f\n", e.time_s, e.step_time_s, e.normal_speed_m_s, vc, t, v);
+      t += 2 * 0.8 * v / kG; v *= 0.8;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace strike

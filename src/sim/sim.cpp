@@ -252,6 +252,13 @@ struct ImpactPoint {
   bool retimed = false;   ///< solved as touching at offset_s (Simulation::moveImpactsToTheirTime)
 };
 
+/// A body's loaded contacts in the current substep (see Simulation::moveImpactsToTheirTime).
+struct StruckBody {
+  double impulse_n_s = 0.0;           ///< normal impulse of its retimed impacts
+  double impulse_times_offset = 0.0;  ///< their sum of impulse x offset, N s^2
+  bool other_contact = false;         ///< a loaded contact that is not a retimed impact
+};
+
 struct RecentContact {
   uint64_t step = 0;
   btVector3 world, a_mesh, b_mesh;
@@ -308,6 +315,7 @@ class Simulation {
   std::vector<RecentContact> step_recent_;
   std::vector<int> step_lifetimes_;
   std::vector<ImpactPoint> step_impacts_;
+  std::vector<StruckBody> step_struck_;
   std::map<std::pair<uint32_t, uint32_t>, std::vector<RecentContact>> recent_;
 };
 
@@ -676,9 +684,8 @@ void Simulation::moveImpactsToTheirTime() {
   // step -dv * offset away (and turned by -dw * offset) from where Bullet put it. Only for bodies
   // whose every loaded contact in this substep is such an impact, with their impulse-weighted
   // offset: a body also resting on something keeps Bullet's step.
-  const size_t n = bodies_.size();
-  std::vector<double> impulse_sum(n, 0.0), weighted_offset(n, 0.0);
-  std::vector<char> other_contact(n, 0);
+  std::vector<StruckBody>& struck = step_struck_;
+  struck.assign(bodies_.size(), StruckBody{});
   const int manifold_count = dispatcher_->getNumManifolds();
   for (int m = 0; m < manifold_count; ++m) {
     const btPersistentManifold* manifold = dispatcher_->getManifoldByIndexInternal(m);
@@ -691,20 +698,21 @@ void Simulation::moveImpactsToTheirTime() {
         if (candidate.point == &pt) impact = &candidate;
       for (int k : index) {
         if (k < 0) continue;
+        StruckBody& body = struck[size_t(k)];
         if (!impact || !impact->retimed) {
-          other_contact[size_t(k)] = 1;
+          body.other_contact = true;
         } else {
-          impulse_sum[size_t(k)] += pt.m_appliedImpulse;
-          weighted_offset[size_t(k)] += pt.m_appliedImpulse * impact->offset_s;
+          body.impulse_n_s += pt.m_appliedImpulse;
+          body.impulse_times_offset += pt.m_appliedImpulse * impact->offset_s;
         }
       }
     }
   }
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = 0; i < bodies_.size(); ++i) {
     BodyState& b = *bodies_[i];
-    if (b.is_static || other_contact[i] || !(impulse_sum[i] > 0.0)) continue;
+    if (b.is_static || struck[i].other_contact || !(struck[i].impulse_n_s > 0.0)) continue;
     btRigidBody& rigid = *b.rigid;
-    const double offset = weighted_offset[i] / impulse_sum[i];
+    const double offset = struck[i].impulse_times_offset / struck[i].impulse_n_s;
     const btVector3 dv = rigid.getLinearVelocity() - (b.pre_linear + rigid.getGravity() * settings_.substep_s);
     const btVector3 dw = rigid.getAngularVelocity() - b.pre_angular;
     btTransform moved;
@@ -795,7 +803,6 @@ void Simulation::postTick() {
         *mesh_points[k] = fromBt(meshes[k]);
       }
       ev.normal_speed_m_s = std::max(0.0, -(point_velocity[0] - point_velocity[1]).dot(normal));
-      ev.step_time_s = time_s;
       if (ev.normal_speed_m_s > settings_.impact_speed_m_s) {
         // An impact is stamped with the moment its surfaces met (timeImpacts; for a CCD point,
         // from its leading point's height above B's surface at the start of the substep).

@@ -552,7 +552,9 @@ TEST(SimDeterminism, TwoRunsGiveIdenticalEvents) {
     // Substeps on the 1 ms grid; impacts within a step of theirs, other contacts on it.
     EXPECT_NEAR(e.step_time_s / step, std::round(e.step_time_s / step), 1e-6);
     EXPECT_LE(std::abs(e.time_s - e.step_time_s), step * (1 + 1e-9));
-    if (e.normal_speed_m_s <= settingsFor(1.0).impact_speed_m_s) EXPECT_EQ(e.time_s, e.step_time_s);
+    if (e.normal_speed_m_s <= settingsFor(1.0).impact_speed_m_s) {
+      EXPECT_EQ(e.time_s, e.step_time_s);
+    }
     timed += e.time_s != e.step_time_s;
   }
   EXPECT_GT(timed, 0);
@@ -678,7 +680,7 @@ TEST(SimImpactTime, DropFromRestMeetsTheGroundAtTheClosedFormTime) {
     const std::vector<ContactEvent> hits = impacts(r, settings);
     ASSERT_FALSE(hits.empty());
     const ContactEvent& first = hits.front();
-    std::printf("[ impact   ] h = %.4f m: closed form %.6f s, stamped %.6f s (%+.1f us), step %.3f s (%+.1f us)\n", h,
+    std::printf("[ impact   ] h = %.4f m: closed form %.6f s, stamped %.6f s (%+.2f us), step %.3f s (%+.1f us)\n", h,
                 t_meet, first.time_s, 1e6 * (first.time_s - t_meet), first.step_time_s,
                 1e6 * (first.step_time_s - t_meet));
     EXPECT_NEAR(first.time_s, t_meet, 0.05e-3) << "h = " << h;
@@ -689,7 +691,7 @@ TEST(SimImpactTime, DropFromRestMeetsTheGroundAtTheClosedFormTime) {
   }
   // The substep's own time misses by most of a step at some height: the test can tell.
   EXPECT_GT(worst_step, 0.5e-3);
-  std::printf("[ impact   ] worst error: stamped %.1f us, substep start %.1f us\n", 1e6 * worst_stamp, 1e6 * worst_step);
+  std::printf("[ impact   ] worst error: stamped %.2f us, substep start %.1f us\n", 1e6 * worst_stamp, 1e6 * worst_step);
 }
 
 // A ball with restitution e (ball 0.8 x ground 1.0, Bullet multiplies them) dropped from h meets

@@ -694,6 +694,34 @@ TEST(SimImpactTime, DropFromRestMeetsTheGroundAtTheClosedFormTime) {
   std::printf("[ impact   ] worst error: stamped %.2f us, substep start %.1f us\n", 1e6 * worst_stamp, 1e6 * worst_step);
 }
 
+// Two balls of equal mass meet head-on without gravity: they touch when the gap between their
+// surfaces has closed at the relative speed, and part with the momentum-conserving velocities
+// of restitution e (1.0 x 0.5), v_a,b = v_mean -/+ e (v_a - v_b) / 2. Both bodies carry the
+// bounce from that moment, so their positions at the end are the closed form's too.
+TEST(SimImpactTime, HeadOnBallsMeetAndPartAtTheClosedFormTime) {
+  SimBodyDesc a = makeSphere("a", 0.02, 0.26), b = makeSphere("b", 0.02, 0.26);
+  const double radius = volumeRadius(a), e = 0.5, va = 1.3, vb = -1.1, end = 0.2;
+  a.restitution = 1.0;
+  b.restitution = e;
+  a.position_m = {-0.1, 0, 0.5};
+  b.position_m = {0.1, 0, 0.5};
+  a.velocity_m_s = {va, 0, 0};
+  b.velocity_m_s = {vb, 0, 0};
+  SimSettings settings = settingsFor(end);
+  settings.gravity_m_s2 = {0, 0, 0};
+  settings.ground = false;
+  const SimResult r = run({a, b}, settings, "balls head-on");
+  ASSERT_EQ(r.events.size(), 1u);
+  const double t_meet = (0.2 - 2 * radius) / (va - vb);
+  EXPECT_NEAR(r.events[0].time_s, t_meet, 1e-6);
+  EXPECT_GT(std::abs(r.events[0].step_time_s - t_meet), 0.1e-3);  // half-way through its step
+  const double mean = 0.5 * (va + vb), after_a = mean - 0.5 * e * (va - vb), after_b = mean + 0.5 * e * (va - vb);
+  EXPECT_NEAR(r.final_velocity_m_s[0][0], after_a, 1e-9);
+  EXPECT_NEAR(r.final_velocity_m_s[1][0], after_b, 1e-9);
+  EXPECT_NEAR(r.final_position_m[0][0], -0.1 + va * t_meet + after_a * (end - t_meet), 1e-8);
+  EXPECT_NEAR(r.final_position_m[1][0], 0.1 + vb * t_meet + after_b * (end - t_meet), 1e-8);
+}
+
 // A ball with restitution e (ball 0.8 x ground 1.0, Bullet multiplies them) dropped from h meets
 // the ground at t1 = sqrt(2 h / g) and then after each flight of 2 v_k / g, v_k = e^k sqrt(2 g h):
 // the intervals shrink by e. Bullet alone bounces a ball found 0.6 mm above the ground 0.6 m/s
@@ -722,6 +750,7 @@ TEST(SimImpactTime, BounceIntervalsShrinkByTheRestitution) {
     EXPECT_NEAR(hits[k].normal_speed_m_s, v, 2 * kG * settings.substep_s) << "impact " << k;
   }
 }
+
 
 }  // namespace
 }  // namespace strike

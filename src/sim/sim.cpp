@@ -84,7 +84,8 @@ Status checkSettings(const SimSettings& settings) {
   const std::pair<const char*, double> scalars[] = {{"ground_height_m", settings.ground_height_m},
                                                     {"ground_restitution", settings.ground_restitution},
                                                     {"ground_friction", settings.ground_friction},
-                                                    {"min_impulse_n_s", settings.min_impulse_n_s}};
+                                                    {"min_impulse_n_s", settings.min_impulse_n_s},
+                                                    {"impact_speed_m_s", settings.impact_speed_m_s}};
   for (const auto& [name, value] : scalars) {
     if (!std::isfinite(value) || (value < 0.0 && std::string(name) != "ground_height_m")) {
       return badInput(std::string("sim settings: ") + name + " = " + fmt(value) + " (must be finite and >= 0)");

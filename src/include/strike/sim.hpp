@@ -100,7 +100,9 @@ struct SimResult {
   std::vector<double> max_kinetic_energy_j;
   std::vector<double> initial_kinetic_energy_j;
   std::vector<std::array<double, 3>> final_position_m;      ///< mesh-frame origin, world
-  std::vector<std::array<double, 3>> final_velocity_m_s;    ///< of the centre of mass, world
+  /// Of the centre of mass, world; Bullet's stored velocity, which is half a step old (sim.cpp,
+  /// buildBody): under gravity alone it differs from the velocity at the end by g dt / 2.
+  std::vector<std::array<double, 3>> final_velocity_m_s;
   std::vector<std::array<double, 3>> final_angular_velocity_rad_s;  ///< world
   /// Per body: the collision shape actually used (Auto resolved) and its collision margin, m.
   std::vector<SimBodyDesc::Shape> shape_used;

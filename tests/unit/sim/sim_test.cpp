@@ -590,6 +590,13 @@ TEST(SimBadInput, ErrorsNameTheBodyFieldAndValue) {
     EXPECT_NE(r.error().message.find("substep_s = 0.002"), std::string::npos) << r.error().message;
   }
   {
+    SimSettings settings = settingsFor(0.1);
+    settings.impact_speed_m_s = -1.0;
+    auto r = simulate({box}, settings);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("impact_speed_m_s = -1"), std::string::npos) << r.error().message;
+  }
+  {
     SimBodyDesc bad = box;
     bad.orientation_wxyz = {1, 0.1, 0, 0};
     auto r = simulate({bad}, settingsFor(0.1));

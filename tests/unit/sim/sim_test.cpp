@@ -455,6 +455,9 @@ TEST_P(SimTunnelling, FastBoxHitsTheGround) {
   EXPECT_NEAR(best, impact, 0.03 * impact);
   EXPECT_TRUE(r.events.front().new_contact);
   EXPECT_NEAR(r.events.front().normal_speed_m_s, impact, 0.03 * impact);
+  // A CCD contact is timed too: 0.49 m at `speed` under gravity, to 10 us of its 5-10 ms.
+  const double t_meet = (std::sqrt(speed * speed + 2 * kG * 0.49) - speed) / kG;
+  EXPECT_NEAR(r.events.front().time_s, t_meet, 0.01e-3);
   EXPECT_GT(r.final_position_m[0][2], 0.0) << "tunnelled through the ground";
   expectNoEnergyGain(r, "pellet");
 }

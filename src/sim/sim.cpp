@@ -639,7 +639,8 @@ LeadingPoint ccdLeadingPoint(const btCollisionObject& a, const btCollisionObject
     const auto* plane = static_cast<const btStaticPlaneShape*>(b.getCollisionShape());
     const btVector3 plane_normal = b.getWorldTransform().getBasis() * plane->getPlaneNormal();
     const double plane_constant = plane->getPlaneConstant() + plane_normal.dot(b.getWorldTransform().getOrigin());
-    leading.gap_m = (plane_normal.dot(world) - plane_constant) / plane_normal.dot(normal);
+    const double cosine = plane_normal.dot(normal);
+    if (cosine > 0.5) leading.gap_m = (plane_normal.dot(world) - plane_constant) / cosine;
   }
   leading.on_b_plane = world - normal * leading.gap_m;
   return leading;

@@ -253,6 +253,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   sim.gravity_m_s2 = scene.gravity_m_s2;
   sim.substep_s = substep;
   sim.max_events = settings.max_events;
+  sim.impact_speed_m_s = kImpactSpeed_m_s;  // impacts are timed within the step (ContactEvent::time_s)
   sim.ground = scene.has_ground;
   sim.ground_height_m = scene.ground_height_m;
   const ContactProperties ground_contact = builtinMaterials().contactProperties(scene.ground_material.name);
@@ -479,7 +480,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     if (hold_start >= duration || norm(simulated->final_velocity_m_s[index]) > kImpactSpeed_m_s) continue;
     bool later_impact = false;
     for (const ContactEvent& event : result.events)
-      if ((event.body_a == index || event.body_b == index) && event.time_s > body.last_sustained_time_s) later_impact = true;
+      if ((event.body_a == index || event.body_b == index) && event.step_time_s > body.last_sustained_time_s) later_impact = true;
     if (later_impact) continue;
     const double hold = duration - hold_start;
     for (double& g : body.sustained_modal) g *= hold / substep;  // same force, longer box
@@ -520,16 +521,16 @@ Status writeEventsCsv(const std::string& path, const RenderResult& result) {
   std::string csv =
       "time_s,body_a,body_b,new_contact,normal_speed_m_s,normal_impulse_n_s,friction_impulse_n_s,"
       "point_x_m,point_y_m,point_z_m,normal_x,normal_y,normal_z,"
-      "point_a_mesh_x,point_a_mesh_y,point_a_mesh_z,point_b_mesh_x,point_b_mesh_y,point_b_mesh_z\n";
+      "point_a_mesh_x,point_a_mesh_y,point_a_mesh_z,point_b_mesh_x,point_b_mesh_y,point_b_mesh_z,step_time_s\n";
   auto name = [&](uint32_t index) { return index == kGroundBody ? std::string("ground") : result.body_names[index]; };
   char line[512];
   for (const ContactEvent& e : result.events) {
     std::snprintf(line, sizeof line,
-                  ",%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n",
+                  ",%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n",
                   e.new_contact ? 1 : 0, e.normal_speed_m_s, e.normal_impulse_n_s, e.friction_impulse_n_s,
                   e.point_world[0], e.point_world[1], e.point_world[2], e.normal_world[0], e.normal_world[1],
                   e.normal_world[2], e.point_a_mesh[0], e.point_a_mesh[1], e.point_a_mesh[2], e.point_b_mesh[0],
-                  e.point_b_mesh[1], e.point_b_mesh[2]);
+                  e.point_b_mesh[1], e.point_b_mesh[2], e.step_time_s);
     char time[64];
     std::snprintf(time, sizeof time, "%.9g,", e.time_s);
     csv += time + name(e.body_a) + "," + name(e.body_b) + line;

@@ -13,7 +13,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <memory>
 #include <new>
@@ -82,7 +84,8 @@ Status checkSettings(const SimSettings& settings) {
   const std::pair<const char*, double> scalars[] = {{"ground_height_m", settings.ground_height_m},
                                                     {"ground_restitution", settings.ground_restitution},
                                                     {"ground_friction", settings.ground_friction},
-                                                    {"min_impulse_n_s", settings.min_impulse_n_s}};
+                                                    {"min_impulse_n_s", settings.min_impulse_n_s},
+                                                    {"impact_speed_m_s", settings.impact_speed_m_s}};
   for (const auto& [name, value] : scalars) {
     if (!std::isfinite(value) || (value < 0.0 && std::string(name) != "ground_height_m")) {
       return badInput(std::string("sim settings: ") + name + " = " + fmt(value) + " (must be finite and >= 0)");
@@ -233,6 +236,28 @@ class StrikeWorld : public btDiscreteDynamicsWorld {
     }
     return false;
   }
+  /// Called after the narrow phase and before the solver of every substep.
+  std::function<void()> before_solve;
+
+ protected:
+  void solveConstraints(btContactSolverInfo& info) override {
+    if (before_solve) before_solve();
+    btDiscreteDynamicsWorld::solveConstraints(info);
+  }
+};
+
+/// A contact point that strikes within the current substep (see Simulation::timeImpacts).
+struct ImpactPoint {
+  const btManifoldPoint* point = nullptr;
+  double offset_s = 0.0;  ///< when the surfaces met, from the start of the substep, in [-step, step]
+  bool retimed = false;   ///< solved as touching at offset_s (Simulation::moveImpactsToTheirTime)
+};
+
+/// A body's loaded contacts in the current substep (see Simulation::moveImpactsToTheirTime).
+struct StruckBody {
+  double impulse_n_s = 0.0;           ///< normal impulse of its retimed impacts
+  double impulse_times_offset = 0.0;  ///< their sum of impulse x offset, N s^2
+  bool other_contact = false;         ///< a loaded contact that is not a retimed impact
 };
 
 struct RecentContact {
@@ -261,6 +286,8 @@ class Simulation {
  private:
   Status buildBody(size_t index, const btQuaternion& orientation);
   void preTick();
+  void timeImpacts();
+  void moveImpactsToTheirTime();
   void postTick();
   double energy(std::vector<double>* kinetic) const;
   void hastenSleep();
@@ -288,6 +315,8 @@ class Simulation {
   std::vector<ContactEvent> step_events_;
   std::vector<RecentContact> step_recent_;
   std::vector<int> step_lifetimes_;
+  std::vector<ImpactPoint> step_impacts_;
+  std::vector<StruckBody> step_struck_;
   std::map<std::pair<uint32_t, uint32_t>, std::vector<RecentContact>> recent_;
 };
 
@@ -463,7 +492,12 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   state->rigid = std::make_unique<btRigidBody>(info);
   state->rigid->setUserIndex(int(index));
   if (!desc.is_static) {
-    state->rigid->setLinearVelocity(toBt(desc.velocity_m_s));
+    // Bullet's integrator (symplectic Euler: v += g dt, then x += v dt) moves a body exactly along
+    // the parabola of free fall when the stored velocity is the one half a step earlier; started
+    // from v0 itself it falls g dt t / 2 too far by time t (0.7 mm, half a step early, at 0.14 s).
+    // So the stored velocity is v(t - dt/2) throughout, as in leapfrog [Hairer, Lubich & Wanner
+    // 2003, "Geometric numerical integration illustrated by the Stoermer-Verlet method"].
+    state->rigid->setLinearVelocity(toBt(desc.velocity_m_s) - 0.5 * settings_.substep_s * toBt(settings_.gravity_m_s2));
     state->rigid->setAngularVelocity(toBt(desc.angular_velocity_rad_s));
     // CCD (Bullet's swept sphere + predictive contact) once a substep moves the body by more
     // than half its thinnest extent: below that the discrete narrow phase still sees the overlap
@@ -524,6 +558,7 @@ Status Simulation::build(const std::vector<btQuaternion>& orientations) {
     ground_->setUserIndex(-1);
     world_->addRigidBody(ground_.get());
   }
+  world_->before_solve = [this] { timeImpacts(); };
   world_->setInternalTickCallback(&Simulation::preTickThunk, this, true);
   world_->setInternalTickCallback(&Simulation::postTickThunk, this, false);
   return {};
@@ -569,8 +604,162 @@ void Simulation::preTick() {
   }
 }
 
+/// Acceleration of a body between contacts: gravity when it moves, none when static.
+btVector3 freeAcceleration(const btCollisionObject* object) {
+  const btRigidBody* body = btRigidBody::upcast(object);
+  if (!body || body->isStaticOrKinematicObject() || !body->isActive()) return btVector3(0, 0, 0);
+  return body->getGravity();
+}
+
+/// Velocity of an object's material point at `world` (zero for static objects).
+btVector3 velocityAt(const btCollisionObject* object, const btVector3& world) {
+  const btRigidBody* body = btRigidBody::upcast(object);
+  return body ? body->getVelocityInLocalPoint(world - body->getCenterOfMassPosition()) : btVector3(0, 0, 0);
+}
+
+/// Where a CCD predictive point strikes. Bullet puts that point at A's centre of mass, and B's
+/// point at the swept sphere's centre at its time of impact; the sphere's surface there lies on
+/// B, and A's leading vertex (along -normal) lands on B's tangent plane through it.
+struct LeadingPoint {
+  btVector3 local_a;     ///< A's leading vertex, A's body frame
+  btVector3 on_b_plane;  ///< where it lands: its projection on B's tangent plane, world
+  double gap_m = 0.0;    ///< its height above that plane with A at a_pose
+};
+LeadingPoint ccdLeadingPoint(const btCollisionObject& a, const btCollisionObject& b, const btManifoldPoint& pt,
+                             const btTransform& a_pose) {
+  const btVector3& normal = pt.m_normalWorldOnB;
+  const auto* convex = static_cast<const btConvexShape*>(a.getCollisionShape());
+  LeadingPoint leading;
+  leading.local_a = convex->localGetSupportingVertex(a_pose.getBasis().transpose() * -normal);
+  const btVector3 world = a_pose(leading.local_a);
+  const btVector3 on_b = pt.m_positionWorldOnB - normal * a.getCcdSweptSphereRadius();
+  leading.gap_m = normal.dot(world - on_b);
+  if (b.getCollisionShape()->getShapeType() == STATIC_PLANE_PROXYTYPE) {
+    // The ground: exact, where the swept sphere's time of impact is good to ~0.5 mm.
+    const auto* plane = static_cast<const btStaticPlaneShape*>(b.getCollisionShape());
+    const btVector3 plane_normal = b.getWorldTransform().getBasis() * plane->getPlaneNormal();
+    const double plane_constant = plane->getPlaneConstant() + plane_normal.dot(b.getWorldTransform().getOrigin());
+    const double cosine = plane_normal.dot(normal);
+    if (cosine > 0.5) leading.gap_m = (plane_normal.dot(world) - plane_constant) / cosine;
+  }
+  leading.on_b_plane = world - normal * leading.gap_m;
+  return leading;
+}
+
+/// When, from the start of the substep, a contact point's surfaces meet: the root of
+/// gap - w t - a t^2 / 2 = 0, with the closing speed w at the start of the substep along the
+/// body's path (the stored velocity is half a step old, see buildBody) and the closing
+/// acceleration a. Negative when they met in the previous substep; NaN when they never do.
+double meetingOffset(double gap_m, double closing_m_s, double closing_accel_m_s2, double step_s) {
+  const double w = closing_m_s + 0.5 * closing_accel_m_s2 * step_s;
+  const double discriminant = w * w + 2.0 * closing_accel_m_s2 * gap_m;
+  if (!(w > 0.0) || discriminant < 0.0) return NAN;
+  return 2.0 * gap_m / (w + std::sqrt(discriminant));  // the stable form of the root
+}
+
+void Simulation::timeImpacts() {
+  // Bullet steps the world at whole substeps: a contact point found at the start of a substep is
+  // solved there, though its surfaces met up to a step earlier (it is found penetrating) or will
+  // meet up to a step later (it is found within the contact threshold, still apart). Bullet then
+  // also bounces a point still apart by `gap` with the rebound speed less gap / dt (its
+  // speculative contact: 0.6 m/s less for a 2 cm ball found 0.6 mm above the ground), and one
+  // that would not even reach the surface in this step. So for each point striking faster than
+  // the impact speed: when its surfaces meet (offset, in [-dt, dt]); if within a step either
+  // side, the solver sees it touching (gap 0: no speculative or penetration term) with the
+  // restitution that gives the rebound speed at the meeting, and moveImpactsToTheirTime() shifts
+  // the body to where the rebound at that moment takes it.
+  step_impacts_.clear();
+  const double dt = settings_.substep_s;
+  const int manifold_count = dispatcher_->getNumManifolds();
+  for (int m = 0; m < manifold_count; ++m) {
+    btPersistentManifold* manifold = dispatcher_->getManifoldByIndexInternal(m);
+    // A CCD predictive point is left to Bullet: its distance is a swept sphere's, whose time of
+    // impact Bullet finds only to about half a millimetre (a 2 mm plate landing at 1.5 m/s).
+    if (world_->isPredictive(manifold)) continue;
+    const btCollisionObject* a = manifold->getBody0();
+    const btCollisionObject* b = manifold->getBody1();
+    const double restitution = a->getRestitution() * b->getRestitution();  // Bullet's combination
+    const btVector3 relative_accel = freeAcceleration(a) - freeAcceleration(b);
+    for (int p = 0; p < manifold->getNumContacts(); ++p) {
+      btManifoldPoint& pt = manifold->getContactPoint(p);
+      pt.m_combinedRestitution = restitution;  // undo a previous substep's change
+      const btVector3& normal = pt.m_normalWorldOnB;  // from b to a
+      const double closing =
+          -(velocityAt(a, pt.getPositionWorldOnA()) - velocityAt(b, pt.getPositionWorldOnB())).dot(normal);
+      if (!(closing > settings_.impact_speed_m_s)) continue;
+      const double accel = -relative_accel.dot(normal);
+      const double offset = meetingOffset(pt.getDistance(), closing, accel, dt);
+      if (std::isnan(offset)) continue;
+      if (offset > dt) {
+        pt.m_combinedRestitution = 0.0;  // meets in a later substep: no early bounce
+        continue;
+      }
+      ImpactPoint impact{&pt, std::max(offset, -dt), false};
+      if (offset >= -dt) {
+        // Bullet bounces to restitution x (closing speed before gravity), and stores velocities
+        // half a step old: after a bounce at the offset, e v_meet - a (dt/2 - offset).
+        const double at_meeting = closing + accel * (0.5 * dt + offset);
+        const double stored_after = restitution * at_meeting - accel * (0.5 * dt - offset);
+        pt.m_combinedRestitution = std::max(0.0, stored_after / closing);
+        pt.setDistance(0.0);
+        impact.retimed = true;
+      }
+      step_impacts_.push_back(impact);
+    }
+  }
+}
+
+void Simulation::moveImpactsToTheirTime() {
+  // The solver changed the velocities of a struck body at the start of the substep; the surfaces
+  // met `offset` later (or earlier), so until then the body moved at its old velocity. Along the
+  // body's path that is the step's velocity change dv applied offset later: the body ends the
+  // step -dv * offset away (and turned by -dw * offset) from where Bullet put it. Only for bodies
+  // whose every loaded contact in this substep is such an impact, with their impulse-weighted
+  // offset: a body also resting on something keeps Bullet's step.
+  std::vector<StruckBody>& struck = step_struck_;
+  struck.assign(bodies_.size(), StruckBody{});
+  const int manifold_count = dispatcher_->getNumManifolds();
+  for (int m = 0; m < manifold_count; ++m) {
+    const btPersistentManifold* manifold = dispatcher_->getManifoldByIndexInternal(m);
+    // A CCD point only keeps a fast body from passing through; the discrete contacts of the same
+    // impact (if found in this substep) say when it struck, so it neither moves a body nor keeps
+    // it from being moved.
+    if (world_->isPredictive(manifold)) continue;
+    const int index[2] = {manifold->getBody0()->getUserIndex(), manifold->getBody1()->getUserIndex()};
+    for (int p = 0; p < manifold->getNumContacts(); ++p) {
+      const btManifoldPoint& pt = manifold->getContactPoint(p);
+      if (!(pt.m_appliedImpulse > settings_.min_impulse_n_s)) continue;
+      const ImpactPoint* impact = nullptr;
+      for (const ImpactPoint& candidate : step_impacts_)
+        if (candidate.point == &pt) impact = &candidate;
+      for (int k : index) {
+        if (k < 0) continue;
+        StruckBody& body = struck[size_t(k)];
+        if (!impact || !impact->retimed) {
+          body.other_contact = true;
+        } else {
+          body.impulse_n_s += pt.m_appliedImpulse;
+          body.impulse_times_offset += pt.m_appliedImpulse * impact->offset_s;
+        }
+      }
+    }
+  }
+  for (size_t i = 0; i < bodies_.size(); ++i) {
+    BodyState& b = *bodies_[i];
+    if (b.is_static || struck[i].other_contact || !(struck[i].impulse_n_s > 0.0)) continue;
+    btRigidBody& rigid = *b.rigid;
+    const double offset = struck[i].impulse_times_offset / struck[i].impulse_n_s;
+    const btVector3 dv = rigid.getLinearVelocity() - (b.pre_linear + rigid.getGravity() * settings_.substep_s);
+    const btVector3 dw = rigid.getAngularVelocity() - b.pre_angular;
+    btTransform moved;
+    btTransformUtil::integrateTransform(rigid.getWorldTransform(), dv, dw, -offset, moved);
+    rigid.proceedToTransform(moved);
+  }
+}
+
 void Simulation::postTick() {
   const double time_s = double(step_) * settings_.substep_s;
+  moveImpactsToTheirTime();
   step_events_.clear();
   const int manifold_count = dispatcher_->getNumManifolds();
   for (int m = 0; m < manifold_count; ++m) {
@@ -600,15 +789,12 @@ void Simulation::postTick() {
       btVector3 local_a = pt.m_localPointA;
       btVector3 local_b = pt.m_localPointB;
       btVector3 point_world = 0.5 * (pre_a(local_a) + pre_b(local_b));
+      double predictive_gap_m = NAN;  // a CCD point's leading point above B's surface
       if (predictive && objects[0]->getCollisionShape()->isConvex()) {
-        // Bullet's predictive point: A's centre, and B's point is the swept sphere's centre at
-        // its time of impact. The sphere's surface there lies on B; A's leading vertex lands on
-        // B's tangent plane through it, which is where the impact happens.
-        const auto* convex = static_cast<const btConvexShape*>(objects[0]->getCollisionShape());
-        local_a = convex->localGetSupportingVertex(pre_a.getBasis().transpose() * -normal);
-        const btVector3 leading = pre_a(local_a);
-        const btVector3 on_b = pt.m_positionWorldOnB - normal * objects[0]->getCcdSweptSphereRadius();
-        point_world = leading - normal * normal.dot(leading - on_b);
+        const LeadingPoint leading = ccdLeadingPoint(*objects[0], *objects[1], pt, pre_a);
+        local_a = leading.local_a;
+        point_world = leading.on_b_plane;
+        predictive_gap_m = leading.gap_m;
         local_b = pre_b.invXform(point_world);
       }
       // Canonical order: the ground is always b; otherwise a is the lower index.
@@ -621,6 +807,7 @@ void Simulation::postTick() {
       }
       ContactEvent ev;
       ev.time_s = time_s;
+      ev.step_time_s = time_s;
       ev.body_a = uint32_t(index[0]);
       ev.body_b = index[1] < 0 ? kGroundBody : uint32_t(index[1]);
       ev.point_world = fromBt(point_world);
@@ -647,6 +834,26 @@ void Simulation::postTick() {
         *mesh_points[k] = fromBt(meshes[k]);
       }
       ev.normal_speed_m_s = std::max(0.0, -(point_velocity[0] - point_velocity[1]).dot(normal));
+      if (ev.normal_speed_m_s > settings_.impact_speed_m_s) {
+        // An impact is stamped with the moment its surfaces met (timeImpacts; for a CCD point,
+        // from its leading point's height above B's surface at the start of the substep).
+        double offset = NAN;
+        for (const ImpactPoint& impact : step_impacts_)
+          if (impact.point == &pt) offset = impact.offset_s;
+        if (std::isnan(offset) && std::isfinite(predictive_gap_m)) {
+          const double closing_accel =
+              -(freeAcceleration(objects[0]) - freeAcceleration(objects[1])).dot(pt.m_normalWorldOnB);
+          offset = meetingOffset(predictive_gap_m, ev.normal_speed_m_s, closing_accel, settings_.substep_s);
+        }
+        if (std::isfinite(offset)) {
+          offset = std::clamp(offset, -settings_.substep_s, settings_.substep_s);
+          ev.time_s = time_s + offset;
+          // And placed where they met: both points moved along their paths (see meetingOffset).
+          const btVector3 path_velocity_sum = point_velocity[0] + point_velocity[1] +
+              0.5 * settings_.substep_s * (freeAcceleration(objects[0]) + freeAcceleration(objects[1]));
+          ev.point_world = fromBt(point_world + 0.5 * offset * path_velocity_sum);
+        }
+      }
       step_events_.push_back(ev);
       step_recent_.push_back(RecentContact{step_, point_world, meshes[0], meshes[1]});
       step_lifetimes_.push_back(pt.m_lifeTime);
@@ -672,6 +879,7 @@ void Simulation::postTick() {
   // between corners: a corner can carry nothing for a while and then take load again, and that is
   // not an impact (its point stayed within the contact threshold all along).
   constexpr uint64_t kLookbackSteps = 3;
+  const size_t first_new = events_.size();
   for (size_t k : order) {
     ContactEvent& ev = step_events_[k];
     const RecentContact& here = step_recent_[k];
@@ -693,6 +901,15 @@ void Simulation::postTick() {
     }
     ev.new_contact = !seen && step_lifetimes_[k] <= int(kLookbackSteps) + 1;
     events_.push_back(ev);
+  }
+  // Impacts are stamped up to a step either side of their substep: keep the events in time order
+  // (a stable merge, so events of one time keep the order above).
+  if (events_.size() > first_new) {
+    const auto earlier = [](const ContactEvent& x, const ContactEvent& y) { return x.time_s < y.time_s; };
+    const auto new_begin = events_.begin() + std::ptrdiff_t(first_new);
+    std::stable_sort(new_begin, events_.end(), earlier);
+    std::inplace_merge(std::upper_bound(events_.begin(), new_begin, *new_begin, earlier), new_begin, events_.end(),
+                       earlier);
   }
   for (auto it = recent_.begin(); it != recent_.end();) {
     auto& list = it->second;

@@ -44,6 +44,10 @@ struct SimSettings {
   double ground_restitution = 0.5, ground_friction = 0.6;
   /// Contacts whose normal impulse is below this are not recorded, N s.
   double min_impulse_n_s = 1e-9;
+  /// A contact point closing faster than this is an impact: it is solved at the moment its
+  /// surfaces meet, which can fall anywhere within a step either side of the substep that finds
+  /// it, and its event is stamped with that moment (ContactEvent::time_s). m/s.
+  double impact_speed_m_s = 0.05;
   /// Maximum sequential-impulse iterations per substep. An impact through a 1000:1 mass ratio
   /// needs ~1000 (with 100 a heavy box squeezes a light one out from under it); the solver stops
   /// early once the largest squared impulse change per iteration is below the threshold, (N s)^2.
@@ -67,11 +71,15 @@ constexpr uint32_t kGroundBody = 0xffffffffu;
 
 /// One contact point during one substep.
 struct ContactEvent {
-  double time_s = 0.0;              ///< start of the substep in which the impulse was applied
+  /// When the contact happened, s. An impact (normal_speed_m_s > SimSettings::impact_speed_m_s):
+  /// the moment its surfaces met, estimated within a step either side of step_time_s from the gap
+  /// and the closing speed at the start of the substep. Any other contact: step_time_s.
+  double time_s = 0.0;
+  double step_time_s = 0.0;         ///< start of the substep in which the impulse was applied
   uint32_t body_a = 0, body_b = 0;  ///< indices into the body list; body_b may be kGroundBody
   std::array<double, 3> point_a_mesh{}, point_b_mesh{};      ///< contact point in each body's mesh frame
   std::array<double, 3> impulse_on_a_mesh{}, impulse_on_b_mesh{};  ///< total impulse (normal + friction), N s, in each body's mesh frame
-  std::array<double, 3> point_world{}, normal_world{};       ///< normal points from b to a
+  std::array<double, 3> point_world{}, normal_world{};       ///< at time_s; normal points from b to a
   double normal_impulse_n_s = 0.0;
   double friction_impulse_n_s = 0.0;   ///< magnitude of the tangential impulse
   double normal_speed_m_s = 0.0;       ///< approach speed along the normal before the substep (>= 0)
@@ -84,7 +92,7 @@ struct ContactEvent {
 };
 
 struct SimResult {
-  std::vector<ContactEvent> events;    ///< in time order
+  std::vector<ContactEvent> events;    ///< in order of time_s
   /// Total mechanical energy (kinetic + gravitational potential) of the dynamic bodies, J,
   /// sampled every substep; and each body's kinetic energy maximum over the run.
   /// energy_trace_j[0] is the initial energy, then one value after each substep (substeps + 1).
@@ -92,7 +100,9 @@ struct SimResult {
   std::vector<double> max_kinetic_energy_j;
   std::vector<double> initial_kinetic_energy_j;
   std::vector<std::array<double, 3>> final_position_m;      ///< mesh-frame origin, world
-  std::vector<std::array<double, 3>> final_velocity_m_s;    ///< of the centre of mass, world
+  /// Of the centre of mass, world; Bullet's stored velocity, which is half a step old (sim.cpp,
+  /// buildBody): under gravity alone it differs from the velocity at the end by g dt / 2.
+  std::vector<std::array<double, 3>> final_velocity_m_s;
   std::vector<std::array<double, 3>> final_angular_velocity_rad_s;  ///< world
   /// Per body: the collision shape actually used (Auto resolved) and its collision margin, m.
   std::vector<SimBodyDesc::Shape> shape_used;

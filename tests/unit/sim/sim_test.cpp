@@ -117,6 +117,38 @@ SimBodyDesc makeBall(const std::string& name, double r, double mass_kg) {
   return body;
 }
 
+/// A geodesic sphere of radius r (an icosahedron subdivided `levels` times, vertices pushed onto
+/// the sphere) centred at the mesh origin, with a solid sphere's mass properties. From one level
+/// on its hull fills >= 90% of the sphere, so the simulator uses Bullet's exact sphere shape.
+SimBodyDesc makeSphere(const std::string& name, double r, double mass_kg, int levels = 2) {
+  SimBodyDesc body = makeBall(name, 1.0, mass_kg);
+  for (int level = 0; level < levels; ++level) {
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoints;
+    auto midpoint = [&](uint32_t a, uint32_t b) {
+      const auto key = std::minmax(a, b);
+      if (auto it = midpoints.find(key); it != midpoints.end()) return it->second;
+      Vec3 m{};
+      for (int k = 0; k < 3; ++k) m[k] = 0.5 * (body.surface_positions[3 * a + k] + body.surface_positions[3 * b + k]);
+      const double n = std::sqrt(dot(m, m));
+      const uint32_t index = uint32_t(body.surface_positions.size() / 3);
+      body.surface_positions.insert(body.surface_positions.end(), {m[0] / n, m[1] / n, m[2] / n});
+      midpoints.emplace(key, index);
+      return index;
+    };
+    std::vector<uint32_t> finer;
+    for (size_t t = 0; t < body.surface_triangles.size(); t += 3) {
+      const uint32_t a = body.surface_triangles[t], b = body.surface_triangles[t + 1], c = body.surface_triangles[t + 2];
+      const uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+      finer.insert(finer.end(), {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca});
+    }
+    body.surface_triangles = std::move(finer);
+  }
+  for (double& x : body.surface_positions) x *= r;
+  const double i = 0.4 * mass_kg * r * r;
+  body.inertia_kg_m2 = {i, 0, 0, 0, i, 0, 0, 0, i};
+  return body;
+}
+
 /// An open-top tray: outer a x a x h, walls and floor t thick, mesh origin at the centre of its
 /// bottom face. A closed, watertight 16-vertex / 28-triangle surface (CCW from outside).
 SimBodyDesc makeTray(const std::string& name, double a, double h, double t, double density) {
@@ -423,6 +455,9 @@ TEST_P(SimTunnelling, FastBoxHitsTheGround) {
   EXPECT_NEAR(best, impact, 0.03 * impact);
   EXPECT_TRUE(r.events.front().new_contact);
   EXPECT_NEAR(r.events.front().normal_speed_m_s, impact, 0.03 * impact);
+  // A CCD contact is timed too: 0.49 m at `speed` under gravity, to 10 us of its 5-10 ms.
+  const double t_meet = (std::sqrt(speed * speed + 2 * kG * 0.49) - speed) / kG;
+  EXPECT_NEAR(r.events.front().time_s, t_meet, 0.01e-3);
   EXPECT_GT(r.final_position_m[0][2], 0.0) << "tunnelled through the ground";
   expectNoEnergyGain(r, "pellet");
 }
@@ -498,7 +533,7 @@ TEST(SimDeterminism, TwoRunsGiveIdenticalEvents) {
   for (size_t k = 0; k < a.events.size(); ++k) {
     const ContactEvent& x = a.events[k];
     const ContactEvent& y = b.events[k];
-    ASSERT_TRUE(x.time_s == y.time_s && x.body_a == y.body_a && x.body_b == y.body_b &&
+    ASSERT_TRUE(x.time_s == y.time_s && x.step_time_s == y.step_time_s && x.body_a == y.body_a && x.body_b == y.body_b &&
                 x.point_a_mesh == y.point_a_mesh && x.point_b_mesh == y.point_b_mesh &&
                 x.impulse_on_a_mesh == y.impulse_on_a_mesh && x.impulse_on_b_mesh == y.impulse_on_b_mesh &&
                 x.point_world == y.point_world && x.normal_world == y.normal_world &&
@@ -512,10 +547,20 @@ TEST(SimDeterminism, TwoRunsGiveIdenticalEvents) {
   EXPECT_EQ(a.energy_trace_j, b.energy_trace_j);
   EXPECT_EQ(a.final_position_m, b.final_position_m);
   // The impulses on a and b are equal and opposite (compare in the world for a ground contact).
+  const double step = settingsFor(1.0).substep_s;
+  int timed = 0;
   for (const ContactEvent& e : a.events) {
     EXPECT_GE(e.normal_speed_m_s, 0.0);
     EXPECT_NEAR(std::sqrt(dot(e.normal_world, e.normal_world)), 1.0, 1e-9);
+    // Substeps on the 1 ms grid; impacts within a step of theirs, other contacts on it.
+    EXPECT_NEAR(e.step_time_s / step, std::round(e.step_time_s / step), 1e-6);
+    EXPECT_LE(std::abs(e.time_s - e.step_time_s), step * (1 + 1e-9));
+    if (e.normal_speed_m_s <= settingsFor(1.0).impact_speed_m_s) {
+      EXPECT_EQ(e.time_s, e.step_time_s);
+    }
+    timed += e.time_s != e.step_time_s;
   }
+  EXPECT_GT(timed, 0);
 }
 
 TEST(SimBadInput, ErrorsNameTheBodyFieldAndValue) {
@@ -546,6 +591,13 @@ TEST(SimBadInput, ErrorsNameTheBodyFieldAndValue) {
     auto r = simulate({box}, settings);
     ASSERT_FALSE(r.ok());
     EXPECT_NE(r.error().message.find("substep_s = 0.002"), std::string::npos) << r.error().message;
+  }
+  {
+    SimSettings settings = settingsFor(0.1);
+    settings.impact_speed_m_s = -1.0;
+    auto r = simulate({box}, settings);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("impact_speed_m_s = -1"), std::string::npos) << r.error().message;
   }
   {
     SimBodyDesc bad = box;
@@ -594,6 +646,121 @@ TEST(Sim, ContactEventCapNamesTheFlag) {
   settings.max_events = SimSettings{}.max_events;
   EXPECT_TRUE(simulate({box}, settings).ok());
 }
+
+
+/// Radius of the sphere the simulator puts in a geodesic mesh's place: the sphere of equal volume.
+double volumeRadius(const SimBodyDesc& body) {
+  double six_v = 0.0;
+  const auto& x = body.surface_positions;
+  for (size_t t = 0; t < body.surface_triangles.size(); t += 3) {
+    const double* a = &x[3 * body.surface_triangles[t]];
+    const double* b = &x[3 * body.surface_triangles[t + 1]];
+    const double* c = &x[3 * body.surface_triangles[t + 2]];
+    six_v += dot({a[0], a[1], a[2]}, cross({b[0], b[1], b[2]}, {c[0], c[1], c[2]}));
+  }
+  return std::cbrt(std::abs(six_v) / 6.0 * 3.0 / (4.0 * M_PI));
+}
+
+/// The impacts of a run (contacts closing faster than the impact speed), first of each substep.
+std::vector<ContactEvent> impacts(const SimResult& r, const SimSettings& settings) {
+  std::vector<ContactEvent> out;
+  for (const ContactEvent& e : r.events) {
+    if (e.normal_speed_m_s <= settings.impact_speed_m_s) continue;
+    if (out.empty() || e.step_time_s > out.back().step_time_s + 1.5 * settings.substep_s) out.push_back(e);
+  }
+  return out;
+}
+
+// Dropped from rest with its lowest point at height h, a ball meets the ground at sqrt(2 h / g).
+// The heights put that moment at tenths of the 1 ms step: an event stamped with its substep is
+// up to a step late (and Bullet's integrator, started from the scene's velocity, is half a step
+// early); the estimate within the step must hit it to a small fraction of the step.
+TEST(SimImpactTime, DropFromRestMeetsTheGroundAtTheClosedFormTime) {
+  const SimBodyDesc ball_shape = makeSphere("ball", 0.02, 0.26);
+  const double radius = volumeRadius(ball_shape);
+  double worst_stamp = 0.0, worst_step = 0.0;
+  for (double fraction : {0.05, 0.25, 0.5, 0.75, 0.95}) {
+    const SimSettings settings = settingsFor(0.2);
+    const double t_meet = 0.150 + fraction * settings.substep_s;
+    const double h = 0.5 * kG * t_meet * t_meet;
+    SimBodyDesc ball = ball_shape;
+    ball.position_m = {0, 0, h + radius};
+    const SimResult r = run({ball}, settings, "ball dropped from rest");
+    ASSERT_EQ(r.shape_used[0], SimBodyDesc::Shape::ConvexHull);  // Bullet's sphere (makeSphere)
+    const std::vector<ContactEvent> hits = impacts(r, settings);
+    ASSERT_FALSE(hits.empty());
+    const ContactEvent& first = hits.front();
+    std::printf("[ impact   ] h = %.4f m: closed form %.6f s, stamped %.6f s (%+.2f us), step %.3f s (%+.1f us)\n", h,
+                t_meet, first.time_s, 1e6 * (first.time_s - t_meet), first.step_time_s,
+                1e6 * (first.step_time_s - t_meet));
+    EXPECT_NEAR(first.time_s, t_meet, 0.05e-3) << "h = " << h;
+    EXPECT_NEAR(first.point_world[2], 0.0, 1e-5) << "placed where the surfaces met";
+    EXPECT_NEAR(first.normal_speed_m_s, kG * t_meet, 0.01 * kG * t_meet);
+    worst_stamp = std::max(worst_stamp, std::abs(first.time_s - t_meet));
+    worst_step = std::max(worst_step, std::abs(first.step_time_s - t_meet));
+  }
+  // The substep's own time misses by most of a step at some height: the test can tell.
+  EXPECT_GT(worst_step, 0.5e-3);
+  std::printf("[ impact   ] worst error: stamped %.2f us, substep start %.1f us\n", 1e6 * worst_stamp, 1e6 * worst_step);
+}
+
+// Two balls of equal mass meet head-on without gravity: they touch when the gap between their
+// surfaces has closed at the relative speed, and part with the momentum-conserving velocities
+// of restitution e (1.0 x 0.5), v_a,b = v_mean -/+ e (v_a - v_b) / 2. Both bodies carry the
+// bounce from that moment, so their positions at the end are the closed form's too.
+TEST(SimImpactTime, HeadOnBallsMeetAndPartAtTheClosedFormTime) {
+  SimBodyDesc a = makeSphere("a", 0.02, 0.26), b = makeSphere("b", 0.02, 0.26);
+  const double radius = volumeRadius(a), e = 0.5, va = 1.3, vb = -1.1, end = 0.2;
+  a.restitution = 1.0;
+  b.restitution = e;
+  a.position_m = {-0.1, 0, 0.5};
+  b.position_m = {0.1, 0, 0.5};
+  a.velocity_m_s = {va, 0, 0};
+  b.velocity_m_s = {vb, 0, 0};
+  SimSettings settings = settingsFor(end);
+  settings.gravity_m_s2 = {0, 0, 0};
+  settings.ground = false;
+  const SimResult r = run({a, b}, settings, "balls head-on");
+  ASSERT_EQ(r.events.size(), 1u);
+  const double t_meet = (0.2 - 2 * radius) / (va - vb);
+  EXPECT_NEAR(r.events[0].time_s, t_meet, 1e-6);
+  EXPECT_GT(std::abs(r.events[0].step_time_s - t_meet), 0.1e-3);  // half-way through its step
+  const double mean = 0.5 * (va + vb), after_a = mean - 0.5 * e * (va - vb), after_b = mean + 0.5 * e * (va - vb);
+  EXPECT_NEAR(r.final_velocity_m_s[0][0], after_a, 1e-9);
+  EXPECT_NEAR(r.final_velocity_m_s[1][0], after_b, 1e-9);
+  EXPECT_NEAR(r.final_position_m[0][0], -0.1 + va * t_meet + after_a * (end - t_meet), 1e-8);
+  EXPECT_NEAR(r.final_position_m[1][0], 0.1 + vb * t_meet + after_b * (end - t_meet), 1e-8);
+}
+
+// A ball with restitution e (ball 0.8 x ground 1.0, Bullet multiplies them) dropped from h meets
+// the ground at t1 = sqrt(2 h / g) and then after each flight of 2 v_k / g, v_k = e^k sqrt(2 g h):
+// the intervals shrink by e. Bullet alone bounces a ball found 0.6 mm above the ground 0.6 m/s
+// slower and from there (see Simulation::timeImpacts); each interval must match to 0.05 ms.
+TEST(SimImpactTime, BounceIntervalsShrinkByTheRestitution) {
+  const double e = 0.8, h = 0.1;
+  SimBodyDesc ball = makeSphere("ball", 0.02, 0.26);
+  ball.position_m = {0, 0, h + volumeRadius(ball)};
+  ball.restitution = e;
+  SimSettings settings = settingsFor(1.0);
+  settings.ground_restitution = 1.0;
+  const SimResult r = run({ball}, settings, "bouncing ball, e = 0.8");
+  const std::vector<ContactEvent> hits = impacts(r, settings);
+  ASSERT_GE(hits.size(), 4u);
+  double t = std::sqrt(2 * h / kG), v = std::sqrt(2 * kG * h);
+  EXPECT_NEAR(hits[0].time_s, t, 0.05e-3);
+  for (size_t k = 1; k < 4; ++k) {
+    const double interval = 2 * e * v / kG;
+    v *= e;
+    t += interval;
+    std::printf("[ bounce   ] interval %zu: closed form %.6f s, stamped %.6f s, substeps %.6f s\n", k, interval,
+                hits[k].time_s - hits[k - 1].time_s, hits[k].step_time_s - hits[k - 1].step_time_s);
+    EXPECT_NEAR(hits[k].time_s - hits[k - 1].time_s, interval, 0.05e-3) << "interval " << k;
+    EXPECT_NEAR(hits[k].time_s, t, 0.1e-3) << "impact " << k;
+    // Its speed at the start of the substep is within a step of gravity of the closed form.
+    EXPECT_NEAR(hits[k].normal_speed_m_s, v, 2 * kG * settings.substep_s) << "impact " << k;
+  }
+}
+
 
 }  // namespace
 }  // namespace strike

@@ -12,11 +12,11 @@
 // Unknown chunks are skipped, so a reader of the same major format can read files that carry
 // more. Every read is bounds-checked: a hostile file can make decoding fail, never overrun.
 #include <fcntl.h>
-#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -156,14 +156,10 @@ uint32_t verticesPerBlock(size_t modes, size_t vertices) {
   return static_cast<uint32_t>(std::clamp<size_t>(kShapeBlockBytes / (modes * 3 * sizeof(float)), 1, vertices));
 }
 
-/// Block b of format 3 shapes: its bytes' bankPayloadChecksum, seeded into FNV-1a of the block
-/// number so that two swapped blocks do not pass.
-uint64_t shapeBlockChecksum(const uint8_t* shapes, size_t modes, size_t vertices, size_t per_block, size_t block) {
-  const size_t row_bytes = modes * 3 * sizeof(float);
-  const size_t first = block * per_block;
-  const size_t count = std::min(per_block, vertices - first);
-  const uint64_t index = block;
-  return fnv1a64(&index, sizeof index, bankPayloadChecksum(3, shapes + first * row_bytes, count * row_bytes));
+/// Block b of format 3 shapes (its `size` bytes): their bankPayloadChecksum, seeded into FNV-1a of
+/// the block number so that two swapped blocks do not pass.
+uint64_t shapeBlockChecksum(const uint8_t* bytes, size_t size, uint64_t block) {
+  return fnv1a64(&block, sizeof block, bankPayloadChecksum(3, bytes, size));
 }
 
 }  // namespace
@@ -262,8 +258,10 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank) {
   }
   w.endChunk(at);
   std::vector<uint8_t>& bytes = w.data();
+  const size_t row_bytes = modes * 3 * sizeof(float);
   for (size_t b = 0; b < blocks; ++b) {
-    const uint64_t checksum = shapeBlockChecksum(bytes.data() + shapes_at, modes, vertices, per_block, b);
+    const size_t first = b * per_block, count = std::min<size_t>(per_block, vertices - first);
+    const uint64_t checksum = shapeBlockChecksum(bytes.data() + shapes_at + first * row_bytes, count * row_bytes, b);
     std::memcpy(bytes.data() + checksums_at + 8 * b, &checksum, 8);
   }
 
@@ -296,33 +294,52 @@ uint64_t bankPayloadChecksum(uint32_t format_version, const uint8_t* payload, si
   return fnv1a64(payload + 32 * blocks, size - 32 * blocks, hash);
 }
 
+/// A bank's bytes: all of them in memory, or an open file of which the first `resident` bytes (the
+/// header and the checked head) are in memory and the rest is read with pread when asked.
 struct BankFile::Source {
-  const uint8_t* data = nullptr;
-  size_t size = 0;
   std::string name;
-  void* mapped = nullptr;  ///< unmapped with the last copy
-  std::string buffer;      ///< the bytes, when the file was read instead of mapped
+  uint64_t size = 0;              ///< of the whole file
+  const uint8_t* data = nullptr;  ///< its first `resident` bytes
+  uint64_t resident = 0;
+  std::string buffer;             ///< owns `data` when read from a file
+  int fd = -1;                    ///< open while bytes after `resident` may be asked for
   Source() = default;
   Source(const Source&) = delete;
   Source& operator=(const Source&) = delete;
   ~Source() {
-    if (mapped != nullptr) munmap(mapped, size);
+    if (fd >= 0) close(fd);
+  }
+  /// Bytes [offset, offset + count) into `to`; false if the file no longer has them.
+  bool read(uint64_t offset, size_t count, uint8_t* to) const {
+    if (count == 0) return true;
+    if (offset <= resident && count <= resident - offset) {
+      std::memcpy(to, data + offset, count);
+      return true;
+    }
+    if (fd < 0) return false;
+    while (count > 0) {
+      const ssize_t got = pread(fd, to, count, static_cast<off_t>(offset));
+      if (got < 0 && errno == EINTR) continue;
+      if (got <= 0) return false;
+      to += got, offset += static_cast<uint64_t>(got), count -= static_cast<size_t>(got);
+    }
+    return true;
   }
 };
 
 Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
   const Source& src = *source_ptr;
   const uint8_t* data = src.data;
-  const size_t size = src.size;
+  const uint64_t size = src.size;
   const std::string& source = src.name;
-  if (size < kHeaderSize || std::memcmp(data, kMagic, 8) != 0) {
-    if (size >= 8 && std::memcmp(data, kMagic, 8) == 0)
+  if (src.resident < kHeaderSize || std::memcmp(data, kMagic, 8) != 0) {
+    if (src.resident >= 8 && std::memcmp(data, kMagic, 8) == 0)
       return corrupt(source, "file is " + std::to_string(size) + " bytes, shorter than the 32-byte header (truncated)");
     return corrupt(source, "wrong magic number (expected a file written by `strike modes`)");
   }
   BankFile file;
   ModeBank& bank = file.bank_;
-  ByteReader header(data + 8, size - 8);
+  ByteReader header(data + 8, src.resident - 8);
   bank.format_version = header.get<uint32_t>();
   const uint32_t header_size = header.get<uint32_t>();
   const uint64_t payload_size = header.get<uint64_t>();
@@ -334,7 +351,7 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
   const uint32_t expected_header = bank.format_version >= 3 ? kHeaderSizeV3 : kHeaderSize;
   if (header_size != expected_header)
     return corrupt(source, "header size " + std::to_string(header_size) + ", expected " + std::to_string(expected_header));
-  if (size < header_size)
+  if (src.resident < header_size)
     return corrupt(source, "file is " + std::to_string(size) + " bytes, shorter than the " + std::to_string(header_size) +
                                "-byte header (truncated)");
   if (payload_size != size - header_size)
@@ -344,11 +361,14 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
   if (head_size > payload_size)
     return corrupt(source, "header says the checked head is " + std::to_string(head_size) + " bytes, the payload has " +
                                std::to_string(payload_size));
+  if (src.resident - header_size < head_size) return corrupt(source, "the checked head is not all in memory");
   const uint8_t* payload_start = data + header_size;
   if (bankPayloadChecksum(bank.format_version, payload_start, head_size) != checksum)
     return corrupt(source, "checksum mismatch (the file is damaged)");
 
-  ByteReader payload(payload_start, payload_size);
+  // Chunks are read from what is in memory: all of a format 1-2 file, the head of a format 3 file
+  // (whose last chunk, MODV, runs on into the shapes after it).
+  ByteReader payload(payload_start, src.resident - header_size);
   bool seen_modes = false, seen_surface = false;
   uint32_t surface_vertices = 0, mode_vertices = 0;
   while (payload.remaining() > 0) {
@@ -356,10 +376,13 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
     for (char& c : tag_chars) c = static_cast<char>(payload.get<uint8_t>());
     payload.get<uint32_t>();  // flags, reserved
     const uint64_t chunk_size = payload.get<uint64_t>();
-    if (payload.failed() || chunk_size > payload.remaining())
-      return corrupt(source, "chunk '" + std::string(tag_chars, 4) + "' runs past the end of the file");
     const std::string tag(tag_chars, 4);
-    ByteReader r = payload.take(chunk_size);
+    const uint64_t chunk_offset = static_cast<uint64_t>(payload.here() - payload_start);  // of its contents
+    const bool runs_past = !payload.failed() && chunk_size > payload.remaining();
+    // Only MODV may run past what is in memory, and only to the end of the file.
+    if (payload.failed() || (runs_past && (tag != "MODV" || chunk_size != payload_size - chunk_offset)))
+      return corrupt(source, "chunk '" + tag + "' runs past the end of the file");
+    ByteReader r = payload.take(runs_past ? payload.remaining() : chunk_size);
     if (tag == "MATL") {
       bank.material.name = r.getString();
       bank.material.youngs_pa = r.get<double>();
@@ -406,25 +429,22 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
         if (file.vertices_per_block_ > 0) blocks = (uint64_t(mode_vertices) + file.vertices_per_block_ - 1) / file.vertices_per_block_;
       }
       r.getArray(bank.eigenvalues, modes);
-      if (vertex_major) {
-        file.block_checksums_ = r.here();
-        if (blocks > r.remaining() / 8) return corrupt(source, "chunk 'MODV' is shorter than its block checksums");
-        r.skip(blocks * 8);
-      }
-      // The shapes are not copied here: readAll() or readShapeRows() read them when asked.
+      if (vertex_major) r.getArray(file.block_checksums_, blocks);
+      if (r.failed()) return corrupt(source, "chunk '" + tag + "' is shorter than its contents");
+      // The shapes are not read here: readAll() or readShapeRows() read them when asked.
+      const uint64_t shapes_offset = static_cast<uint64_t>(r.here() - payload_start);
+      const uint64_t shape_bytes = chunk_offset + chunk_size - shapes_offset;  // what the chunk has left
       const uint64_t values = uint64_t(modes) * 3;
-      if (!r.failed() && (mode_vertices != 0 && values > r.remaining() / 4 / mode_vertices))
+      if (mode_vertices != 0 && values > shape_bytes / 4 / mode_vertices)
         return corrupt(source, "chunk '" + tag + "' is shorter than its " + std::to_string(modes) + " modes x " +
                                    std::to_string(mode_vertices) + " vertices of shapes");
-      file.shape_bytes_ = r.here();
-      r.skip(values * mode_vertices * 4);
-      if (vertex_major) {
-        // The shapes must be exactly the unchecked tail: nothing after them escapes both checksums.
-        const uint64_t shapes_offset = static_cast<uint64_t>(file.shape_bytes_ - payload_start);
-        if (!r.failed() && (shapes_offset != head_size || r.remaining() != 0 || payload.remaining() != 0))
-          return corrupt(source, "the shapes of chunk 'MODV' are not the file's tail after the checked head");
-        file.block_verified_.assign(blocks, 0);
-      }
+      // The shapes must be exactly the unchecked tail of a format 3 file: nothing after them
+      // escapes both checksums.
+      if (vertex_major && (shapes_offset != head_size || shape_bytes != values * mode_vertices * 4 ||
+                           chunk_offset + chunk_size != payload_size))
+        return corrupt(source, "the shapes of chunk 'MODV' are not the file's tail after the checked head");
+      if (!runs_past) r.skip(values * mode_vertices * 4);
+      file.shapes_offset_ = header_size + shapes_offset;
       file.vertex_major_ = vertex_major;
       seen_modes = true;
     } else if (tag == "FERR") {
@@ -457,20 +477,25 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
   return file;
 }
 
-Status BankFile::verifyBlock(size_t block) {
-  if (!vertex_major_ || block_verified_[block]) return {};
-  uint64_t expected = 0;
-  std::memcpy(&expected, block_checksums_ + 8 * block, 8);
-  if (shapeBlockChecksum(shape_bytes_, bank_.modeCount(), bank_.surfaceVertexCount(), vertices_per_block_, block) != expected)
-    return corrupt(source_->name, "checksum mismatch in the shapes of vertices " +
-                                      std::to_string(block * vertices_per_block_) + " and on (the file is damaged)");
-  block_verified_[block] = 1;
+Status BankFile::readShapeBytes(size_t first, size_t count, std::vector<uint8_t>& to) const {
+  const size_t row_bytes = bank_.modeCount() * 3 * sizeof(float);
+  to.resize(count * row_bytes);
+  if (!source_->read(shapes_offset_ + first * row_bytes, to.size(), to.data()))
+    return corrupt(source_->name, "the file ended inside its mode shapes (was it truncated while open?)");
   return {};
 }
 
-Result<ShapeRows> BankFile::readShapeRows(std::vector<uint32_t> vertices) {
+Status BankFile::verifyBlock(size_t block, const uint8_t* bytes, size_t size) const {
+  if (shapeBlockChecksum(bytes, size, block) != block_checksums_[block])
+    return corrupt(source_->name, "checksum mismatch in the shapes of vertices " +
+                                      std::to_string(block * vertices_per_block_) + " and on (the file is damaged)");
+  return {};
+}
+
+Result<ShapeRows> BankFile::readShapeRows(std::vector<uint32_t> vertices) const {
   const size_t modes = bank_.modeCount();
   const size_t nv = bank_.surfaceVertexCount();
+  const size_t row_floats = modes * 3;
   std::sort(vertices.begin(), vertices.end());
   vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
   if (!vertices.empty() && vertices.back() >= nv)
@@ -478,43 +503,60 @@ Result<ShapeRows> BankFile::readShapeRows(std::vector<uint32_t> vertices) {
                     " is out of range, the bank has " + std::to_string(nv));
   ShapeRows rows;
   rows.modes = modes;
-  rows.values.resize(vertices.size() * modes * 3);
+  rows.values.resize(vertices.size() * row_floats);
+  std::vector<uint8_t> bytes;
+  size_t block_read = SIZE_MAX;  // format 3: the block in `bytes` (vertices come sorted)
   for (size_t i = 0; i < vertices.size(); ++i) {
     const size_t v = vertices[i];
-    float* row = rows.values.data() + i * modes * 3;
+    float* row = rows.values.data() + i * row_floats;
     if (vertex_major_) {
-      Status verified = verifyBlock(v / vertices_per_block_);
-      if (!verified) return verified.error();
-      std::memcpy(row, shape_bytes_ + v * modes * 3 * sizeof(float), modes * 3 * sizeof(float));
+      // Read and verify the whole block, then take the row from the verified bytes.
+      const size_t block = v / vertices_per_block_;
+      const size_t first = block * vertices_per_block_;
+      if (block != block_read) {
+        Status read = readShapeBytes(first, std::min<size_t>(vertices_per_block_, nv - first), bytes);
+        if (!read) return read.error();
+        Status verified = verifyBlock(block, bytes.data(), bytes.size());
+        if (!verified) return verified.error();
+        block_read = block;
+      }
+      std::memcpy(row, bytes.data() + (v - first) * row_floats * sizeof(float), row_floats * sizeof(float));
     } else {
+      // Formats 1-2 are all in memory and verified: gather [mode][vertex][xyz].
       for (size_t m = 0; m < modes; ++m)
-        std::memcpy(row + m * 3, shape_bytes_ + (m * nv + v) * 3 * sizeof(float), 3 * sizeof(float));
+        if (!source_->read(shapes_offset_ + (m * nv + v) * 3 * sizeof(float), 3 * sizeof(float),
+                           reinterpret_cast<uint8_t*>(row + m * 3)))
+          return corrupt(source_->name, "the file ended inside its mode shapes");
     }
-    for (size_t k = 0; k < modes * 3; ++k)
+    for (size_t k = 0; k < row_floats; ++k)
       if (!std::isfinite(row[k])) return corrupt(source_->name, "a mode shape value is not finite");
   }
   rows.vertices = std::move(vertices);
   return rows;
 }
 
-Result<ModeBank> BankFile::readAll() {
+Result<ModeBank> BankFile::readAll() const {
   ModeBank bank = bank_;
   const size_t modes = bank.modeCount();
   const size_t nv = bank.surfaceVertexCount();
   bank.shapes.resize(modes * nv * 3);
   if (vertex_major_) {
-    for (size_t b = 0; b < block_verified_.size(); ++b) {
-      Status verified = verifyBlock(b);
+    std::vector<uint8_t> bytes;
+    Status read = readShapeBytes(0, nv, bytes);
+    if (!read) return read.error();
+    const size_t row_bytes = modes * 3 * sizeof(float);
+    for (size_t b = 0; b < block_checksums_.size(); ++b) {
+      const size_t first = b * vertices_per_block_, count = std::min<size_t>(vertices_per_block_, nv - first);
+      Status verified = verifyBlock(b, bytes.data() + first * row_bytes, count * row_bytes);
       if (!verified) return verified.error();
     }
     // [vertex][mode][xyz] in the file, [mode][vertex][xyz] in memory.
-    for (size_t v = 0; v < nv; ++v) {
-      const uint8_t* row = shape_bytes_ + v * modes * 3 * sizeof(float);
+    for (size_t v = 0; v < nv; ++v)
       for (size_t m = 0; m < modes; ++m)
-        std::memcpy(bank.shapes.data() + (m * nv + v) * 3, row + m * 3 * sizeof(float), 3 * sizeof(float));
-    }
-  } else if (!bank.shapes.empty()) {
-    std::memcpy(bank.shapes.data(), shape_bytes_, bank.shapes.size() * sizeof(float));
+        std::memcpy(bank.shapes.data() + (m * nv + v) * 3, bytes.data() + v * row_bytes + m * 3 * sizeof(float),
+                    3 * sizeof(float));
+  } else if (!source_->read(shapes_offset_, bank.shapes.size() * sizeof(float), reinterpret_cast<uint8_t*>(bank.shapes.data()))) {
+    return corrupt(source_->name, "the file ended inside its mode shapes");
   }
   const std::string problem = bank.checkConsistency();
   if (!problem.empty()) return corrupt(source_->name, problem);
@@ -523,40 +565,61 @@ Result<ModeBank> BankFile::readAll() {
 
 Result<BankFile> BankFile::openBytes(const uint8_t* data, size_t size, const std::string& source) {
   auto bytes = std::make_shared<Source>();
-  bytes->data = data;
-  bytes->size = size;
   bytes->name = source;
+  bytes->data = data;
+  bytes->size = bytes->resident = size;
   return parse(std::move(bytes));
 }
 
 Result<BankFile> BankFile::open(const std::string& path) {
-  // A regular file is mapped, not read into a buffer: only the pages a reader touches are read
-  // (the head, and the shape blocks of the vertices a render strikes). Bank files are replaced
-  // by rename, never rewritten in place, so a mapping does not shrink under the reader. Anything
-  // else (or a failed map) takes the buffered path, which also words the errors.
+  // A format 3 file is read up to the end of its checked head (about 1 MB of a 17 MB plate
+  // bank) and kept open: its shapes are read with pread when asked. pread, not mmap: a file
+  // truncated meanwhile by someone else then gives an error instead of a SIGBUS. Anything else
+  // (formats 1-2, damaged headers, directories) is read whole, which also words the errors.
   auto bytes = std::make_shared<Source>();
   bytes->name = path;
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   struct stat info {};
-  if (fd >= 0 && fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0 &&
+  if (fd >= 0 && fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size >= kHeaderSizeV3 &&
       static_cast<uint64_t>(info.st_size) <= kMaxBankBytes) {
-    const size_t size = static_cast<size_t>(info.st_size);
-    void* mapped = mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
-    close(fd);
-    if (mapped != MAP_FAILED) {
-      bytes->mapped = mapped;
-      bytes->data = static_cast<const uint8_t*>(mapped);
-      bytes->size = size;
+    bytes->fd = fd;
+    bytes->size = static_cast<uint64_t>(info.st_size);
+    uint8_t header[kHeaderSizeV3] = {};
+    uint32_t version = 0, header_size = 0;
+    uint64_t head_size = 0;
+    if (bytes->read(0, sizeof header, header)) {
+      std::memcpy(&version, header + 8, 4);
+      std::memcpy(&header_size, header + 12, 4);
+      std::memcpy(&head_size, header + 32, 8);
+    }
+    // Only the head of a well-formed format 3 header; everything otherwise.
+    uint64_t wanted = bytes->size;
+    if (std::memcmp(header, kMagic, 8) == 0 && version == 3 && header_size == kHeaderSizeV3 &&
+        head_size <= bytes->size - kHeaderSizeV3)
+      wanted = kHeaderSizeV3 + head_size;
+    bytes->buffer.resize(wanted);
+    if (bytes->read(0, bytes->buffer.size(), reinterpret_cast<uint8_t*>(bytes->buffer.data()))) {  // from the file
+      bytes->data = reinterpret_cast<const uint8_t*>(bytes->buffer.data());
+      bytes->resident = wanted;
+      if (bytes->resident == bytes->size) {
+        close(bytes->fd);
+        bytes->fd = -1;
+      }
       return parse(std::move(bytes));
     }
+    bytes->buffer.clear();  // shorter than fstat said: the buffered path words it
   } else if (fd >= 0) {
     close(fd);
+  }
+  if (bytes->fd >= 0) {
+    close(bytes->fd);
+    bytes->fd = -1;
   }
   Result<std::string> read = readWholeFile(path, kMaxBankBytes);
   if (!read) return read.error();
   bytes->buffer = std::move(*read);
   bytes->data = reinterpret_cast<const uint8_t*>(bytes->buffer.data());
-  bytes->size = bytes->buffer.size();
+  bytes->size = bytes->resident = bytes->buffer.size();
   return parse(std::move(bytes));
 }
 

@@ -93,9 +93,10 @@ struct ShapeRows {
 
 /// A bank file opened to be read in parts. open() reads and verifies everything but the mode
 /// shapes (about 1 MB of a 17 MB plate bank); readShapeRows() reads the shapes at chosen
-/// vertices, verifying each block of the file they lie in against its own checksum the first
-/// time it is read. Files of formats 1 and 2 (one checksum over everything) are verified whole at
-/// open. Copies share the mapping; a file replaced by rename keeps its old contents readable.
+/// vertices, verifying each block of the file they lie in against its own checksum. The file
+/// stays open and is read with pread, not mapped: a file truncated by someone else meanwhile
+/// gives an error, not a SIGBUS. Files of formats 1 and 2 (one checksum over everything) are
+/// read and verified whole at open. Copies share the open file.
 class BankFile {
  public:
   static Result<BankFile> open(const std::string& path);
@@ -105,23 +106,24 @@ class BankFile {
   /// Everything but the shapes (`shapes` is empty).
   const ModeBank& bank() const { return bank_; }
   /// The shapes at `vertices` (any order, repeats allowed). Fails, naming the file, on a damaged
-  /// block, a non-finite value or a vertex out of range.
-  Result<ShapeRows> readShapeRows(std::vector<uint32_t> vertices);
+  /// block, a non-finite value, a vertex out of range or a file that has become shorter.
+  Result<ShapeRows> readShapeRows(std::vector<uint32_t> vertices) const;
   /// The whole bank, shapes included, every block verified.
-  Result<ModeBank> readAll();
+  Result<ModeBank> readAll() const;
 
  private:
   struct Source;
   BankFile() = default;
-  std::shared_ptr<const Source> source_;  ///< the bytes (a mapping or a buffer) and their name
+  std::shared_ptr<const Source> source_;  ///< the file (or bytes) and its name
   ModeBank bank_;
   bool vertex_major_ = false;             ///< format 3 (MODV) or 1-2 (MODE, [mode][vertex][xyz])
   uint32_t vertices_per_block_ = 0;
-  const uint8_t* block_checksums_ = nullptr;  ///< u64 per block (format 3)
-  const uint8_t* shape_bytes_ = nullptr;      ///< the f32 shapes inside the file
-  std::vector<uint8_t> block_verified_;       ///< per block: 1 once its checksum matched
+  std::vector<uint64_t> block_checksums_;  ///< format 3: one per block of vertices
+  uint64_t shapes_offset_ = 0;             ///< where the f32 shapes start in the file
   static Result<BankFile> parse(std::shared_ptr<const Source> source);
-  Status verifyBlock(size_t block);
+  /// Reads the shape bytes of vertices [first, first + count) into `to`.
+  Status readShapeBytes(size_t first, size_t count, std::vector<uint8_t>& to) const;
+  Status verifyBlock(size_t block, const uint8_t* bytes, size_t size) const;
 };
 
 /// Writes atomically: to PATH.tmp-XXXX in the same directory, then rename().

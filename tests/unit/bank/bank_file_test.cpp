@@ -263,6 +263,39 @@ TEST(BankFile, ReadsShapeRowsCheckingOnlyTheirBlocks) {
   EXPECT_FALSE(swapped_file->readShapeRows({per_block}));
 }
 
+// A BankFile keeps the file open and reads shapes with pread: a file truncated (or replaced by
+// rename) after open gives an error or the old contents, never a crash (a mapping would SIGBUS).
+TEST(BankFile, ReadsFromAFileTruncatedOrReplacedAfterOpenFailCleanly) {
+  const std::string dir = testing::TempDir() + "/bank_truncated";
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/big.modes";
+  const ModeBank bank = makeBigBank();
+  ASSERT_TRUE(writeBank(path, bank).ok());
+  Result<BankFile> file = BankFile::open(path);
+  ASSERT_TRUE(file) << file.error().message;
+  const uintmax_t full = std::filesystem::file_size(path);
+  EXPECT_TRUE(file->readShapeRows({999}));
+
+  // Replaced by rename (what writers do): the open file still reads its old, intact contents.
+  ModeBank other = bank;
+  for (float& v : other.shapes) v = -v;
+  ASSERT_TRUE(writeBank(path, other).ok());
+  Result<ShapeRows> old_rows = file->readShapeRows({999});
+  ASSERT_TRUE(old_rows) << old_rows.error().message;
+  EXPECT_EQ(old_rows->row(999)[0], bank.shapeAt(0, 999)[0]);
+
+  // Truncated in place under the reader: rows past the end fail naming the file.
+  Result<BankFile> reopened = BankFile::open(path);
+  ASSERT_TRUE(reopened);
+  std::filesystem::resize_file(path, full / 2);
+  EXPECT_TRUE(reopened->readShapeRows({0})) << "the first block is still there";
+  Result<ShapeRows> cut = reopened->readShapeRows({999});
+  ASSERT_FALSE(cut);
+  EXPECT_NE(cut.error().message.find(path), std::string::npos) << cut.error().message;
+  EXPECT_NE(cut.error().message.find("ended"), std::string::npos) << cut.error().message;
+  EXPECT_FALSE(reopened->readAll());
+}
+
 // Only the shapes escape the head checksum: a file whose head size stops short of them, or that
 // carries bytes after them, is refused even with a repaired head checksum.
 TEST(BankFile, NothingButTheShapesIsOutsideTheHeadChecksum) {

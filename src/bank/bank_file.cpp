@@ -486,10 +486,11 @@ Status BankFile::readShapeBytes(size_t first, size_t count, std::vector<uint8_t>
 }
 
 Status BankFile::verifyBlock(size_t block, const uint8_t* bytes, size_t size) const {
-  if (shapeBlockChecksum(bytes, size, block) != block_checksums_[block])
-    return corrupt(source_->name, "checksum mismatch in the shapes of vertices " +
-                                      std::to_string(block * vertices_per_block_) + " and on (the file is damaged)");
-  return {};
+  if (shapeBlockChecksum(bytes, size, block) == block_checksums_[block]) return {};
+  const size_t first = block * vertices_per_block_;
+  const size_t last = std::min<size_t>(first + vertices_per_block_, bank_.surfaceVertexCount()) - 1;
+  return corrupt(source_->name, "checksum mismatch in the shapes of surface vertices " + std::to_string(first) + " to " +
+                                    std::to_string(last) + " (the file is damaged)");
 }
 
 Result<ShapeRows> BankFile::readShapeRows(std::vector<uint32_t> vertices) const {

@@ -430,6 +430,29 @@ TEST_F(BarDrop, DamagedShapesInTheCacheAreRecomputedNotTrusted) {
   EXPECT_NE(r.err.find("shapes      read at"), std::string::npos) << r.err;
 }
 
+// A bank the scene names ("bank": ...) whose shapes are damaged is the user's file: the render
+// fails with exit 1, names the file and the vertices, and writes nothing.
+TEST_F(BarDrop, DamagedGivenBankFailsNamingItAndWritesNothing) {
+  const std::string dir = temp("given-bank-damaged");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::string bytes;
+  for (const auto& entry : std::filesystem::directory_iterator(cache_)) bytes = test::slurp(entry.path().string());
+  ASSERT_GT(bytes.size(), 40u);
+  uint64_t head_size = 0;
+  std::memcpy(&head_size, bytes.data() + 32, 8);
+  for (size_t at = 40 + head_size; at < bytes.size(); at += 200) bytes[at] = static_cast<char>(bytes[at] ^ 0x55);
+  std::ofstream(dir + "/bar.modes", std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  std::ofstream(dir + "/scene.json") << R"({"objects": [{"name": "bar", "mesh": "box:0.3,0.02,0.02", "bank": "bar.modes",
+    "material": "steel", "position": [0, 0, 0.15]}], "duration": 1})";
+  const std::string wav = dir + "/out.wav";
+  CliResult r = runCli("render '" + dir + "/scene.json' -o '" + wav + "' --no-cache");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("given-bank-damaged/bar.modes"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("checksum mismatch in the shapes of surface vertices"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(wav));
+}
+
 TEST(CliRender, MalformedScenesFailNamingTheKeyAndWriteNothing) {
   struct Case {
     std::string json, expected;

@@ -17,10 +17,9 @@
 //     pass against the basis, and top-Ritz-pair checks by LAPACK dsyevr, until the cut-off or
 //     the cap is passed; a second round, deflated against what was found, if the first falls
 //     short (ModalMethod::ArpackOnly instead grows ARPACK requests, single-vector). OpenBLAS
-//     runs single-threaded in this stage by default (ModalSettings::blas_threads), and the
-//     block solves, Gram-Schmidt products and M products are then split in two halves over
-//     two threads of our own (two_parts.hpp; 1.6x on this stage at 29k DOF with both cores
-//     free, tests/bench/modal);
+//     runs single-threaded for the whole solve, and the block solves, Gram-Schmidt products
+//     and M products are split in two fixed halves over two threads of our own
+//     (two_parts.hpp; the bits do not depend on the split happening);
 //  5. Rayleigh-Ritz on the kept vectors: exact M-orthonormality and ascending order (modes
 //     from a single block Lanczos run already are: Rayleigh quotients only); the residuals
 //     ||K x - lambda M x|| are measured and reported.
@@ -87,21 +86,12 @@ double secondsSince(Clock::time_point t0) {
 
 using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-/// work(begin, end, part) over [0, count): see TwoParts::run; one part without `parts`.
-template <class Index, class Work>
-void inParts(TwoParts* parts, Index count, Index split, const Work& work) {
-  if (parts != nullptr) {
-    parts->run(count, split, TwoParts::Alone::WholeRange, work);
-  } else {
-    work(Index{0}, count, 0);
-  }
-}
-
 /// Y = A X for a SYMMETRIC sparse A (K or M) and a block X of a few to a few hundred columns.
 /// Column j of A is row j, so each row of Y gathers rows of X: with X and Y row-major the
 /// inner loop runs over the block's columns, contiguous, and A is read once instead of once
 /// per column (Eigen's sparse * dense product; measured 2x faster at 16 and 100 columns).
-/// Rows of Y are independent: with `parts`, two threads fill one half each.
+/// Rows of Y are independent and each is summed by this loop in one order, so with `parts` two
+/// threads may fill one half each and the bits do not depend on the cut.
 void symmetricTimesBlock(const SpMat& A, const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd& Y,
                          TwoParts* parts = nullptr) {
   const RowMajorMatrix Xr = X;
@@ -112,7 +102,7 @@ void symmetricTimesBlock(const SpMat& A, const Eigen::Ref<const Eigen::MatrixXd>
   const int* nnz = A.innerNonZeroPtr();  // null when compressed
   const Eigen::Index b = X.cols();
   const Eigen::Index rows = A.outerSize();
-  inParts(parts, rows, rows / 2, [&](Eigen::Index begin, Eigen::Index end_row, int) {
+  auto rowsOfY = [&](Eigen::Index begin, Eigen::Index end_row, int) {
     for (Eigen::Index j = begin; j < end_row; ++j) {
       double* y = Yr.data() + j * b;
       std::fill(y, y + b, 0.0);
@@ -123,7 +113,12 @@ void symmetricTimesBlock(const SpMat& A, const Eigen::Ref<const Eigen::MatrixXd>
         for (Eigen::Index c = 0; c < b; ++c) y[c] += a * x[c];
       }
     }
-  });
+  };
+  if (parts != nullptr) {
+    parts->run(rows, rows / 2, rowsOfY);
+  } else {
+    rowsOfY(0, rows, 0);
+  }
   Y = Yr;
 }
 
@@ -210,19 +205,23 @@ class CholmodSolver {
   double factorNonZeros() const { return common_.lnz; }
 
   /// x = A^{-1} b for ncols right-hand sides stored column-major with leading dimension n.
-  /// With `parts`, a helper thread solves the second half of the columns with its own
-  /// CHOLMOD workspace (cholmod_solve2 only reads the factor). Two threads of 8 right-hand
-  /// sides each take ~70% of the time of one thread of 16 (per-thread cost 3.7 vs 2.6 ms per
-  /// right-hand side at 29k DOF, tests/bench/modal).
+  /// With `parts`, the columns are solved in two halves, ALWAYS: the second by the helper
+  /// thread when it is free, with its own CHOLMOD workspace (cholmod_solve2 only reads the
+  /// factor), else by this thread after the first. The halves are never merged into one call
+  /// when the helper is late: OpenBLAS's AVX-512 kernels give other last bits for 16
+  /// right-hand sides than for 2 x 8. Two threads of 8 right-hand sides each take ~70% of the
+  /// time of one thread of 16 (per-thread cost 3.7 vs 2.6 ms per right-hand side at 29k DOF,
+  /// tests/bench/modal).
   bool solve(const double* b, double* x, int ncols, TwoParts* parts = nullptr) {
-    if (parts != nullptr && !helper_started_) {
+    if (parts == nullptr) return solveColumns(b, x, ncols, common_, x_, y_, e_);
+    if (!helper_started_) {
       cholmod_start(&helper_common_);
       helper_common_.print = 0;
       helper_started_ = true;
     }
     const size_t n = factor_->n;
     bool ok[2] = {true, true};
-    inParts(parts, ncols, ncols / 2, [&](int first, int end, int part) {
+    parts->run(ncols, ncols / 2, [&](int first, int end, int part) {
       ok[part] = solveColumns(b + n * static_cast<size_t>(first), x + n * static_cast<size_t>(first), end - first,
                               part == 0 ? common_ : helper_common_, part == 0 ? x_ : helper_x_,
                               part == 0 ? y_ : helper_y_, part == 0 ? e_ : helper_e_);
@@ -286,7 +285,7 @@ struct Context {
   CholmodSolver& solver;
   double sigma;
   const ModalSettings& settings;
-  TwoParts* parts = nullptr;  // block stage: solves and products in two parts on two threads
+  TwoParts* parts = nullptr;  // block stage: solves and products in two fixed parts (two_parts.hpp)
   int applications = 0;
   double solve_seconds = 0.0;
   double orthogonalize_seconds = 0.0;
@@ -484,24 +483,18 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   MQ.leftCols(b) = MW;
 
   // One classical Gram-Schmidt pass against basis columns [first, first + width):
-  // h = (M Q)^T W, W -= Q h, both products split by rows over two threads with ctx.parts
-  // (each thread streams half of Q and M Q; h is the sum of the two parts' products).
+  // h = (M Q)^T W, W -= Q h, both products split by rows in two halves over two threads
+  // (each thread streams half of Q and M Q; h is the sum of the two halves' products). The
+  // halves are the same whoever computes them (ctx.parts runs them in turn without a helper).
   Eigen::MatrixXd h_parts[2];
+  const Eigen::Index half = n / 2;
   auto gramSchmidt = [&](Eigen::Index first, Eigen::Index width, Eigen::MatrixXd& h_out) {
     for (Eigen::MatrixXd& part : h_parts) part.resize(width, b);
-    const Eigen::Index split = ctx.parts != nullptr ? n / 2 : n;
-    auto partial = [&](Eigen::Index r0, Eigen::Index r1, int part) {
+    ctx.parts->run(n, half, [&](Eigen::Index r0, Eigen::Index r1, int part) {
       h_parts[part].noalias() = MQ.block(r0, first, r1 - r0, width).transpose() * W.middleRows(r0, r1 - r0);
-    };
-    if (ctx.parts != nullptr) {
-      // A sum over rows: always the same two parts, whoever computes them.
-      ctx.parts->run(n, split, TwoParts::Alone::BothParts, partial);
-    } else {
-      partial(0, n, 0);
-    }
-    h_out = h_parts[0];
-    if (split < n) h_out += h_parts[1];
-    inParts(ctx.parts, n, split, [&](Eigen::Index r0, Eigen::Index r1, int) {
+    });
+    h_out = h_parts[0] + h_parts[1];
+    ctx.parts->run(n, half, [&](Eigen::Index r0, Eigen::Index r1, int) {
       W.middleRows(r0, r1 - r0).noalias() -= Q.block(r0, first, r1 - r0, width) * h_out;
     });
   };
@@ -598,7 +591,7 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   const Eigen::Index total = locked + num_converged;
   found.vectors.conservativeResize(n, total);
   found.m_vectors.conservativeResize(n, total);
-  inParts(ctx.parts, n, n / 2, [&](Eigen::Index r0, Eigen::Index r1, int) {
+  ctx.parts->run(n, n / 2, [&](Eigen::Index r0, Eigen::Index r1, int) {
     found.vectors.block(r0, locked, r1 - r0, num_converged).noalias() = Q.block(r0, 0, r1 - r0, kb) * S.topRows(kb);
   });
   Q.resize(0, 0);  // the basis is not needed any more: release it before the temporaries below
@@ -686,11 +679,15 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   // All modes from one block Lanczos run: M-orthonormal and ascending by construction.
   bool single_block_round = false;
   std::unique_ptr<CholmodSolver> solver;
-  // A helper thread for the block stage and the refinement when OpenBLAS runs single-threaded
-  // there (the default; see two_parts.hpp) and the machine has two cores or more.
+  // OpenBLAS single-threaded for the whole solve, factorization included: its threaded
+  // kernels gave other bits from run to run (the same matrix's CHOLMOD factor), and its idle
+  // threads spin. The parallelism is ours instead (two_parts.hpp): a helper thread for the
+  // block stage and the refinement when the machine has two cores or more, with the work cut
+  // in the same two parts whether it takes part or not.
+  const BlasThreadsScope one_blas_thread(1);
   const bool block_stage = n > 600 && settings.method != ModalMethod::ArpackOnly && settings.max_modes + 7 > kArpackModes;
-  TwoParts parts(block_stage && settings.blas_threads == 1 && std::thread::hardware_concurrency() >= 2);
-  TwoParts* const parts_or_null = parts.active() ? &parts : nullptr;
+  TwoParts parts(block_stage && settings.threads >= 2 && std::thread::hardware_concurrency() >= 2,
+                 std::chrono::microseconds(settings.helper_delay_us));
   if (n <= 600) {
     // Tiny problems (a few cells): LAPACK on dense matrices is exact and faster than setting
     // up Lanczos, and ARPACK needs ncv < n anyway.
@@ -708,9 +705,8 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     if (settings.progress) settings.progress("factorize", 1.0);
 
     const auto t_lanczos = Clock::now();
-    const BlasThreadsScope blas_threads(settings.blas_threads);
     Context ctx{K, M_pruned, *solver, out.sigma, settings};
-    ctx.parts = parts_or_null;
+    ctx.parts = &parts;
     Found found;
     // A small request (at most kArpackModes pairs): ARPACK alone, to full accuracy. A larger
     // one: block Lanczos from scratch (rigid modes included), then, only if it fell short,
@@ -810,12 +806,12 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   all_vectors = Eigen::MatrixXd();
   if (p > 0) {
     Eigen::MatrixXd KX, MX;
-    symmetricTimesBlock(K, X, KX, parts_or_null);
+    symmetricTimesBlock(K, X, KX, &parts);
     if (all_m_vectors.cols() == all_lambdas.size()) {
       MX.resize(n, p);
       for (Eigen::Index k = 0; k < p; ++k) MX.col(k) = all_m_vectors.col(kept[static_cast<size_t>(k)]);
     } else {
-      symmetricTimesBlock(M_pruned, X, MX, parts_or_null);
+      symmetricTimesBlock(M_pruned, X, MX, &parts);
     }
     all_m_vectors = Eigen::MatrixXd();
     if (single_block_round) {

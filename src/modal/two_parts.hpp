@@ -1,17 +1,21 @@
 // SPDX-License-Identifier: MIT
-// Splits a loop over [0, count) in two parts, the second on one persistent helper thread.
+// Splits a loop over [0, count) in two fixed parts, the second on one persistent helper thread
+// when it is free, so that the numbers never depend on the timing.
 //
 // The block Lanczos stage streams its basis and the factor through one core otherwise.
-// OpenBLAS's own threads would do the same split, but its idle threads spin (sched_yield),
-// which on a shared 2-core machine takes the core from the thread doing the work. The helper
-// here sleeps on a condition variable between parts. On a loaded machine a second thread
-// gains nothing and can lose: a thread started per call waits a scheduler slice before it
-// first runs (measured 30% slower than one thread at load 7), and a split block solve costs
-// 1.4x the CPU of an unsplit one. So a run is split only when the helper picks its part up
-// within kStartWait; otherwise the caller does the work alone: the whole range in one part
-// when the parts' results do not depend on where the range is cut (rows of a product), or
-// both parts in turn when they do (a sum over rows), so that the numbers never depend on
-// the machine's load.
+// OpenBLAS's own threads would do the same split, but its idle threads spin (sched_yield), and
+// on a shared 2-core machine they take the core from the thread doing the work; its threaded
+// results also change from run to run (measured: the CHOLMOD factor of the same matrix with
+// two OpenBLAS threads gave different bits in different runs). The helper here sleeps on a
+// condition variable between parts. On a loaded machine a second thread gains nothing and can
+// lose (a thread woken per call waits a scheduler slice before it first runs), so a part the
+// helper has not picked up within kStartWait is done by the caller.
+//
+// Determinism: the two parts are ALWAYS the same, [0, split) and [split, count), whoever
+// computes them, and also without a helper thread at all. A BLAS kernel may give other bits for
+// a block of 16 columns than for two blocks of 8 (OpenBLAS's AVX-512 kernels do: 17% of the
+// values of a CHOLMOD solve differ in the last bits), so "rows of a product do not depend on
+// where the range is cut" cannot be assumed: the cut never moves.
 #pragma once
 
 #include <chrono>
@@ -25,13 +29,14 @@ namespace strike {
 
 class TwoParts {
  public:
-  /// Starts the helper thread when `enabled` (and the system can start one).
-  explicit TwoParts(bool enabled) {
-    if (!enabled) return;
+  /// Starts the helper thread when `use_helper` (and the system can start one). `helper_delay`
+  /// is for tests: the helper sleeps that long before it picks up each part.
+  explicit TwoParts(bool use_helper, std::chrono::microseconds helper_delay = {}) : helper_delay_(helper_delay) {
+    if (!use_helper) return;
     try {
       helper_ = std::thread([this] { helperLoop(); });
     } catch (const std::system_error&) {
-      // No helper: every run() is serial.
+      // No helper: every run() is done by the caller, in the same two parts.
     }
   }
   ~TwoParts() {
@@ -43,26 +48,17 @@ class TwoParts {
     wake_.notify_one();
     helper_.join();
   }
-  /// True when a helper thread runs.
-  bool active() const { return helper_.joinable(); }
   TwoParts(const TwoParts&) = delete;
   TwoParts& operator=(const TwoParts&) = delete;
 
-  enum class Alone { WholeRange, BothParts };
-
-  /// Calls work(0, split, 0) in this thread and work(split, count, 1) in the helper. Without
-  /// a helper, or when it does not start within kStartWait, this thread does it alone: with
-  /// Alone::WholeRange as work(0, count, 0), with Alone::BothParts as the two calls above in
-  /// turn. `work` must not throw: a throw in the helper thread would end the process.
+  /// Calls work(0, split, 0) and work(split, count, 1): the second in the helper thread when
+  /// it picks it up within kStartWait, else in this thread after the first. `work` must not
+  /// throw: a throw in the helper thread would end the process.
   template <class Index, class Work>
-  void run(Index count, Index split, Alone alone, const Work& work) {
+  void run(Index count, Index split, const Work& work) {
     auto by_itself = [&] {
-      if (alone == Alone::WholeRange) {
-        work(Index{0}, count, 0);
-      } else {
-        work(Index{0}, split, 0);
-        work(split, count, 1);
-      }
+      work(Index{0}, split, 0);
+      work(split, count, 1);
     };
     if (!helper_.joinable() || !(split > 0 && split < count)) {
       by_itself();
@@ -87,7 +83,7 @@ class TwoParts {
   }
 
   /// How long a run waits for the helper to start its part (an idle core wakes it in tens of
-  /// microseconds; a block solve takes tens of milliseconds).
+  /// microseconds; a block solve takes milliseconds).
   static constexpr std::chrono::microseconds kStartWait{300};
 
  private:
@@ -98,6 +94,13 @@ class TwoParts {
       wake_.wait(lock, [&] { return stop_ || generation_ != seen; });
       if (stop_) return;
       seen = generation_;
+      if (helper_delay_.count() > 0) {
+        lock.unlock();
+        std::this_thread::sleep_for(helper_delay_);
+        lock.lock();
+        if (stop_) return;
+        if (generation_ != seen) continue;  // that run is over; a newer one waits
+      }
       if (claimed_) continue;  // the caller did this part itself
       claimed_ = true;
       started_.notify_one();
@@ -109,6 +112,7 @@ class TwoParts {
     }
   }
 
+  std::chrono::microseconds helper_delay_;
   std::thread helper_;
   std::mutex mutex_;
   std::condition_variable wake_;

@@ -30,14 +30,18 @@ struct ModalSettings {
   ModalMethod method = ModalMethod::Hybrid;
   /// Right-hand sides per block solve in the block Lanczos stage (Hybrid); 0 = default (16).
   int block_size = 0;
-  /// OpenBLAS threads during the Lanczos stage, restored afterwards (the setting is process
-  /// wide: do not run other BLAS work concurrently); 0 leaves OpenBLAS alone. One thread is
-  /// the default: the stage's dense products are thin, and on a shared 2-core machine idle
-  /// OpenBLAS threads spin (sched_yield) instead of working (tests/bench/modal). With 1, on
-  /// a machine of two cores or more, the block stage splits its solves and dense products
-  /// with one helper thread of its own, which sleeps between parts and is used only when it
-  /// starts promptly (the numbers do not depend on it).
-  int blas_threads = 1;
+  /// Threads of our own in the block Lanczos stage and the refinement: 2 (on a machine of two
+  /// cores or more) splits each block solve and dense product in two fixed halves, the second
+  /// on a helper thread that sleeps between parts and is used only when it starts promptly;
+  /// 1 does both halves in the calling thread. The result is the same bits either way, and
+  /// whatever the load (tests/unit/modal/determinism_test.cpp). OpenBLAS itself runs
+  /// single-threaded during the solve whatever OPENBLAS_NUM_THREADS says (its threaded kernels
+  /// are not reproducible from run to run). What does change the bits: the BLAS kernels
+  /// OpenBLAS picks for the CPU (docs/determinism.md).
+  int threads = 2;
+  /// For tests: the helper thread sleeps this long before it picks up each part (a part it
+  /// has not picked up within 300 us is done by the calling thread). Never changes the bits.
+  int helper_delay_us = 0;
 };
 
 struct ModalResult {

@@ -4,7 +4,7 @@
 //   strike_modal_bench [--naive] [--only 50k|150k] [--repeat N] [--block B] [--threads T]
 //                      [--max-freq F] [--max-modes N]
 // --repeat N runs the hybrid solve N times (best and spread: the machine is shared), --block
-// sets the block Lanczos block size, --threads the OpenBLAS threads of the Lanczos stage,
+// sets the block Lanczos block size, --threads our own threads (ModalSettings::threads, 1 or 2),
 // --max-freq F --max-modes N a cut-off-limited request instead of 100 modes (the default).
 // --naive also times a single-vector baseline (ARPACK to full accuracy, no block refinement)
 // in the same process, so the printed ratio does not depend on how loaded the machine is.
@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
     settings.max_freq_hz = max_freq;
     settings.max_modes = max_modes;
     settings.block_size = block;
-    if (threads >= 0) settings.blas_threads = threads;
+    if (threads >= 1) settings.threads = threads;
     std::vector<double> totals;
     strike::ModalResult modes;
     for (int r = 0; r < repeat; ++r) {

@@ -246,7 +246,7 @@ TEST(Settings, HybridMatchesArpackOnly) {
 
 TEST(Settings, BlockLanczosMatchesArpackOnlyOnAMediumSolidAndIsDeterministic) {
   // A 100-mode request (the block Lanczos path from scratch, rigid modes included) on a
-  // medium solid, with two block sizes and with OpenBLAS left alone, against ARPACK alone.
+  // medium solid, with two block sizes and with one thread, against ARPACK alone.
   ModalSettings settings;
   settings.max_freq_hz = 1e9;
   settings.max_modes = 100;
@@ -265,17 +265,18 @@ TEST(Settings, BlockLanczosMatchesArpackOnlyOnAMediumSolidAndIsDeterministic) {
 
   ModalSettings other = settings;
   other.block_size = 32;
-  other.blas_threads = 0;
+  other.threads = 1;
   auto wide = solveModes(s.K, s.M, other);
   ASSERT_TRUE(wide.ok()) << wide.error().message;
   ASSERT_EQ(wide->eigenvalues.size(), 100);
   EXPECT_EQ(wide->block_size, 32);
   EXPECT_LT(((wide->eigenvalues - reference->eigenvalues).array() / reference->eigenvalues.array()).abs().maxCoeff(), 1e-8);
 
-  // Fixed start blocks: the same request gives the same numbers.
+  // Fixed start blocks: the same request gives the same numbers (under hostile timing too:
+  // determinism_test.cpp).
   auto again = solveModes(s.K, s.M, settings);
   ASSERT_TRUE(again.ok());
-  EXPECT_EQ(again->eigenvalues, s.modes.eigenvalues);
+  EXPECT_TRUE(again->eigenvalues == s.modes.eigenvalues);
   EXPECT_EQ(again->operator_applications, s.modes.operator_applications);
 }
 

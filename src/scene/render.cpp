@@ -330,6 +330,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   SynthSettings synth_settings;
   synth_settings.sample_rate_hz = rate;
   synth_settings.max_freq_hz = std::min(20000.0, max_freq_hz);
+  synth_settings.simd = settings.simd;
   if (settings.leave_nothing_out) {
     synth_settings.max_freq_hz = max_freq_hz;
     synth_settings.audibility_threshold = 0.0;

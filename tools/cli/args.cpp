@@ -28,6 +28,18 @@ Result<SampleEncoding> sampleEncodingFor(const ParsedArgs& args, const std::stri
   return badInput("--format = '" + format + "' (expected pcm16, pcm24 or float)");
 }
 
+Result<SimdLevel> simdLevelFor(const ParsedArgs& args) {
+  const char* env = std::getenv("STRIKE_SIMD");
+  const bool from_option = args.has("--simd");
+  const std::string name = from_option ? args.text("--simd") : (env != nullptr ? env : "auto");
+  if (name == "auto" || name.empty()) return SimdLevel::Auto;
+  if (name == "scalar") return SimdLevel::Scalar;
+  if (name == "avx2") return SimdLevel::Avx2;
+  if (name == "avx512") return SimdLevel::Avx512;
+  return badInput(std::string(from_option ? "--simd" : "STRIKE_SIMD") + " = '" + name +
+                  "' (expected auto, scalar, avx2 or avx512)");
+}
+
 std::string ParsedArgs::text(const std::string& name, const std::string& fallback) const {
   auto it = values_.find(name);
   return it == values_.end() ? fallback : it->second;

@@ -11,6 +11,7 @@
 
 #include "strike/audio.hpp"
 #include "strike/result.hpp"
+#include "strike/synth.hpp"
 
 namespace strike::cli {
 
@@ -49,6 +50,15 @@ std::string helpText(const CommandSpec& spec);
 /// The sample encoding from --format, defaulting by the output's extension: float for .wav
 /// (keeps levels above full scale), pcm24 for .flac (FLAC has no float).
 Result<SampleEncoding> sampleEncodingFor(const ParsedArgs& args, const std::string& output);
+
+/// The synthesizer's kernel: --simd, else $STRIKE_SIMD, else auto (the widest the CPU has).
+/// auto|scalar|avx2|avx512; a kernel the CPU lacks falls back to the next narrower one.
+Result<SimdLevel> simdLevelFor(const ParsedArgs& args);
+
+/// The --simd option's help row (render and hit).
+inline constexpr const char* kSimdHelp =
+    "synthesizer kernel: auto, scalar, avx2 or avx512; default $STRIKE_SIMD, else auto. Kernels differ "
+    "only in the last bits (< -120 dB re peak: docs/determinism.md)";
 
 /// Parses a number strictly: the whole text, finite. `what` names it in the error.
 Result<double> parseNumber(const std::string& text, const std::string& what);

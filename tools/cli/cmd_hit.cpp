@@ -39,6 +39,7 @@ CommandSpec hitSpec() {
       {"--contact-time", "S", "force pulse duration, s (0 = ideal impulse); default from Hertz theory"},
       {"--striker", "MATERIAL", "striker sphere material for the Hertz contact time; default steel"},
       {"--striker-radius", "M", "striker sphere radius, m; default 0.005"},
+      {"--simd", "KERNEL", kSimdHelp},
       {"--quiet", "", "no summary on stderr"},
   };
   spec.examples =
@@ -88,6 +89,8 @@ int runHit(const std::vector<std::string>& raw_args) {
 
   Result<double> duration = args.number("--duration", 2.0);
   Result<double> rate = args.number("--rate", 48000.0);
+  Result<SimdLevel> simd = simdLevelFor(args);
+  if (!simd) return reportError("hit", simd.error());
   Result<double> distance = args.number("--distance", 1.0);
   Result<double> gain = args.number("--gain", 1.0);
   Result<double> striker_radius = args.number("--striker-radius", 0.005);
@@ -154,6 +157,7 @@ int runHit(const std::vector<std::string>& raw_args) {
 
   SynthSettings settings;
   settings.sample_rate_hz = *rate;
+  settings.simd = *simd;
   OscillatorBank synth(settings);
   ModalObjectDesc object;
   object.eigenvalues = bank.eigenvalues;

@@ -34,6 +34,7 @@ CommandSpec renderSpec() {
       {"--no-cache", "", "compute every bank, read and write no cache"},
       {"--max-tets", "N", "refuse object meshes with more tets than this (memory cap); default 2000000"},
       {"--max-events", "N", "stop if the simulation records more contact events (memory cap); default 20000000"},
+      {"--simd", "KERNEL", kSimdHelp},
       {"--quiet", "", "no progress or summary on stderr"},
   };
   spec.examples =
@@ -113,6 +114,9 @@ int runRender(const std::vector<std::string>& raw_args) {
   if (*max_events < 1)
     return reportError("render", badInput("--max-events = " + args.text("--max-events") + " (must be >= 1)"));
   settings.max_events = static_cast<size_t>(*max_events);
+  Result<SimdLevel> simd = simdLevelFor(args);
+  if (!simd) return reportError("render", simd.error());
+  settings.simd = *simd;
   settings.cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
 
   const std::string output = args.text("-o");

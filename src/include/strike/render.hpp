@@ -14,6 +14,7 @@
 #include "strike/progress.hpp"
 #include "strike/scene.hpp"
 #include "strike/sim.hpp"
+#include "strike/synth.hpp"
 
 namespace strike {
 
@@ -40,6 +41,8 @@ struct RenderSettings {
   /// impact is placed within one step (48 samples at 48 kHz); 1 ms halves the simulation cost of
   /// the 0.5 ms step used before (`strike bench render` measures both).
   double substep_s = 1e-3;
+  /// The synthesizer's kernel (SynthSettings::simd): kernels differ only in the last bits.
+  SimdLevel simd = SimdLevel::Auto;
   ProgressFn progress;
 };
 

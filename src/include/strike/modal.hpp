@@ -36,7 +36,9 @@ struct ModalSettings {
   /// 1 does both halves in the calling thread. The result is the same bits either way, and
   /// whatever the load (tests/unit/modal/determinism_test.cpp). OpenBLAS itself runs
   /// single-threaded during the solve whatever OPENBLAS_NUM_THREADS says (its threaded kernels
-  /// are not reproducible from run to run). What does change the bits: the BLAS kernels
+  /// are not reproducible from run to run); that setting is process-wide, so it is restored
+  /// afterwards, and other BLAS work should not run concurrently with a solve. What does change
+  /// the bits: the BLAS kernels
   /// OpenBLAS picks for the CPU (docs/determinism.md).
   int threads = 2;
   /// For tests: the helper thread sleeps this long before it picks up each part (a part it

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "../../capi/test_bank.hpp"  // the hand-made plate: modes at 440, 1000, 2500, 5200 Hz
-#include "run_cli.hpp"
+#include "cli/run_cli.hpp"
+#include "test_bank.hpp"  // the hand-made plate: modes at 440, 1000, 2500, 5200 Hz
 #include "strike/audio.hpp"
 #include "strike/bank.hpp"
 #include "strike/strike.h"

@@ -158,8 +158,8 @@ typedef struct strike_context_config {
   /** Output amplitude (output units, before object gain) below which a mode sleeps; default 1e-6
    *  (with the default output_full_scale_pa, 20 uPa: 0 dB SPL). */
   double audibility_threshold;
-  /** Distance at which the output is the bank's radiated pressure, m (> 0); closer objects are
-   *  not louder. Gain = reference / max(distance, reference). Default 1. */
+  /** Distance at which the output is the bank's radiated pressure (over output_full_scale_pa),
+   *  m (> 0); closer objects are not louder. Gain = reference / max(distance, reference). Default 1. */
   double reference_distance_m;
   strike_log_fn log;             /**< NULL = no logging */
   strike_alloc_fn alloc;         /**< NULL = aligned_alloc; alloc and free are both set or both NULL */

@@ -202,11 +202,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: cannot write\n", argv[2]);
     return 1;
   }
-  std::printf("%s: %.2f s, %llu impacts queued, %llu scheduled, %llu dropped, peak %.3g Pa (normalized x%.3g), %zu clipped\n",
+  std::printf("%s: %.2f s, %llu impacts queued, %llu scheduled, %llu dropped, peak %.3g full scale = %.3g Pa (normalized x%.3g), %zu clipped\n",
               argv[2], audio_time, static_cast<unsigned long long>(impacts),
               static_cast<unsigned long long>(stats.impacts_scheduled),
               static_cast<unsigned long long>(stats.impacts_dropped_queue_full + stats.impacts_dropped_capacity),
-              static_cast<double>(peak), gain, clipped);
+              static_cast<double>(peak), static_cast<double>(peak) * cfg.output_full_scale_pa, gain, clipped);
   for (Body& b : bodies) world.removeRigidBody(b.body.get());
   world.removeRigidBody(&ground);
   strike_bank_destroy(bank);

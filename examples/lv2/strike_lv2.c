@@ -7,7 +7,14 @@
  *  - Velocity picks the impact speed v = 0.05 * 100^(velocity / 127) m/s (0.05 .. 5 m/s) of a
  *    10 mm, 50 g steel ball; the impulse is m v along the inward normal and the Hertz contact
  *    time falls as v^(-1/5), so harder notes are louder AND brighter.
- *  - Control port "gain" (dB).
+ *  - Level: the object is normalised when the plugin is instantiated, so that the loudest note
+ *    at velocity 127 peaks at -6 dBFS (two such notes struck together cannot clip) whatever the
+ *    bank: every note is struck once at velocity 127 in a private probe context and the peak of
+ *    its first PROBE_SECONDS is measured. Velocity then spans 40 dB of impulse (a medium note,
+ *    velocity 64, is about 20 dB below velocity 127) and the brightness of the Hertz contact.
+ *    Without it the physical level of a 5 m/s steel ball 1 m away varies by orders of magnitude
+ *    from one object to another (the hand-made plate of the tests peaked at +51 dBFS).
+ *  - Control port "gain" (dB, default 0) on top of that.
  * Everything is allocated in instantiate(); run() only queues impacts and calls strike_render(),
  * which never allocates. */
 #include <math.h>
@@ -25,6 +32,13 @@
 
 #define STRIKE_LV2_URI "https://github.com/strike-synth/strike/lv2/instrument"
 #define STRIKE_LV2_MAX_BLOCK 4096u
+#define STRIKE_LV2_LOUDEST_NOTE_PEAK 0.5 /* -6 dBFS: the loudest note at velocity 127 */
+#define STRIKE_LV2_NOTES 128
+#define STRIKER_MASS_KG 0.05 /* the striking ball's mass (radius 5 mm, see note_impact) */
+/* How long each probe note is rendered, s: at least 4 periods of the lowest mode (the peak of a
+ * struck object comes within its first few periods), within these bounds. */
+#define STRIKE_LV2_PROBE_MIN_S 0.02
+#define STRIKE_LV2_PROBE_MAX_S 0.25
 
 enum { PORT_MIDI_IN = 0, PORT_OUT_L = 1, PORT_OUT_R = 2, PORT_GAIN = 3 };
 
@@ -38,8 +52,10 @@ typedef struct {
   strike_bank bank;
   strike_object_id object;
   uint32_t vertices;
-  double mass_striker_kg;
 } StrikeLv2;
+
+static double loudest_note_peak(const strike_context_config* cfg, const char* bank_path,
+                                const strike_object_config* ocfg_in);
 
 static LV2_Handle instantiate(const LV2_Descriptor* descriptor, double rate, const char* bundle_path,
                               const LV2_Feature* const* features) {
@@ -49,8 +65,13 @@ static LV2_Handle instantiate(const LV2_Descriptor* descriptor, double rate, con
   strike_object_config ocfg;
   strike_bank_info info;
   char path[4096];
+  double loudest;
   int i;
   (void)descriptor;
+  if (!bundle_path) {
+    fprintf(stderr, "strike.lv2: the host gave no bundle path\n");
+    return NULL;
+  }
   for (i = 0; features && features[i]; ++i)
     if (strcmp(features[i]->URI, LV2_URID__map) == 0) map = (const LV2_URID_Map*)features[i]->data;
   if (!map) {
@@ -60,7 +81,6 @@ static LV2_Handle instantiate(const LV2_Descriptor* descriptor, double rate, con
   self = (StrikeLv2*)calloc(1, sizeof(StrikeLv2));
   if (!self) return NULL;
   self->midi_event = map->map(map->handle, LV2_MIDI__MidiEvent);
-  self->mass_striker_kg = 0.05;
   self->last_gain_db = 0.0f;
 
   cfg = strike_context_config_default();
@@ -86,8 +106,16 @@ static LV2_Handle instantiate(const LV2_Descriptor* descriptor, double rate, con
   ocfg = strike_object_config_default();
   ocfg.bank = self->bank;
   ocfg.position[1] = 1.0; /* 1 m in front of the listener */
-  ocfg.gain = 20.0f;      /* Pa at 1 m -> a usable level for ~1 kg objects */
-  if (self->vertices == 0 || strike_object_add(self->ctx, &ocfg, &self->object) != STRIKE_OK) {
+  loudest = self->vertices > 0 ? loudest_note_peak(&cfg, path, &ocfg) : 0.0;
+  if (!(loudest > 0.0)) {
+    fprintf(stderr, "strike.lv2: %s: no note of this bank makes a sound\n", path);
+    strike_bank_destroy(self->bank);
+    strike_context_destroy(self->ctx);
+    free(self);
+    return NULL;
+  }
+  ocfg.gain = (float)(STRIKE_LV2_LOUDEST_NOTE_PEAK / loudest);
+  if (strike_object_add(self->ctx, &ocfg, &self->object) != STRIKE_OK) {
     fprintf(stderr, "strike.lv2: %s\n", strike_context_last_error(self->ctx));
     strike_bank_destroy(self->bank);
     strike_context_destroy(self->ctx);
@@ -108,22 +136,88 @@ static void connect_port(LV2_Handle instance, uint32_t port, void* data) {
   }
 }
 
-static void note_on(StrikeLv2* self, uint8_t note, uint8_t velocity, uint32_t frame) {
+/* The impact of one note: the note picks the vertex, the velocity the speed of the ball. */
+static strike_impact_desc note_impact(strike_bank bank, uint32_t vertices, strike_object_id object, uint8_t note,
+                                      uint8_t velocity, uint32_t frame) {
   strike_impact_desc hit = strike_impact_desc_default();
   double normal[3] = {0, 0, 1};
   const double speed = 0.05 * pow(100.0, (double)velocity / 127.0);
-  const double impulse = self->mass_striker_kg * speed;
-  hit.object = self->object;
-  hit.surface_vertex = (int32_t)(((uint32_t)note * 37u) % self->vertices);
-  strike_bank_surface_vertex(self->bank, (uint32_t)hit.surface_vertex, NULL, normal);
+  const double impulse = STRIKER_MASS_KG * speed;
+  hit.object = object;
+  hit.surface_vertex = (int32_t)(((uint32_t)note * 37u) % vertices);
+  strike_bank_surface_vertex(bank, (uint32_t)hit.surface_vertex, NULL, normal);
   hit.impulse[0] = -impulse * normal[0]; /* into the surface */
   hit.impulse[1] = -impulse * normal[1];
   hit.impulse[2] = -impulse * normal[2];
   hit.normal_speed_m_s = speed;
   hit.striker_radius_m = 0.005;
-  hit.striker_mass_kg = self->mass_striker_kg;
+  hit.striker_mass_kg = STRIKER_MASS_KG;
   hit.sample_offset = frame;
+  return hit;
+}
+
+static void note_on(StrikeLv2* self, uint8_t note, uint8_t velocity, uint32_t frame) {
+  const strike_impact_desc hit = note_impact(self->bank, self->vertices, self->object, note, velocity, frame);
   (void)strike_impact(self->ctx, &hit); /* a full queue drops the note; counted in stats */
+}
+
+/* Peak output (either channel) of the loudest note at velocity 127, at object gain 1: each note
+ * is struck alone on a fresh object in a probe context like the plugin's and rendered for
+ * PROBE seconds. Main thread (instantiate) only: it allocates. Returns 0 on failure. */
+static double loudest_note_peak(const strike_context_config* cfg, const char* bank_path, const strike_object_config* ocfg_in) {
+  strike_context probe;
+  strike_bank bank;
+  strike_bank_info info;
+  strike_object_config ocfg = *ocfg_in;
+  double peak = 0.0, probe_s;
+  uint32_t frames, note, vertices;
+  float* buffers;
+  if (strike_context_create(cfg, &probe) != STRIKE_OK) return 0.0;
+  if (strike_bank_load_file(probe, bank_path, &bank) != STRIKE_OK) {
+    strike_context_destroy(probe);
+    return 0.0;
+  }
+  strike_bank_get_info(bank, &info);
+  vertices = info.surface_vertex_count;
+  probe_s = info.lowest_frequency_hz > 0 ? 4.0 / info.lowest_frequency_hz : STRIKE_LV2_PROBE_MAX_S;
+  probe_s = probe_s < STRIKE_LV2_PROBE_MIN_S ? STRIKE_LV2_PROBE_MIN_S : probe_s > STRIKE_LV2_PROBE_MAX_S ? STRIKE_LV2_PROBE_MAX_S : probe_s;
+  frames = (uint32_t)ceil(probe_s * cfg->sample_rate_hz);
+  buffers = (float*)malloc(2u * STRIKE_LV2_MAX_BLOCK * sizeof(float));
+  ocfg.bank = bank;
+  ocfg.gain = 1.0f;
+  /* Notes that share a vertex sound alike: (note * 37) mod V repeats after V notes. */
+  for (note = 0; buffers && vertices > 0 && note < STRIKE_LV2_NOTES && note < vertices; ++note) {
+    strike_object_id id;
+    strike_impact_desc hit;
+    uint32_t done = 0, k;
+    if (strike_object_add(probe, &ocfg, &id) != STRIKE_OK) break;
+    hit = note_impact(bank, vertices, id, (uint8_t)note, 127, 0);
+    (void)strike_impact(probe, &hit);
+    while (done < frames) {
+      float* out[2];
+      const uint32_t n = frames - done < STRIKE_LV2_MAX_BLOCK ? frames - done : STRIKE_LV2_MAX_BLOCK;
+      out[0] = buffers;
+      out[1] = buffers + STRIKE_LV2_MAX_BLOCK;
+      if (strike_render(probe, out, 2, n) != STRIKE_OK) break;
+      for (k = 0; k < n; ++k) {
+        if (fabs(out[0][k]) > peak) peak = fabs(out[0][k]);
+        if (fabs(out[1][k]) > peak) peak = fabs(out[1][k]);
+      }
+      done += n;
+    }
+    strike_object_remove(probe, id);
+    { /* lets the probe's render side drop the object, then frees it */
+      float* out[2];
+      out[0] = buffers;
+      out[1] = buffers + STRIKE_LV2_MAX_BLOCK;
+      (void)strike_render(probe, out, 2, 1);
+      strike_context_collect(probe);
+    }
+  }
+  free(buffers);
+  strike_bank_destroy(bank);
+  strike_context_destroy(probe);
+  return peak;
 }
 
 static void run(LV2_Handle instance, uint32_t n_samples) {

@@ -257,6 +257,8 @@ strike_status loadBank(strike_context ctx, const uint8_t* bytes, size_t size, co
   auto loaded = std::make_shared<LoadedBank>();
   loaded->bank = std::move(decoded.value());
   loaded->pressure_weights = radiationWeights(loaded->bank, ctx->config.reference_distance_m);
+  // The output convention: pressure / output_full_scale_pa (1.0 = 20 Pa by default, as the tools).
+  for (double& w : loaded->pressure_weights) w /= ctx->config.output_full_scale_pa;
   void* mem = ctx->allocArray<strike_bank_s>(1);
   *out = new (mem) strike_bank_s{ctx, std::move(loaded)};
   ctx->last_error[0] = '\0';
@@ -444,6 +446,7 @@ STRIKE_API strike_context_config STRIKE_CALL strike_context_config_default(void)
   c.audibility_threshold = 1e-6;
   c.reference_distance_m = 1.0;
   c.internal_cookie = kContextCookie;
+  c.output_full_scale_pa = kFullScalePascal;
   return c;
 }
 
@@ -451,8 +454,12 @@ STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_
   if (!config || !out) return STRIKE_ERR_INVALID_ARG;
   if (config->internal_cookie != kContextCookie) return STRIKE_ERR_NOT_INITIALIZED;
   const uint32_t caller = config->api_version;
-  // Same major, and a caller no newer than us (IPL isVersionCompatible).
-  if ((caller >> 16) != STRIKE_VERSION_MAJOR || ((caller >> 8) & 0xffu) > STRIKE_VERSION_MINOR) return STRIKE_ERR_VERSION;
+  // Same major, and a caller no newer than us (IPL isVersionCompatible); before 1.0 the same
+  // minor too, since a minor release may change the config structs' layout (0.2 grew this one).
+  const uint32_t caller_minor = (caller >> 8) & 0xffu;
+  if ((caller >> 16) != STRIKE_VERSION_MAJOR || caller_minor > STRIKE_VERSION_MINOR ||
+      (STRIKE_VERSION_MAJOR == 0 && caller_minor != STRIKE_VERSION_MINOR))
+    return STRIKE_ERR_VERSION;
   const strike_context_config& c = *config;
   const bool valid = c.sample_rate_hz >= 8000.0 && c.sample_rate_hz <= 768000.0 && c.max_block_frames >= 1 &&
                      c.max_block_frames <= 16384 && (c.channels == 1 || c.channels == 2) && c.max_objects >= 1 &&
@@ -461,7 +468,8 @@ STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_
                      c.max_contact_duration_s >= 0.0 && c.max_contact_duration_s <= 1.0 && c.min_freq_hz >= 0.0 &&
                      c.max_freq_hz > c.min_freq_hz && std::isfinite(c.max_freq_hz) && c.audibility_threshold >= 0.0 &&
                      std::isfinite(c.audibility_threshold) && c.reference_distance_m > 0.0 &&
-                     std::isfinite(c.reference_distance_m) && (c.alloc == nullptr) == (c.free == nullptr);
+                     std::isfinite(c.reference_distance_m) && c.output_full_scale_pa > 0.0 &&
+                     std::isfinite(c.output_full_scale_pa) && (c.alloc == nullptr) == (c.free == nullptr);
   if (!valid) return STRIKE_ERR_INVALID_ARG;
   strike_context_config cfg = c;
   if (!cfg.alloc) cfg.alloc = defaultAlloc, cfg.free = defaultFree;

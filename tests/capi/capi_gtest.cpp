@@ -74,6 +74,10 @@ TEST(CApi, VersionCheckAtCreation) {
   EXPECT_EQ(strike_context_create(&c, &ctx), STRIKE_ERR_VERSION);
   c.api_version = STRIKE_VERSION + (1u << 8);  // newer minor than the library
   EXPECT_EQ(strike_context_create(&c, &ctx), STRIKE_ERR_VERSION);
+  // Before 1.0 an older minor's config has another layout (0.2 added output_full_scale_pa).
+  static_assert(STRIKE_VERSION_MAJOR > 0 || STRIKE_VERSION_MINOR >= 2, "this header is 0.2 or later");
+  c.api_version = STRIKE_VERSION - (1u << 8);  // a 0.1 header
+  EXPECT_EQ(strike_context_create(&c, &ctx), STRIKE_ERR_VERSION);
   EXPECT_EQ(ctx, nullptr) << "nothing is written to *out on failure";
   strike_context_config raw;
   std::memset(&raw, 0, sizeof raw);

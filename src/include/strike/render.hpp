@@ -18,10 +18,8 @@
 
 namespace strike {
 
-/// The tools' output level convention: sample value 1.0 = 20 Pa (120 dB SPL, the threshold of
-/// pain) at the listener, so no physically plausible level clips, and the synthesizer's default
-/// audibility threshold of 1e-6 full scale is 20 uPa: the threshold of hearing (0 dB SPL).
-constexpr double kFullScalePascal = 20.0;
+// The tools' output level convention, kFullScalePascal (1.0 = 20 Pa), is in strike/synth.hpp:
+// libstrike uses it too.
 
 struct RenderSettings {
   double sample_rate_hz = 0.0;   ///< 0: the scene's

@@ -19,11 +19,21 @@
  * strike_render(); memory the audio thread no longer uses is freed later on the main thread.
  *
  * Units: SI everywhere (metres, seconds, kilograms, newton-seconds, hertz). Output samples are
- * sound pressure in pascals at the reference distance times the object gain (see
- * strike_object_config.radiation).
+ * sound pressure at the listener divided by the context's output_full_scale_pa, times the
+ * object gain: by default 1.0 = 20 Pa (120 dB SPL), the convention of the `strike` tools, so a
+ * float buffer from strike_render() and a WAV from `strike hit` or `strike render` have the
+ * same level (see strike_context_config.output_full_scale_pa and strike_object_config.radiation).
  *
  * Status: EXPERIMENTAL (0.x). The ABI may change between minor versions until 1.0; the version
- * check in strike_context_create() refuses a mismatched header.
+ * check in strike_context_create() refuses a header of another minor version.
+ *
+ * Changes in 0.2 (source-compatible; recompile: the soname is now libstrike.so.0.2):
+ *  - strike_context_config.output_full_scale_pa (new, last field): the output level convention.
+ *    Its default, 20 Pa, makes the default output 20 times (26 dB) lower than 0.1's pascals; set
+ *    it to 1 to keep pascals. audibility_threshold is in output units, so its default 1e-6 is
+ *    now 20 uPa (0 dB SPL, the threshold of hearing) rather than 1 uPa.
+ *  - strike_context_create() refuses a config from a 0.1 header (STRIKE_ERR_VERSION): before
+ *    1.0 every minor version may change the structs' layout.
  */
 #ifndef STRIKE_STRIKE_H
 #define STRIKE_STRIKE_H
@@ -62,7 +72,7 @@ extern "C" {
 /* ---- Version ---------------------------------------------------------------------------- */
 /* Kept equal to project(strike VERSION ...) in CMakeLists.txt (checked at configure time). */
 #define STRIKE_VERSION_MAJOR 0
-#define STRIKE_VERSION_MINOR 1
+#define STRIKE_VERSION_MINOR 2
 #define STRIKE_VERSION_PATCH 0
 /** Packed version of this header: (major << 16) | (minor << 8) | patch. */
 #define STRIKE_VERSION \
@@ -145,16 +155,23 @@ typedef struct strike_context_config {
   double max_contact_duration_s; /**< longer contact pulses are shortened to this, s; default 0.005 */
   double min_freq_hz;            /**< modes below are not synthesized, Hz; default 20 */
   double max_freq_hz;            /**< modes above min(this, 0.45 fs) are not synthesized; default 20000 */
-  /** Output amplitude (output units, before object gain) below which a mode sleeps; default 1e-6. */
+  /** Output amplitude (output units, before object gain) below which a mode sleeps; default 1e-6
+   *  (with the default output_full_scale_pa, 20 uPa: 0 dB SPL). */
   double audibility_threshold;
-  /** Distance at which the output is the bank's radiated pressure, m (> 0); closer objects are
-   *  not louder. Gain = reference / max(distance, reference). Default 1. */
+  /** Distance at which the output is the bank's radiated pressure (over output_full_scale_pa),
+   *  m (> 0); closer objects are not louder. Gain = reference / max(distance, reference). Default 1. */
   double reference_distance_m;
   strike_log_fn log;             /**< NULL = no logging */
   strike_alloc_fn alloc;         /**< NULL = aligned_alloc; alloc and free are both set or both NULL */
   strike_free_fn free;
   void* user;                    /**< passed to log, alloc and free */
   int32_t internal_cookie;       /**< set by strike_context_config_default(); do not touch */
+  /** Output level convention (added in 0.2): the sound pressure at the listener, Pa, that
+   *  strike_render() writes as sample value 1.0 (for STRIKE_RADIATION_PRESSURE objects; _UNIT
+   *  objects are not scaled). Finite, > 0. Default 20: 1.0 = 20 Pa = 120 dB SPL, as the `strike`
+   *  tools write WAVs, so ordinary impacts stay below full scale and the same impact has the
+   *  same level in both. 1 gives pascals (libstrike 0.1's output). */
+  double output_full_scale_pa;
 } strike_context_config;
 
 /** Defaults (see each field). [any-thread] */
@@ -163,7 +180,8 @@ STRIKE_API strike_context_config STRIKE_CALL strike_context_config_default(void)
 /**
  * Creates a context; allocates everything the audio thread will need for max_objects objects.
  * Fails with STRIKE_ERR_VERSION when config->api_version has another major version or a newer
- * minor version than the library, STRIKE_ERR_NOT_INITIALIZED when config did not come from
+ * minor version than the library, or (before 1.0) another minor version at all,
+ * STRIKE_ERR_NOT_INITIALIZED when config did not come from
  * strike_context_config_default(), STRIKE_ERR_INVALID_ARG for a value out of range.
  * [main-thread]
  * @param config read during the call only.
@@ -253,8 +271,8 @@ STRIKE_API strike_status STRIKE_CALL strike_bank_surface_vertex(strike_bank bank
 
 /* ---- Objects ---------------------------------------------------------------------------- */
 enum {
-  /** Per-mode weights of a compact radiator: output is sound pressure (Pa) at the reference
-   *  distance (see radiation.cpp for the model and what it leaves out). */
+  /** Per-mode weights of a compact radiator: output is sound pressure at the reference distance
+   *  in units of output_full_scale_pa (see radiation.cpp for the model and what it leaves out). */
   STRIKE_RADIATION_PRESSURE = 0,
   /** Weight 1 for every mode: output is the sum of modal accelerations (m/s^2 sqrt(kg)). */
   STRIKE_RADIATION_UNIT = 1

@@ -219,8 +219,15 @@ double hertzContactDuration(double youngs1_pa, double poisson1, double radius1_m
                             double youngs2_pa, double poisson2, double radius2_m, double mass2_kg,
                             double normal_speed_m_s);
 
+/// The output level convention of the tools and (by default, output_full_scale_pa) of libstrike:
+/// sample value 1.0 = 20 Pa (120 dB SPL, the threshold of pain) at the listener, so no physically
+/// plausible level clips, and the synthesizer's default audibility threshold of 1e-6 full scale
+/// is 20 uPa: the threshold of hearing (0 dB SPL).
+constexpr double kFullScalePascal = 20.0;
+
 /// Listener model, per mode, for a listener at distance_m from the object (see radiation.cpp for
-/// the approximation and what it leaves out). Returns #modes weights for ModalObjectDesc.
+/// the approximation and what it leaves out). Returns #modes weights for ModalObjectDesc
+/// that make the output sound pressure in Pa; divide them by kFullScalePascal for full scale.
 std::vector<double> radiationWeights(const ModeBank& bank, double distance_m);
 /// The distance-free part of radiationWeights: R_i per mode (m^2 / sqrt(kg)), computed from the
 /// surface and shapes. radiationWeights uses bank.radiation_m2 instead when the bank has it.

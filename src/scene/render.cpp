@@ -19,6 +19,7 @@
 #include "strike/bank.hpp"
 #include "strike/materials.hpp"
 #include "strike/precompute.hpp"
+#include "strike/scene_checks.hpp"
 #include "strike/synth.hpp"
 
 namespace strike {
@@ -100,6 +101,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   body.precompute.material = object.material;
   body.precompute.order = object.order;
   body.precompute.target_edge_m = object.size_m;
+  body.precompute.mesh_scale = object.mesh_scale;
   body.precompute.max_freq_hz = max_freq_hz;
   body.precompute.max_modes = scene.max_modes;
   body.precompute.max_tets = settings.max_tets;
@@ -207,6 +209,24 @@ double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) {
 }
 double norm(const std::array<double, 3>& a) { return std::sqrt(dot(a, a)); }
 
+/// Whether a struck body can be heard at all: some mode in the band the oscillator bank
+/// synthesizes (the band test of OscillatorBank::addObject). The error says why not.
+Status hasAudibleMode(const ModeBank& bank, const SynthSettings& synth, double rate) {
+  const double low = synth.min_freq_hz, high = std::min(synth.max_freq_hz, 0.45 * rate);
+  for (size_t i = 0; i < bank.modeCount(); ++i) {
+    const double f = bank.frequencyHz(i);
+    if (f >= low && f <= high) return {};
+  }
+  char why[256];
+  if (bank.modeCount() == 0)
+    std::snprintf(why, sizeof why, "its bank has no elastic mode below its cut-off of %.0f Hz: too small or too stiff to ring",
+                  bank.max_freq_hz);
+  else
+    std::snprintf(why, sizeof why, "its %zu modes lie at %.1f to %.1f Hz, outside the synthesized band %.0f to %.0f Hz",
+                  bank.modeCount(), bank.frequencyHz(0), bank.frequencyHz(bank.modeCount() - 1), low, high);
+  return badInput(std::string("silent: no mode in the audible band (") + why + ")");
+}
+
 }  // namespace
 
 std::string defaultCacheDir() {
@@ -248,6 +268,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   const auto simulate_start = std::chrono::steady_clock::now();
   std::vector<SimBodyDesc> sim_bodies;
   for (const Body& body : bodies) sim_bodies.push_back(simBody(body));
+  report.warnings = checkStartingPlacement(scene, sim_bodies);
   SimSettings sim;
   sim.duration_s = duration;
   sim.gravity_m_s2 = scene.gravity_m_s2;
@@ -265,6 +286,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   report.simulate_seconds = secondsSince(simulate_start);
   result.events = std::move(simulated->events);
   report.events = result.events.size();
+  for (const ContactEvent& event : result.events)
+    ++(event.normal_speed_m_s > kImpactSpeed_m_s ? report.impact_events : report.sustained_events);
 
   // ---- Phase 2: banks only for objects struck hard enough to hear ----------------------------
   for (const ContactEvent& event : result.events) {
@@ -276,6 +299,9 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
         body.max_velocity_change_m_s = std::max(body.max_velocity_change_m_s, impulse / body.bank.mass_kg);
     }
   }
+  for (size_t i = 0; i < bodies.size(); ++i)
+    if (bodies[i].max_velocity_change_m_s == 0.0 && !bodies[i].object->is_static)
+      report.warnings.push_back(neverStruckWarning(scene, sim_bodies[i], duration));
   const auto precompute_start = std::chrono::steady_clock::now();
   std::map<uint64_t, size_t> computed_by_key;  // identical objects share one eigen-solve
   for (size_t i = 0; i < bodies.size(); ++i) {
@@ -337,7 +363,12 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   OscillatorBank synth(synth_settings);
   for (Body& body : bodies) {
     if (!body.sounded) continue;
-    ++report.objects_sounded;
+    if (Status audible = hasAudibleMode(body.bank, synth_settings, rate); !audible) {
+      ++report.objects_silent;
+      report.warnings.push_back("objects \"" + body.object->name + "\": " + audible.error().message);
+    } else {
+      ++report.objects_sounded;
+    }
     // The listener hears each object from where it was first struck (objects that travel far
     // while ringing are not tracked: a documented simplification).
     std::array<double, 3> where = body.object->position_m;

@@ -24,7 +24,11 @@ Result<SampleEncoding> sampleEncodingFor(const ParsedArgs& args, const std::stri
   const std::string format = args.text("--format", flac ? "pcm24" : "float");
   if (format == "pcm16") return SampleEncoding::Pcm16;
   if (format == "pcm24") return SampleEncoding::Pcm24;
-  if (format == "float") return SampleEncoding::Float32;
+  if (format == "float") {
+    // Refused here, before any work, not by the writer after it (FLAC has no float samples).
+    if (flac) return badInput("--format float with " + output + ": FLAC stores integer PCM only; use pcm16 or pcm24, or a .wav file");
+    return SampleEncoding::Float32;
+  }
   return badInput("--format = '" + format + "' (expected pcm16, pcm24 or float)");
 }
 

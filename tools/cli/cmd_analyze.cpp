@@ -6,6 +6,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "output_check.hpp"
 #include "strike/audio.hpp"
 
 namespace strike::cli {
@@ -53,6 +54,9 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
   if (!(*floor_db < 0)) return reportError("analyze", badInput("--floor = " + args->text("--floor") + " (must be < 0 dB)"));
   options.floor_db = *floor_db;
 
+  if (args->has("--spectrogram"))
+    if (Status ok = checkOutputFile("--spectrogram", args->text("--spectrogram"), {".png"}); !ok)
+      return reportError("analyze", ok.error());
   const std::string path = args->positional[0];
   Result<AudioBuffer> audio = readAudio(path);
   if (!audio) return reportError("analyze", audio.error());

@@ -5,6 +5,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "output_check.hpp"
 #include "progress_reporter.hpp"
 #include "strike/error_estimate.hpp"
 #include "strike/materials.hpp"
@@ -185,6 +186,7 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (args.has("--list-materials")) return listMaterials();
   if (args.positional.empty()) return reportError("modes", badInput("missing MESH; usage: " + spec.usage));
   if (!args.has("-o")) return reportError("modes", badInput("missing -o BANK.modes (where to write the bank)"));
+  if (Status ok = checkOutputFile("-o", args.text("-o"), {}); !ok) return reportError("modes", ok.error());
 
   PrecomputeSettings settings;
   settings.mesh_spec = args.positional[0];

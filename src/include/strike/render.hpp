@@ -44,13 +44,23 @@ struct RenderSettings {
 };
 
 struct RenderReport {
-  size_t objects = 0, objects_struck = 0, objects_sounded = 0;
+  size_t objects = 0, objects_struck = 0;
+  size_t objects_sounded = 0;    ///< struck audibly and with at least one mode in the synthesized band
+  size_t objects_silent = 0;     ///< struck audibly, but no mode in the synthesized band (warnings say why)
   size_t objects_inaudible = 0;  ///< struck, but too softly to hear: no eigen-solve
   size_t banks_given = 0, banks_cached = 0, banks_computed = 0, banks_shared = 0;
   /// Surface vertices whose mode shapes were read from given or cached bank files, of all theirs
   /// (a render reads shapes only where its contacts land).
   size_t shape_vertices_read = 0, shape_vertices_total = 0;
-  size_t events = 0, impacts = 0, sustained_contacts = 0;
+  /// Contact points Bullet recorded (one per point per step), split by their closing speed into
+  /// impacts (> 5 cm/s) and resting or sliding contact.
+  size_t events = 0, impact_events = 0, sustained_events = 0;
+  /// What reached the oscillators: one impact pulse, or one resting/sliding impulse, per event
+  /// per sounding body it acts on. An event between two sounding bodies counts for both; one
+  /// against the ground or a body that does not sound, for one or none.
+  size_t impacts = 0, sustained_contacts = 0;
+  /// Scenes that cannot be right, and silent results, in words with numbers (scene_checks.hpp).
+  std::vector<std::string> warnings;
   uint64_t modes_total = 0, modes_out_of_band = 0, mode_samples = 0, max_active_modes = 0;
   double peak = 0.0;
   size_t clipped_samples = 0;

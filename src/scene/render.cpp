@@ -10,12 +10,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
 
 #include "strike/atomic_file.hpp"
+#include "strike/bank_cache.hpp"
 #include "strike/bank.hpp"
 #include "strike/materials.hpp"
 #include "strike/precompute.hpp"
@@ -122,6 +124,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
       Result<BankFile> cached = BankFile::open(path);
       // A damaged cache entry is recomputed, not trusted (damaged shapes are found in phase 2).
       if (cached && cached->bank().mesh_hash == *hash) {
+        touchCacheEntry(path);  // recently used: the size cap removes it last
         body.bank = cached->bank();
         body.file = std::move(*cached);
         body.has_modes = true;
@@ -350,6 +353,11 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     }
   }
   report.precompute_seconds = secondsSince(precompute_start);
+  if (!settings.cache_dir.empty() && settings.cache_max_bytes > 0) {
+    // This render's banks were just written or touched, so they are the last to go.
+    Result<PruneReport> pruned = pruneCache(settings.cache_dir, settings.cache_max_bytes, -1.0, std::time(nullptr));
+    if (pruned) report.cache_pruned = pruned->removed, report.cache_pruned_bytes = pruned->bytes_removed;
+  }
 
   // ---- Phase 3: impacts into the oscillator bank --------------------------------------------
   const auto synth_start = std::chrono::steady_clock::now();

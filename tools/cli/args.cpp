@@ -123,10 +123,14 @@ std::string helpText(const CommandSpec& spec) {
       std::string left = "  " + o.name + (o.value_name.empty() ? "" : " " + o.value_name);
       if (left.size() < 30) left.resize(30, ' ');
       else left += "\n" + std::string(30, ' ');
-      out << left << o.help << "\n";
+      std::string help = o.help;  // continuation lines line up under the first
+      for (size_t at = help.find('\n'); at != std::string::npos; at = help.find('\n', at + 1)) help.insert(at + 1, 30, ' ');
+      out << left << help << "\n";
     }
   }
   if (!spec.examples.empty()) out << "\nexamples:\n" << spec.examples;
+  out << "\nEvery command, option, output and exit code: docs/cli.md; the scene file: docs/scene-format.md\n"
+         "(in the source tree; exit codes: 0 success, 1 bad input, 2 internal error).\n";
   return out.str();
 }
 

@@ -20,7 +20,7 @@ CommandSpec analyzeSpec() {
       "FFT (FFTW) with sub-bin interpolation: frequency, level relative to the strongest peak, and the\n"
       "amplitude decay rate d of A e^(-d t) fitted per peak (T60 = 6.91 / d).";
   spec.options = {
-      {"--json", "", "print one JSON object on stdout (the contract in ARCHITECTURE.md)"},
+      {"--json", "", "print one JSON object on stdout (the contract in docs/cli.md)"},
       {"--peaks", "N", "report the N strongest peaks; default 20"},
       {"--floor", "DB", "ignore peaks more than DB below the strongest; default -60"},
       {"--spectrogram", "PNG", "also draw a spectrogram (log frequency, 100 dB range) to this PNG file"},

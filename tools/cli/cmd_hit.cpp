@@ -42,7 +42,7 @@ CommandSpec hitSpec() {
       {"--contact-time", "S", "force pulse duration, s (0 = ideal impulse); default from Hertz theory"},
       {"--striker", "MATERIAL", "striker sphere material for the Hertz contact time; default steel"},
       {"--striker-radius", "M", "striker sphere radius, m; default 0.005"},
-      {"--quiet", "", "no summary on stderr"},
+      {"--quiet", "", "no summary on stderr (warnings are still printed)"},
   };
   spec.examples =
       "  strike hit bar.modes -o hit.wav --vertex 12 --impulse 0,0,-0.01 --duration 2\n"

@@ -36,6 +36,7 @@ CommandSpec modesSpec() {
       {"--rayleigh-mass", "A2", "Rayleigh damping a2 (1/s); default 0 or the material's"},
       {"--order", "1|2", "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default 1"},
       {"--size", "METRES", "target tet edge length; default: chosen from the object's size"},
+      {"--units", "m|cm|mm", "unit of a mesh file's coordinates (not of primitives); default m"},
       {"--max-freq", "HZ", "keep every mode up to this frequency; default 20000"},
       {"--max-modes", "N", "but at most N modes (lowest first); default 200, cap 100000"},
       {"--max-tets", "N", "refuse meshes with more tets than this (memory and time cap); default 2000000"},
@@ -202,6 +203,12 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (!size) return reportError("modes", size.error());
   if (args.has("--size") && !(*size > 0)) return reportError("modes", badInput("--size = " + args.text("--size") + " (must be > 0 metres)"));
   settings.target_edge_m = *size;
+  const std::string units = args.text("--units", "m");
+  if (units != "m" && units != "cm" && units != "mm")
+    return reportError("modes", badInput("--units = '" + units + "' (expected m, cm or mm)"));
+  if (units != "m" && isPrimitiveSpec(settings.mesh_spec))
+    return reportError("modes", badInput("--units applies to a mesh file; primitives are in metres"));
+  settings.mesh_scale = units == "mm" ? 0.001 : units == "cm" ? 0.01 : 1.0;
   Result<double> max_freq = args.number("--max-freq", 20000.0);
   if (!max_freq) return reportError("modes", max_freq.error());
   if (!(*max_freq > 0)) return reportError("modes", badInput("--max-freq = " + args.text("--max-freq") + " (must be > 0 Hz)"));

@@ -9,6 +9,7 @@
 #include "output_check.hpp"
 #include "progress_reporter.hpp"
 #include "strike/audio.hpp"
+#include "strike/bank_cache.hpp"
 #include "strike/render.hpp"
 #include "strike/scene.hpp"
 
@@ -34,9 +35,11 @@ CommandSpec renderSpec() {
       {"--gain", "G", "multiply the output (1.0 full scale = 20 Pa); default 1"},
       {"--cache", "DIR", "mode bank cache folder; default $STRIKE_CACHE_DIR or ~/.cache/strike"},
       {"--no-cache", "", "compute every bank, read and write no cache"},
+      {"--cache-max-size", "SIZE", "after the render, remove the least recently used banks until the cache fits\n"
+                                   "in SIZE (e.g. 500M, 2G; 0 = no cap); default 2G. See `strike cache`"},
       {"--max-tets", "N", "refuse object meshes with more tets than this (memory cap); default 2000000"},
       {"--max-events", "N", "stop if the simulation records more contact events (memory cap); default 20000000"},
-      {"--quiet", "", "no progress or summary on stderr"},
+      {"--quiet", "", "no progress or summary on stderr (warnings are still printed)"},
   };
   spec.examples =
       "  strike render examples/scenes/bar-drop.json -o bar-drop.wav\n"
@@ -91,6 +94,9 @@ void printSummary(const RenderResult& result, const std::string& output, double 
   std::fprintf(stderr, "  time        load %.2f s, simulate %.2f s, modes %.2f s, synthesize %.2f s, total %.2f s (%.1fx real time)\n",
                r.load_seconds, r.simulate_seconds, r.precompute_seconds, r.synthesize_seconds, r.total_seconds,
                r.total_seconds > 0 ? duration / r.total_seconds : 0.0);
+  if (r.cache_pruned > 0)
+    std::fprintf(stderr, "  cache       removed %zu least recently used banks (%.1f MB) to keep the cache under its cap (--cache-max-size)\n",
+                 r.cache_pruned, double(r.cache_pruned_bytes) / 1e6);
   if (r.precompute_saved_seconds > 0)
     std::fprintf(stderr, "  saved       %.2f s of eigen-solves answered by the cache\n", r.precompute_saved_seconds);
 }
@@ -139,6 +145,11 @@ int runRender(const std::vector<std::string>& raw_args) {
     return reportError("render", badInput("--max-events = " + args.text("--max-events") + " (must be >= 1)"));
   settings.max_events = static_cast<size_t>(*max_events);
   settings.cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
+  if (args.has("--cache-max-size")) {
+    Result<uint64_t> cap = parseByteSize(args.text("--cache-max-size"), "--cache-max-size");
+    if (!cap) return reportError("render", cap.error());
+    settings.cache_max_bytes = *cap;
+  }
 
   const std::string output = args.text("-o");
   Result<SampleEncoding> encoding_result = sampleEncodingFor(args, output);

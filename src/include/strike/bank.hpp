@@ -70,7 +70,7 @@ struct ModeBank {
   double frequencyHz(size_t mode) const;
   /// Rayleigh damping c = a1 lambda + a2 (1/s); an under-damped mode decays as exp(-c t / 2).
   double dampingCoefficient(size_t mode) const;
-  /// Amplitude decay rate c/2 (1/s), the ARCHITECTURE's `decay_per_s`.
+  /// Amplitude decay rate c/2 (1/s), `decay_per_s` of `strike info --json` (docs/cli.md).
   double decayPerS(size_t mode) const { return 0.5 * dampingCoefficient(mode); }
   /// Mode shape at surface vertex v: 3 floats.
   const float* shapeAt(size_t mode, size_t vertex) const {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "strike/audio.hpp"
+#include "strike/bank_cache.hpp"
 #include "strike/mesh.hpp"
 #include "strike/progress.hpp"
 #include "strike/scene.hpp"
@@ -26,6 +27,9 @@ struct RenderSettings {
   double sample_rate_hz = 0.0;   ///< 0: the scene's
   double duration_s = 0.0;       ///< 0: the scene's
   std::string cache_dir;         ///< where banks are cached by content hash; empty: no cache
+  /// After the render, the cache's least recently used banks are removed until it fits in this
+  /// (strike/bank_cache.hpp); 0: no cap.
+  uint64_t cache_max_bytes = kDefaultCacheMaxBytes;
   double gain = 1.0;             ///< output scale on top of kFullScalePascal
   int64_t max_tets = kDefaultMaxTets;  ///< size cap of each object's tet mesh (PrecomputeSettings::max_tets)
   size_t max_events = SimSettings{}.max_events;  ///< cap on recorded contact events (SimSettings::max_events)
@@ -66,6 +70,8 @@ struct RenderReport {
   size_t clipped_samples = 0;
   double load_seconds = 0, simulate_seconds = 0, precompute_seconds = 0, synthesize_seconds = 0, total_seconds = 0;
   double precompute_saved_seconds = 0;  ///< eigen-solve time the cache answered (as recorded in the banks)
+  size_t cache_pruned = 0;              ///< banks removed from the cache by its size cap after this render
+  uint64_t cache_pruned_bytes = 0;
 };
 
 struct RenderResult {

@@ -61,6 +61,7 @@ double distanceSquaredToTriangle(const Vec& p, const Vec& a, const Vec& b, const
 /// A body's surface in world coordinates and its bounding box.
 struct WorldSurface {
   std::vector<double> positions;
+  std::vector<double> probes;  ///< the vertices and the triangles' centroids: where overlap is tested
   Vec low{}, high{};
 };
 
@@ -79,6 +80,14 @@ WorldSurface toWorld(const SimBodyDesc& body) {
       w.high[a] = std::max(w.high[a], x);
     }
   }
+  // Centroids too: two boxes can overlap with every corner of each on the other's faces.
+  w.probes = w.positions;
+  for (size_t t = 0; t + 2 < body.surface_triangles.size(); t += 3)
+    for (int a = 0; a < 3; ++a) {
+      double sum = 0.0;
+      for (int k = 0; k < 3; ++k) sum += w.positions[body.surface_triangles[t + k] * size_t(3) + a];
+      w.probes.push_back(sum / 3.0);
+    }
   return w;
 }
 
@@ -88,18 +97,18 @@ std::string format(const char* fmt, double a = 0, double b = 0, double c = 0, do
   return text;
 }
 
-/// Deepest penetration of `a`'s vertices (those inside b's box) into b's closed surface.
+/// Deepest penetration of `a`'s probe points (those inside b's box) into b's closed surface.
 double deepestVertexInside(const WorldSurface& a, const WorldSurface& b, const SimBodyDesc& b_desc, size_t max_tested) {
   std::vector<size_t> candidates;
-  for (size_t v = 0; v + 2 < a.positions.size(); v += 3) {
+  for (size_t v = 0; v + 2 < a.probes.size(); v += 3) {
     bool in_box = true;
-    for (int k = 0; k < 3; ++k) in_box = in_box && a.positions[v + k] >= b.low[k] && a.positions[v + k] <= b.high[k];
+    for (int k = 0; k < 3; ++k) in_box = in_box && a.probes[v + k] >= b.low[k] && a.probes[v + k] <= b.high[k];
     if (in_box) candidates.push_back(v);
   }
   const size_t stride = std::max<size_t>(1, (candidates.size() + max_tested - 1) / max_tested);
   double deepest = 0.0;
   for (size_t i = 0; i < candidates.size(); i += stride)
-    deepest = std::max(deepest, depthInside(&a.positions[candidates[i]], b.positions, b_desc.surface_triangles));
+    deepest = std::max(deepest, depthInside(&a.probes[candidates[i]], b.positions, b_desc.surface_triangles));
   return deepest;
 }
 

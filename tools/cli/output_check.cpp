@@ -38,6 +38,8 @@ Status probeWritable(const std::string& option, const std::string& shown, const 
 
 Status checkOutputFile(const std::string& option, const std::string& path, const std::vector<std::string>& extensions) {
   if (path.empty()) return badInput(option + ": empty path");
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return badInput(option + " " + path + ": is a folder, expected a file name");
   if (!extensions.empty()) {
     const std::string ext = lowerExtension(path);
     if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end()) {
@@ -46,8 +48,6 @@ Status checkOutputFile(const std::string& option, const std::string& path, const
       return badInput(option + " " + path + ": unsupported file extension '" + ext + "' (supported: " + list + ")");
     }
   }
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) return badInput(option + " " + path + ": is a folder, expected a file name");
   const fs::path parent = fs::path(path).parent_path();
   const std::string folder = parent.empty() ? "." : parent.string();
   if (!fs::exists(folder, ec)) return badInput(option + " " + path + ": the folder " + folder + " does not exist");

@@ -271,7 +271,11 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   const auto simulate_start = std::chrono::steady_clock::now();
   std::vector<SimBodyDesc> sim_bodies;
   for (const Body& body : bodies) sim_bodies.push_back(simBody(body));
-  report.warnings = checkStartingPlacement(scene, sim_bodies);
+  auto warn = [&](std::string text) {
+    if (settings.on_warning) settings.on_warning(text);
+    report.warnings.push_back(std::move(text));
+  };
+  for (std::string& text : checkStartingPlacement(scene, sim_bodies)) warn(std::move(text));
   SimSettings sim;
   sim.duration_s = duration;
   sim.gravity_m_s2 = scene.gravity_m_s2;
@@ -304,7 +308,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   }
   for (size_t i = 0; i < bodies.size(); ++i)
     if (bodies[i].max_velocity_change_m_s == 0.0 && !bodies[i].object->is_static)
-      report.warnings.push_back(neverStruckWarning(scene, sim_bodies[i], duration));
+      warn(neverStruckWarning(scene, sim_bodies[i], duration));
   const auto precompute_start = std::chrono::steady_clock::now();
   std::map<uint64_t, size_t> computed_by_key;  // identical objects share one eigen-solve
   for (size_t i = 0; i < bodies.size(); ++i) {
@@ -373,7 +377,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     if (!body.sounded) continue;
     if (Status audible = hasAudibleMode(body.bank, synth_settings, rate); !audible) {
       ++report.objects_silent;
-      report.warnings.push_back("objects \"" + body.object->name + "\": " + audible.error().message);
+      warn("objects \"" + body.object->name + "\": " + audible.error().message);
     } else {
       ++report.objects_sounded;
     }

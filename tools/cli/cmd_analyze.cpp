@@ -73,7 +73,8 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
     j["channels"] = audio->channels;
     j["duration_s"] = analysis.duration_s;
     j["peak_amplitude"] = analysis.peak_amplitude;
-    j["peak_dbfs"] = 20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30));
+    j["peak_dbfs"] = 20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30));  // -600 when silent (JSON has no -inf)
+    j["silent"] = analysis.peak_amplitude == 0.0;
     j["rms"] = analysis.rms;
     j["clipped_samples"] = analysis.clipped_samples;
     j["peaks"] = nlohmann::json::array();
@@ -87,6 +88,10 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
   }
   std::printf("%s: %.0f Hz, %d channel(s), %.3f s\n", path.c_str(), analysis.sample_rate_hz, audio->channels,
               analysis.duration_s);
+  if (analysis.peak_amplitude == 0.0) {
+    std::printf("silent: every sample is 0 (no peaks)\n");
+    return 0;
+  }
   std::printf("peak %.4g (%.1f dBFS), RMS %.4g (%.1f dBFS)%s\n\n", analysis.peak_amplitude,
               20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30)), analysis.rms,
               20.0 * std::log10(std::max(analysis.rms, 1e-30)),

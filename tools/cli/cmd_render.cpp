@@ -159,6 +159,12 @@ int runRender(const std::vector<std::string>& raw_args) {
   const bool quiet = args.has("--quiet");
   ProgressReporter progress(quiet);
   settings.progress = progress.callback();
+  // Warnings are printed as they are found, even with --quiet: they say the result is probably
+  // not what was meant, and the scene's are known before the simulation starts.
+  settings.on_warning = [&progress](const std::string& warning) {
+    progress.finish();  // end a progress line first
+    std::fprintf(stderr, "strike render: warning: %s\n", warning.c_str());
+  };
   Result<RenderResult> result = renderScene(*scene, settings);
   progress.finish();
   if (!result) return reportError("render", result.error());
@@ -172,8 +178,6 @@ int runRender(const std::vector<std::string>& raw_args) {
       return reportError("render", events.error());
     }
   }
-  // Warnings are printed even with --quiet: they say the result is probably not what was meant.
-  for (const std::string& warning : result->report.warnings) std::fprintf(stderr, "strike render: warning: %s\n", warning.c_str());
   if (!quiet) printSummary(*result, output, result->audio.sample_rate_hz, result->audio.frames() / result->audio.sample_rate_hz);
   return 0;
 }

@@ -6,6 +6,7 @@
 //      contact impulses projected onto modes, oscillator bank, mix.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,9 @@ struct RenderSettings {
   /// the 0.5 ms step used before (`strike bench render` measures both).
   double substep_s = 1e-3;
   ProgressFn progress;
+  /// Called with each warning as soon as it is found (before the simulation for the scene's
+  /// placement, so a long render does not hide it until the end); also kept in report.warnings.
+  std::function<void(const std::string&)> on_warning;
 };
 
 struct RenderReport {

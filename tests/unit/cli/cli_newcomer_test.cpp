@@ -172,6 +172,14 @@ TEST(NewcomerSilence, AnObjectWithNoAudibleModeIsSilentNotSounded) {
   EXPECT_NE(r.err.find("level       silent: every sample is 0 (the struck objects have no mode in the audible band"),
             std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("-600"), std::string::npos) << r.err;
+  // Its file is all zeros, and analyze says so instead of "-600 dBFS".
+  CliResult text = runCli("analyze '" + dir + "/p.wav'");
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("silent: every sample is 0"), std::string::npos) << text.out;
+  EXPECT_EQ(text.out.find("-600"), std::string::npos) << text.out;
+  const nlohmann::json j = nlohmann::json::parse(runCli("analyze --json '" + dir + "/p.wav'").out);
+  EXPECT_TRUE(j["silent"].get<bool>());
+  EXPECT_TRUE(j["peaks"].empty());
 }
 
 // ---- Item 13: hit --at and the events summary --------------------------------------------------

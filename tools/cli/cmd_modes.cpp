@@ -43,6 +43,8 @@ CommandSpec modesSpec() {
       {"--error-estimate", "", "estimate each mode's frequency error (default: on for primitives and surfaces)"},
       {"--no-error-estimate", "", "skip the error estimate"},
       {"--tolerance", "PCT", "pick the cheapest order and --size whose estimated error is below PCT (e.g. 0.5%)"},
+      {"--compact", "", "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
+                        "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
       {"--quiet", "", "no progress or summary on stderr"},
       {"--list-materials", "", "print the material table with sources and exit"},
   };
@@ -240,7 +242,7 @@ int runModes(const std::vector<std::string>& raw_args) {
     for (const MeshWarning& warning : result->report.warnings)
       std::fprintf(stderr, "strike modes: warning: %s\n", warning.message.c_str());
   const std::string output = args.text("-o");
-  Status written = writeBank(output, result->bank);
+  Status written = writeBank(output, result->bank, args.has("--compact") ? ShapeEncoding::Int16 : ShapeEncoding::Float32);
   if (!written) return reportError("modes", written.error());
   if (!quiet) printSummary(settings, *result, output);
   return 0;

@@ -199,6 +199,19 @@ TEST(NewcomerHit, AtPrintsThePointStruckAndWarnsFarFromTheSurface) {
   EXPECT_NEAR(numberAfter(on.err, "), "), 0.0, 1e-9) << on.err;  // "(nearest vertex N), 0 m from --at"
 }
 
+TEST(NewcomerCompactBank, ModesCompactWritesFormatFourWithTheSameModes) {
+  const std::string dir = folder("compact");
+  const std::string common = "modes box:0.3,0.02,0.02 --material steel --max-modes 4 --no-error-estimate --quiet -o '" + dir;
+  ASSERT_EQ(runCli(common + "/f32.modes'").exit_code, 0);
+  ASSERT_EQ(runCli(common + "/i16.modes' --compact").exit_code, 0);
+  const nlohmann::json a = nlohmann::json::parse(runCli("info --json '" + dir + "/f32.modes'").out);
+  const nlohmann::json b = nlohmann::json::parse(runCli("info --json '" + dir + "/i16.modes'").out);
+  EXPECT_EQ(a["format_version"], 3);
+  EXPECT_EQ(b["format_version"], 4);
+  EXPECT_EQ(a["frequencies_hz"], b["frequencies_hz"]);
+  EXPECT_LT(fs::file_size(dir + "/i16.modes"), fs::file_size(dir + "/f32.modes"));
+}
+
 TEST(NewcomerEvents, TheSummaryAddsUpAndMatchesTheEventsFile) {
   const std::string dir = folder("events");
   write(dir + "/drop.json", kDrop);

@@ -105,6 +105,9 @@ double deepestVertexInside(const WorldSurface& a, const WorldSurface& b, const S
     for (int k = 0; k < 3; ++k) in_box = in_box && a.probes[v + k] >= b.low[k] && a.probes[v + k] <= b.high[k];
     if (in_box) candidates.push_back(v);
   }
+  // Each probe costs a pass over b's triangles: keep a pair under ~2e7 triangle visits (~0.3 s).
+  const size_t triangles = std::max<size_t>(1, b_desc.surface_triangles.size() / 3);
+  max_tested = std::clamp<size_t>(size_t(2e7) / triangles, 64, max_tested);
   const size_t stride = std::max<size_t>(1, (candidates.size() + max_tested - 1) / max_tested);
   double deepest = 0.0;
   for (size_t i = 0; i < candidates.size(); i += stride)

@@ -61,7 +61,8 @@ struct Body {
   bool from_cache = false;           ///< counted in report.banks_cached
   std::optional<LoadedMesh> mesh;    ///< kept when the modes may still need computing
   double max_velocity_change_m_s = 0.0;
-  bool sounded = false;
+  bool sounded = false;              ///< struck audibly: gets a bank and an oscillator
+  bool silent = false;               ///< ...but no mode in the synthesized band
   uint32_t synth_id = 0;
   std::unique_ptr<ContactProjector> projector;  ///< contact impulses onto modes
   double sustained_time_s = -1.0;           ///< substep whose sustained contacts are being summed
@@ -377,6 +378,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     if (!body.sounded) continue;
     if (Status audible = hasAudibleMode(body.bank, synth_settings, rate); !audible) {
       ++report.objects_silent;
+      body.silent = true;
       warn("objects \"" + body.object->name + "\": " + audible.error().message);
     } else {
       ++report.objects_sounded;
@@ -495,7 +497,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
                                                  m2.poisson, r2, mass2, event.normal_speed_m_s);
         impact.shape = PulseShape::HalfSine;
         synth.addImpact(impact);
-        ++report.impacts;
+        if (!body.silent) ++report.impacts;
       } else {
         // Sustained contact: the step's impulse is a constant force over the step, so a
         // steady resting force is a constant and makes no sound; only its changes do.
@@ -505,7 +507,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
           body.sustained_modal.assign(modal.size(), 0.0);
         }
         for (size_t i = 0; i < modal.size(); ++i) body.sustained_modal[i] += modal[i];
-        ++report.sustained_contacts;
+        if (!body.silent) ++report.sustained_contacts;
       }
     }
   }

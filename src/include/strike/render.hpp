@@ -64,8 +64,8 @@ struct RenderReport {
   /// impacts (> 5 cm/s) and resting or sliding contact.
   size_t events = 0, impact_events = 0, sustained_events = 0;
   /// What reached the oscillators: one impact pulse, or one resting/sliding impulse, per event
-  /// per sounding body it acts on. An event between two sounding bodies counts for both; one
-  /// against the ground or a body that does not sound, for one or none.
+  /// per sounding body (objects_sounded) it acts on. An event between two sounding bodies counts
+  /// for both; one against the ground, a silent body or one that was not heard, for one or none.
   size_t impacts = 0, sustained_contacts = 0;
   /// Scenes that cannot be right, and silent results, in words with numbers (scene_checks.hpp).
   std::vector<std::string> warnings;

@@ -23,11 +23,13 @@ const char kUsage[] =
     "  info BANK.modes [--json]       show a mode bank: frequencies, decay, T60, mass\n"
     "  hit BANK.modes -o OUT.wav      strike an object once and render the sound\n"
     "  analyze AUDIO.wav [--json]     spectral peaks, levels and decay rates of a sound\n"
+    "  cache list|size|prune          the mode bank cache: list, measure, remove old or least used banks\n"
     "  bench accuracy -o DIR          accuracy study: FEM and synthesis error against run time (CSV, SVG)\n"
     "  bench leftout SCENE.json -o DIR what leaving out saves: time and audio against rendering everything\n"
     "  bench render SCENE.json -o DIR render speed per phase against a baseline run (CSV)\n"
     "\n"
     "Run `strike COMMAND --help` for a command's options and examples. SI units everywhere.\n"
+    "The command line is documented in docs/cli.md, the scene file in docs/scene-format.md.\n"
     "Exit codes: 0 success, 1 bad input (the message names the file, field and value), 2 internal error.\n";
 
 }  // namespace
@@ -52,6 +54,7 @@ int main(int argc, char** argv) {
     if (command == "info") return strike::cli::runInfo(args);
     if (command == "hit") return strike::cli::runHit(args);
     if (command == "analyze") return strike::cli::runAnalyze(args);
+    if (command == "cache") return strike::cli::runCache(args);
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "strike %s: error: out of memory\n", command.c_str());
     return 2;

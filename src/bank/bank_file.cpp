@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: MIT
 // The mode bank file: see docs/bank-format.md. Little-endian, chunked, checksummed.
 //
-//   header: magic "STRKBANK", u32 format_version, u32 header_size (32; 40 in format 3),
+//   header: magic "STRKBANK", u32 format_version, u32 header_size (32; 40 in formats 3-4),
 //           u64 payload_size, u64 payload_checksum (bankPayloadChecksum),
-//           format 3 only: u64 head_size (the checksum covers the payload's first head_size bytes)
+//           formats 3-4: u64 head_size (the checksum covers the payload's first head_size bytes)
 //   payload: chunks, each: char[4] tag, u32 flags (0), u64 size, then `size` bytes.
 //   format 3: the last chunk is MODV, whose shapes ([vertex][mode][xyz], f32) are the payload's
 //   tail after head_size, in blocks of vertices with one checksum each (kept in the head), so a
 //   reader verifies only the blocks it reads.
+//   format 4: the same with MODQ instead of MODV: a f32 scale per mode after the eigenvalues and
+//   the shapes as i16 (value = q * scale), half the bytes (`strike modes --compact`).
 //
 // Unknown chunks are skipped, so a reader of the same major format can read files that carry
 // more. Every read is bounds-checked: a hostile file can make decoding fail, never overrun.
@@ -150,10 +152,11 @@ Error corrupt(const std::string& source, const std::string& what) {
   return badInput(source + ": error: not a valid mode bank: " + what);
 }
 
-uint32_t verticesPerBlock(size_t modes, size_t vertices) {
+/// Vertices per shape block for rows of `row_bytes` (modes x 3 x the value size).
+uint32_t verticesPerBlock(size_t row_bytes, size_t vertices) {
   if (vertices == 0) return 1;
-  if (modes == 0) return static_cast<uint32_t>(std::min<size_t>(vertices, UINT32_MAX));
-  return static_cast<uint32_t>(std::clamp<size_t>(kShapeBlockBytes / (modes * 3 * sizeof(float)), 1, vertices));
+  if (row_bytes == 0) return static_cast<uint32_t>(std::min<size_t>(vertices, UINT32_MAX));
+  return static_cast<uint32_t>(std::clamp<size_t>(kShapeBlockBytes / row_bytes, 1, vertices));
 }
 
 /// Block b of format 3 shapes (its `size` bytes): their bankPayloadChecksum, seeded into FNV-1a of
@@ -162,12 +165,27 @@ uint64_t shapeBlockChecksum(const uint8_t* bytes, size_t size, uint64_t block) {
   return fnv1a64(&block, sizeof block, bankPayloadChecksum(3, bytes, size));
 }
 
+/// Format 4's per-mode scale: the mode's largest |value| over the surface / 32767, so every value
+/// is stored within scale / 2 = max / 65534 (1.53e-5 of the mode's largest amplitude).
+std::vector<float> int16ShapeScales(const ModeBank& bank) {
+  std::vector<float> scale(bank.modeCount(), 0.0f);
+  for (size_t m = 0; m < bank.modeCount(); ++m) {
+    float largest = 0.0f;
+    for (size_t v = 0; v < bank.surfaceVertexCount(); ++v)
+      for (int a = 0; a < 3; ++a) largest = std::max(largest, std::fabs(bank.shapeAt(m, v)[a]));
+    scale[m] = largest / 32767.0f;
+  }
+  return scale;
+}
+
 }  // namespace
 
-std::vector<uint8_t> encodeBank(const ModeBank& bank) {
+std::vector<uint8_t> encodeBank(const ModeBank& bank, ShapeEncoding encoding) {
+  const bool int16 = encoding == ShapeEncoding::Int16;
+  const uint32_t version = int16 ? 4 : 3;
   ByteWriter w;
   w.data().insert(w.data().end(), kMagic, kMagic + 8);
-  w.put<uint32_t>(kBankFormatVersion);
+  w.put<uint32_t>(version);
   w.put<uint32_t>(kHeaderSizeV3);
   w.put<uint64_t>(0);  // payload size, patched below
   w.put<uint64_t>(0);  // checksum, patched below
@@ -236,29 +254,44 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank) {
   w.putString(bank.tool_version);
   w.endChunk(at);
 
-  // MODV last: its shapes are the payload's tail, outside the head checksum.
+  // MODV (MODQ in format 4) last: its shapes are the payload's tail, outside the head checksum.
   const size_t modes = bank.modeCount();
   const size_t vertices = bank.surfaceVertexCount();
-  const uint32_t per_block = verticesPerBlock(modes, vertices);
+  const size_t value_bytes = int16 ? sizeof(int16_t) : sizeof(float);
+  const uint32_t per_block = verticesPerBlock(modes * 3 * value_bytes, vertices);
   const size_t blocks = per_block > 0 ? (vertices + per_block - 1) / per_block : 0;
-  at = w.beginChunk("MODV");
+  at = w.beginChunk(int16 ? "MODQ" : "MODV");
   w.put<uint32_t>(static_cast<uint32_t>(modes));
   w.put<uint32_t>(static_cast<uint32_t>(vertices));
   w.put<uint32_t>(per_block);
   w.put<uint32_t>(0);  // reserved
   w.putArray(bank.eigenvalues);
+  std::vector<float> scale;
+  if (int16) {
+    scale = int16ShapeScales(bank);
+    w.putArray(scale);
+  }
   const size_t checksums_at = w.data().size();
   for (size_t b = 0; b < blocks; ++b) w.put<uint64_t>(0);  // patched below
   const size_t shapes_at = w.data().size();
   // Transposed from the in-memory [mode][vertex][xyz]: a vertex's row is contiguous in the file.
   std::vector<float> row(modes * 3);
+  std::vector<int16_t> quantized(modes * 3);
   for (size_t v = 0; v < vertices; ++v) {
     for (size_t m = 0; m < modes; ++m) std::memcpy(&row[m * 3], bank.shapeAt(m, v), 3 * sizeof(float));
-    w.putArray(row);
+    if (!int16) {
+      w.putArray(row);
+      continue;
+    }
+    for (size_t k = 0; k < row.size(); ++k) {
+      const float s_m = scale[k / 3];
+      quantized[k] = s_m > 0 ? static_cast<int16_t>(std::clamp<long>(std::lround(double(row[k]) / double(s_m)), -32767, 32767)) : 0;
+    }
+    w.putArray(quantized);
   }
   w.endChunk(at);
   std::vector<uint8_t>& bytes = w.data();
-  const size_t row_bytes = modes * 3 * sizeof(float);
+  const size_t row_bytes = modes * 3 * value_bytes;
   for (size_t b = 0; b < blocks; ++b) {
     const size_t first = b * per_block, count = std::min<size_t>(per_block, vertices - first);
     const uint64_t checksum = shapeBlockChecksum(bytes.data() + shapes_at + first * row_bytes, count * row_bytes, b);
@@ -267,7 +300,7 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank) {
 
   const uint64_t payload_size = bytes.size() - kHeaderSizeV3;
   const uint64_t head_size = shapes_at - kHeaderSizeV3;
-  const uint64_t checksum = bankPayloadChecksum(kBankFormatVersion, bytes.data() + kHeaderSizeV3, head_size);
+  const uint64_t checksum = bankPayloadChecksum(version, bytes.data() + kHeaderSizeV3, head_size);
   std::memcpy(bytes.data() + 16, &payload_size, 8);
   std::memcpy(bytes.data() + 24, &checksum, 8);
   std::memcpy(bytes.data() + 32, &head_size, 8);
@@ -344,9 +377,9 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
   const uint32_t header_size = header.get<uint32_t>();
   const uint64_t payload_size = header.get<uint64_t>();
   const uint64_t checksum = header.get<uint64_t>();
-  if (bank.format_version == 0 || bank.format_version > kBankFormatVersion)
+  if (bank.format_version == 0 || bank.format_version > kBankFormatVersionMax)
     return badInput(source + ": error: mode bank format version " + std::to_string(bank.format_version) +
-                    " is not supported by this build (reads versions 1 to " + std::to_string(kBankFormatVersion) +
+                    " is not supported by this build (reads versions 1 to " + std::to_string(kBankFormatVersionMax) +
                     "); recompute it with `strike modes` or update strike");
   const uint32_t expected_header = bank.format_version >= 3 ? kHeaderSizeV3 : kHeaderSize;
   if (header_size != expected_header)
@@ -380,7 +413,8 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
     const uint64_t chunk_offset = static_cast<uint64_t>(payload.here() - payload_start);  // of its contents
     const bool runs_past = !payload.failed() && chunk_size > payload.remaining();
     // Only MODV may run past what is in memory, and only to the end of the file.
-    if (payload.failed() || (runs_past && (tag != "MODV" || chunk_size != payload_size - chunk_offset)))
+    const std::string shapes_tag = bank.format_version >= 4 ? "MODQ" : "MODV";
+    if (payload.failed() || (runs_past && (tag != shapes_tag || chunk_size != payload_size - chunk_offset)))
       return corrupt(source, "chunk '" + tag + "' runs past the end of the file");
     ByteReader r = payload.take(runs_past ? payload.remaining() : chunk_size);
     if (tag == "MATL") {
@@ -414,9 +448,11 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
       r.getArray(bank.surface_triangles, uint64_t(triangles) * 3);
       if (has_node_index) r.getArray(bank.surface_node_index, surface_vertices);
       seen_surface = true;
-    } else if (tag == "MODE" || tag == "MODV") {
-      const bool vertex_major = tag == "MODV";
-      if (vertex_major != (bank.format_version >= 3))
+    } else if (tag == "MODE" || tag == "MODV" || tag == "MODQ") {
+      const bool vertex_major = tag != "MODE";
+      const bool int16 = tag == "MODQ";
+      const std::string expected = bank.format_version >= 4 ? "MODQ" : bank.format_version == 3 ? "MODV" : "MODE";
+      if (tag != expected)
         return corrupt(source, "a '" + tag + "' chunk in a format " + std::to_string(bank.format_version) + " file");
       if (seen_modes) return corrupt(source, "two '" + tag + "' chunks");
       const uint32_t modes = r.get<uint32_t>();
@@ -425,25 +461,32 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
       if (vertex_major) {
         file.vertices_per_block_ = r.get<uint32_t>();
         r.get<uint32_t>();  // reserved
-        if (!r.failed() && file.vertices_per_block_ == 0) return corrupt(source, "'MODV' has 0 vertices per block");
+        if (!r.failed() && file.vertices_per_block_ == 0) return corrupt(source, "'" + tag + "' has 0 vertices per block");
         if (file.vertices_per_block_ > 0) blocks = (uint64_t(mode_vertices) + file.vertices_per_block_ - 1) / file.vertices_per_block_;
       }
       r.getArray(bank.eigenvalues, modes);
+      if (int16) {
+        r.getArray(file.shape_scale_, modes);
+        for (float scale : file.shape_scale_)
+          if (!r.failed() && !(std::isfinite(scale) && scale >= 0.0f)) return corrupt(source, "a shape scale of 'MODQ' is not finite and >= 0");
+      }
+      file.int16_shapes_ = int16;
       if (vertex_major) r.getArray(file.block_checksums_, blocks);
       if (r.failed()) return corrupt(source, "chunk '" + tag + "' is shorter than its contents");
       // The shapes are not read here: readAll() or readShapeRows() read them when asked.
       const uint64_t shapes_offset = static_cast<uint64_t>(r.here() - payload_start);
       const uint64_t shape_bytes = chunk_offset + chunk_size - shapes_offset;  // what the chunk has left
       const uint64_t values = uint64_t(modes) * 3;
-      if (mode_vertices != 0 && values > shape_bytes / 4 / mode_vertices)
+      const uint64_t value_bytes = int16 ? 2 : 4;
+      if (mode_vertices != 0 && values > shape_bytes / value_bytes / mode_vertices)
         return corrupt(source, "chunk '" + tag + "' is shorter than its " + std::to_string(modes) + " modes x " +
                                    std::to_string(mode_vertices) + " vertices of shapes");
       // The shapes must be exactly the unchecked tail of a format 3 file: nothing after them
       // escapes both checksums.
-      if (vertex_major && (shapes_offset != head_size || shape_bytes != values * mode_vertices * 4 ||
+      if (vertex_major && (shapes_offset != head_size || shape_bytes != values * mode_vertices * value_bytes ||
                            chunk_offset + chunk_size != payload_size))
-        return corrupt(source, "the shapes of chunk 'MODV' are not the file's tail after the checked head");
-      if (!runs_past) r.skip(values * mode_vertices * 4);
+        return corrupt(source, "the shapes of chunk '" + tag + "' are not the file's tail after the checked head");
+      if (!runs_past) r.skip(values * mode_vertices * value_bytes);
       file.shapes_offset_ = header_size + shapes_offset;
       file.vertex_major_ = vertex_major;
       seen_modes = true;
@@ -466,7 +509,8 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
     if (r.failed()) return corrupt(source, "chunk '" + tag + "' is shorter than its contents");
   }
   if (!seen_modes || !seen_surface)
-    return corrupt(source, std::string("missing the ") + (seen_modes ? "SURF" : bank.format_version >= 3 ? "MODV" : "MODE") +
+    return corrupt(source, std::string("missing the ") +
+                               (seen_modes ? "SURF" : bank.format_version >= 4 ? "MODQ" : bank.format_version == 3 ? "MODV" : "MODE") +
                                " chunk");
   if (mode_vertices != surface_vertices)
     return corrupt(source, "modes are sampled on " + std::to_string(mode_vertices) + " vertices, the surface has " +
@@ -477,8 +521,22 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
   return file;
 }
 
+void BankFile::decodeRows(const uint8_t* bytes, size_t count, float* out) const {
+  const size_t values = count * bank_.modeCount() * 3;
+  if (!int16_shapes_) {
+    std::memcpy(out, bytes, values * sizeof(float));
+    return;
+  }
+  // The same float product the writer's error bound assumes: q * scale_mode.
+  for (size_t k = 0; k < values; ++k) {
+    int16_t q;
+    std::memcpy(&q, bytes + 2 * k, 2);
+    out[k] = static_cast<float>(q) * shape_scale_[(k / 3) % bank_.modeCount()];
+  }
+}
+
 Status BankFile::readShapeBytes(size_t first, size_t count, std::vector<uint8_t>& to) const {
-  const size_t row_bytes = bank_.modeCount() * 3 * sizeof(float);
+  const size_t row_bytes = bank_.modeCount() * 3 * shapeValueBytes();
   to.resize(count * row_bytes);
   if (!source_->read(shapes_offset_ + first * row_bytes, to.size(), to.data()))
     return corrupt(source_->name, "the file ended inside its mode shapes (was it truncated while open?)");
@@ -521,7 +579,7 @@ Result<ShapeRows> BankFile::readShapeRows(std::vector<uint32_t> vertices) const 
         if (!verified) return verified.error();
         block_read = block;
       }
-      std::memcpy(row, bytes.data() + (v - first) * row_floats * sizeof(float), row_floats * sizeof(float));
+      decodeRows(bytes.data() + (v - first) * row_floats * shapeValueBytes(), 1, row);
     } else {
       // Formats 1-2 are all in memory and verified: gather [mode][vertex][xyz].
       for (size_t m = 0; m < modes; ++m)
@@ -545,17 +603,18 @@ Result<ModeBank> BankFile::readAll() const {
     std::vector<uint8_t> bytes;
     Status read = readShapeBytes(0, nv, bytes);
     if (!read) return read.error();
-    const size_t row_bytes = modes * 3 * sizeof(float);
+    const size_t row_bytes = modes * 3 * shapeValueBytes();
     for (size_t b = 0; b < block_checksums_.size(); ++b) {
       const size_t first = b * vertices_per_block_, count = std::min<size_t>(vertices_per_block_, nv - first);
       Status verified = verifyBlock(b, bytes.data() + first * row_bytes, count * row_bytes);
       if (!verified) return verified.error();
     }
     // [vertex][mode][xyz] in the file, [mode][vertex][xyz] in memory.
-    for (size_t v = 0; v < nv; ++v)
-      for (size_t m = 0; m < modes; ++m)
-        std::memcpy(bank.shapes.data() + (m * nv + v) * 3, bytes.data() + v * row_bytes + m * 3 * sizeof(float),
-                    3 * sizeof(float));
+    std::vector<float> row(modes * 3);
+    for (size_t v = 0; v < nv; ++v) {
+      decodeRows(bytes.data() + v * row_bytes, 1, row.data());
+      for (size_t m = 0; m < modes; ++m) std::memcpy(bank.shapes.data() + (m * nv + v) * 3, &row[m * 3], 3 * sizeof(float));
+    }
   } else if (!source_->read(shapes_offset_, bank.shapes.size() * sizeof(float), reinterpret_cast<uint8_t*>(bank.shapes.data()))) {
     return corrupt(source_->name, "the file ended inside its mode shapes");
   }
@@ -595,7 +654,7 @@ Result<BankFile> BankFile::open(const std::string& path) {
     }
     // Only the head of a well-formed format 3 header; everything otherwise.
     uint64_t wanted = bytes->size;
-    if (std::memcmp(header, kMagic, 8) == 0 && version == 3 && header_size == kHeaderSizeV3 &&
+    if (std::memcmp(header, kMagic, 8) == 0 && (version == 3 || version == 4) && header_size == kHeaderSizeV3 &&
         head_size <= bytes->size - kHeaderSizeV3)
       wanted = kHeaderSizeV3 + head_size;
     bytes->buffer.resize(wanted);
@@ -636,10 +695,10 @@ Result<ModeBank> readBank(const std::string& path) {
   return file->readAll();
 }
 
-Status writeBank(const std::string& path, const ModeBank& bank) {
+Status writeBank(const std::string& path, const ModeBank& bank, ShapeEncoding shapes) {
   const std::string problem = bank.checkConsistency();
   if (!problem.empty()) return internalError("refusing to write an inconsistent mode bank to " + path + ": " + problem);
-  const std::vector<uint8_t> bytes = encodeBank(bank);
+  const std::vector<uint8_t> bytes = encodeBank(bank, shapes);
   return writeFileAtomically(path, bytes.data(), bytes.size());
 }
 

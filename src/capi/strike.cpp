@@ -246,9 +246,9 @@ strike_status loadBank(strike_context ctx, const uint8_t* bytes, size_t size, co
   if (size >= 12 && std::memcmp(bytes, "STRKBANK", 8) == 0) {
     uint32_t version = 0;
     for (int i = 0; i < 4; ++i) version |= static_cast<uint32_t>(bytes[8 + i]) << (8 * i);
-    if (version > kBankFormatVersion)
+    if (version > kBankFormatVersionMax)
       return fail(ctx, STRIKE_ERR_VERSION, "%s: mode bank format version %u is newer than this library reads (%u)",
-                  source.c_str(), version, kBankFormatVersion);
+                  source.c_str(), version, kBankFormatVersionMax);
   }
   Result<ModeBank> decoded = decodeBank(bytes, size, source);
   if (!decoded) return fail(ctx, STRIKE_ERR_PARSE, "%s", decoded.error().message.c_str());

@@ -88,6 +88,11 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
     s << "mesh size " << options.target_edge_m << " m (must be >= 0; 0 picks one automatically)";
     return badInput(s.str());
   }
+  if (!(options.scale > 0.0) || !std::isfinite(options.scale)) {
+    std::ostringstream s;
+    s << "mesh unit scale " << options.scale << " m per unit (must be a finite number > 0)";
+    return badInput(s.str());
+  }
   LoadedMesh loaded;
   auto finish = [&]() -> Result<LoadedMesh> {
     const int64_t tets = static_cast<int64_t>(loaded.mesh.tets.rows());
@@ -135,6 +140,7 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
     loaded.source_hash = detail::fnv1a64Local(bytes->data(), bytes->size());
     Result<SurfaceMesh> surface = readSurfaceMesh(spec, &loaded.warnings);
     if (!surface) return surface.error();
+    if (options.scale != 1.0) surface->V *= options.scale;  // to metres before TetGen sizes anything
     Result<TetMesh> mesh = tetrahedralize(*surface, options, spec);
     if (!mesh) return mesh.error();
     loaded.mesh = std::move(*mesh);
@@ -143,6 +149,7 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
   if (ext == ".msh" || is_tetgen) {
     Result<TetMesh> mesh = is_tetgen ? readTetgen(spec, &loaded.warnings) : readGmsh(spec, &loaded.warnings);
     if (!mesh) return mesh.error();
+    if (options.scale != 1.0) mesh->nodes *= options.scale;
     if (is_tetgen) {
       // Hash both files, in a fixed order, so that editing either one changes the hash.
       const std::string stem = ext.empty() ? spec : spec.substr(0, spec.size() - ext.size());

@@ -135,6 +135,7 @@ Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, co
   if (canRemesh(settings.mesh_spec)) {
     MeshOptions options;
     options.order = fine.order;
+    options.scale = settings.mesh_scale;  // a file in millimetres is coarsened in metres too
     // Aim at twice the fine mesh's edge (for a box the primitive rounds to whole cells). TetGen's
     // tets are smaller than its volume bound, so when the count ratio says h grew by less than
     // 1.6x, ask again 1.6x coarser (at most twice more).
@@ -240,6 +241,7 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
   const auto start = std::chrono::steady_clock::now();
   // The automatic Tet4 mesh sets the length scale h0.
   MeshOptions probe_options;
+  probe_options.scale = settings.mesh_scale;
   Result<LoadedMesh> probe = loadTetMesh(settings.mesh_spec, probe_options);
   if (!probe) return probe.error();
   const double h0 = meanEdge(probe->mesh) / std::cbrt(std::sqrt(2.0));

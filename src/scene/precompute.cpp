@@ -108,6 +108,8 @@ uint64_t bankCacheKey(uint64_t mesh_hash, const PrecomputeSettings& settings) {
                                kBankFormatVersion};
   uint64_t key = fnv1a64(numbers, sizeof numbers);
   key = fnv1a64(integers, sizeof integers, key);
+  // Only a scaled mesh hashes its scale, so banks cached before "units" existed keep their keys.
+  if (settings.mesh_scale != 1.0) key = fnv1a64(&settings.mesh_scale, sizeof settings.mesh_scale, key);
   return fnv1a64(STRIKE_VERSION_STRING, sizeof STRIKE_VERSION_STRING - 1, key);
 }
 
@@ -122,6 +124,7 @@ MeshOptions meshOptionsFor(const PrecomputeSettings& settings) {
   MeshOptions options;
   options.order = settings.order;
   options.target_edge_m = settings.target_edge_m;
+  options.scale = settings.mesh_scale;
   options.max_tets = settings.max_tets;
   options.progress = settings.progress;
   return options;

@@ -10,15 +10,18 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
 
 #include "strike/atomic_file.hpp"
+#include "strike/bank_cache.hpp"
 #include "strike/bank.hpp"
 #include "strike/materials.hpp"
 #include "strike/precompute.hpp"
+#include "strike/scene_checks.hpp"
 #include "strike/synth.hpp"
 
 namespace strike {
@@ -58,7 +61,8 @@ struct Body {
   bool from_cache = false;           ///< counted in report.banks_cached
   std::optional<LoadedMesh> mesh;    ///< kept when the modes may still need computing
   double max_velocity_change_m_s = 0.0;
-  bool sounded = false;
+  bool sounded = false;              ///< struck audibly: gets a bank and an oscillator
+  bool silent = false;               ///< ...but no mode in the synthesized band
   uint32_t synth_id = 0;
   std::unique_ptr<ContactProjector> projector;  ///< contact impulses onto modes
   double sustained_time_s = -1.0;           ///< substep whose sustained contacts are being summed
@@ -100,6 +104,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   body.precompute.material = object.material;
   body.precompute.order = object.order;
   body.precompute.target_edge_m = object.size_m;
+  body.precompute.mesh_scale = object.mesh_scale;
   body.precompute.max_freq_hz = max_freq_hz;
   body.precompute.max_modes = scene.max_modes;
   body.precompute.max_tets = settings.max_tets;
@@ -120,6 +125,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
       Result<BankFile> cached = BankFile::open(path);
       // A damaged cache entry is recomputed, not trusted (damaged shapes are found in phase 2).
       if (cached && cached->bank().mesh_hash == *hash) {
+        touchCacheEntry(path);  // recently used: the size cap removes it last
         body.bank = cached->bank();
         body.file = std::move(*cached);
         body.has_modes = true;
@@ -207,6 +213,24 @@ double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) {
 }
 double norm(const std::array<double, 3>& a) { return std::sqrt(dot(a, a)); }
 
+/// Whether a struck body can be heard at all: some mode in the band the oscillator bank
+/// synthesizes (the band test of OscillatorBank::addObject). The error says why not.
+Status hasAudibleMode(const ModeBank& bank, const SynthSettings& synth, double rate) {
+  const double low = synth.min_freq_hz, high = std::min(synth.max_freq_hz, 0.45 * rate);
+  for (size_t i = 0; i < bank.modeCount(); ++i) {
+    const double f = bank.frequencyHz(i);
+    if (f >= low && f <= high) return {};
+  }
+  char why[256];
+  if (bank.modeCount() == 0)
+    std::snprintf(why, sizeof why, "its bank has no elastic mode below its cut-off of %.0f Hz: too small or too stiff to ring",
+                  bank.max_freq_hz);
+  else
+    std::snprintf(why, sizeof why, "its %zu modes lie at %.1f to %.1f Hz, outside the synthesized band %.0f to %.0f Hz",
+                  bank.modeCount(), bank.frequencyHz(0), bank.frequencyHz(bank.modeCount() - 1), low, high);
+  return badInput(std::string("silent: no mode in the audible band (") + why + ")");
+}
+
 }  // namespace
 
 std::string defaultCacheDir() {
@@ -248,6 +272,11 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   const auto simulate_start = std::chrono::steady_clock::now();
   std::vector<SimBodyDesc> sim_bodies;
   for (const Body& body : bodies) sim_bodies.push_back(simBody(body));
+  auto warn = [&](std::string text) {
+    if (settings.on_warning) settings.on_warning(text);
+    report.warnings.push_back(std::move(text));
+  };
+  for (std::string& text : checkStartingPlacement(scene, sim_bodies)) warn(std::move(text));
   SimSettings sim;
   sim.duration_s = duration;
   sim.gravity_m_s2 = scene.gravity_m_s2;
@@ -265,6 +294,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   report.simulate_seconds = secondsSince(simulate_start);
   result.events = std::move(simulated->events);
   report.events = result.events.size();
+  for (const ContactEvent& event : result.events)
+    ++(event.normal_speed_m_s > kImpactSpeed_m_s ? report.impact_events : report.sustained_events);
 
   // ---- Phase 2: banks only for objects struck hard enough to hear ----------------------------
   for (const ContactEvent& event : result.events) {
@@ -276,6 +307,9 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
         body.max_velocity_change_m_s = std::max(body.max_velocity_change_m_s, impulse / body.bank.mass_kg);
     }
   }
+  for (size_t i = 0; i < bodies.size(); ++i)
+    if (bodies[i].max_velocity_change_m_s == 0.0 && !bodies[i].object->is_static)
+      warn(neverStruckWarning(scene, sim_bodies[i], duration));
   const auto precompute_start = std::chrono::steady_clock::now();
   std::map<uint64_t, size_t> computed_by_key;  // identical objects share one eigen-solve
   for (size_t i = 0; i < bodies.size(); ++i) {
@@ -324,6 +358,11 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     }
   }
   report.precompute_seconds = secondsSince(precompute_start);
+  if (!settings.cache_dir.empty() && settings.cache_max_bytes > 0) {
+    // This render's banks were just written or touched, so they are the last to go.
+    Result<PruneReport> pruned = pruneCache(settings.cache_dir, settings.cache_max_bytes, -1.0, std::time(nullptr));
+    if (pruned) report.cache_pruned = pruned->removed, report.cache_pruned_bytes = pruned->bytes_removed;
+  }
 
   // ---- Phase 3: impacts into the oscillator bank --------------------------------------------
   const auto synth_start = std::chrono::steady_clock::now();
@@ -338,7 +377,13 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   OscillatorBank synth(synth_settings);
   for (Body& body : bodies) {
     if (!body.sounded) continue;
-    ++report.objects_sounded;
+    if (Status audible = hasAudibleMode(body.bank, synth_settings, rate); !audible) {
+      ++report.objects_silent;
+      body.silent = true;
+      warn("objects \"" + body.object->name + "\": " + audible.error().message);
+    } else {
+      ++report.objects_sounded;
+    }
     // The listener hears each object from where it was first struck (objects that travel far
     // while ringing are not tracked: a documented simplification).
     std::array<double, 3> where = body.object->position_m;
@@ -453,7 +498,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
                                                  m2.poisson, r2, mass2, event.normal_speed_m_s);
         impact.shape = PulseShape::HalfSine;
         synth.addImpact(impact);
-        ++report.impacts;
+        if (!body.silent) ++report.impacts;
       } else {
         // Sustained contact: the step's impulse is a constant force over the step, so a
         // steady resting force is a constant and makes no sound; only its changes do.
@@ -463,7 +508,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
           body.sustained_modal.assign(modal.size(), 0.0);
         }
         for (size_t i = 0; i < modal.size(); ++i) body.sustained_modal[i] += modal[i];
-        ++report.sustained_contacts;
+        if (!body.silent) ++report.sustained_contacts;
       }
     }
   }

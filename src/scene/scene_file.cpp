@@ -66,7 +66,14 @@ std::optional<size_t> tooDeepAt(const std::string& text) {
   return std::nullopt;
 }
 
-Status checkKeys(const json& object, const Where& where, std::initializer_list<const char*> known) {
+const std::vector<const char*>& keysOf(const char* where) {
+  for (const SceneKeyTable& table : sceneKeyTables())
+    if (std::string(table.where) == where) return table.keys;
+  static const std::vector<const char*> none;
+  return none;
+}
+
+Status checkKeys(const json& object, const Where& where, const std::vector<const char*>& known) {
   if (!object.is_object()) return where.error("expected an object, got " + show(object));
   for (const auto& item : object.items()) {
     bool found = false;
@@ -112,8 +119,7 @@ Result<Material> material(const json& value, const Where& where) {
     if (!m) return where.error(m.error().message);
     return m;
   }
-  Status keys = checkKeys(value, where, {"name", "youngs_pa", "poisson", "density_kg_m3", "loss_factor",
-                                         "rayleigh_stiffness", "rayleigh_mass"});
+  Status keys = checkKeys(value, where, keysOf("material"));
   if (!keys) return keys.error();
   Material m;
   m.name = value.contains("name") && value["name"].is_string() ? value["name"].get<std::string>() : "custom";
@@ -152,8 +158,7 @@ std::string resolvePath(const std::string& scene_path, const std::string& relati
 }
 
 Result<SceneObject> object(const json& value, const Where& where, const std::string& scene_path) {
-  Status keys = checkKeys(value, where, {"name", "mesh", "bank", "material", "order", "size", "static", "shape",
-                                         "position", "orientation", "velocity", "angular_velocity"});
+  Status keys = checkKeys(value, where, keysOf("objects[]"));
   if (!keys) return keys.error();
   SceneObject o;
   if (value.contains("name")) {
@@ -182,6 +187,20 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
     o.material = *m;
   } else if (o.bank.empty()) {
     return where.error("needs \"material\" (a name like \"steel\" or an object with youngs_pa, poisson, density_kg_m3)");
+  }
+  if (value.contains("units")) {
+    // A mesh exported in millimetres read as metres is 1000x too large (issue 15: a 264,000-tonne
+    // mug); the file's unit is declared here instead of rescaling the file.
+    Result<std::string> units = text(value["units"], where.at("units"));
+    if (!units) return units.error();
+    if (*units == "m") o.mesh_scale = 1.0;
+    else if (*units == "cm") o.mesh_scale = 0.01;
+    else if (*units == "mm") o.mesh_scale = 0.001;
+    else return where.at("units").error("expected \"m\", \"cm\" or \"mm\", got " + show(value["units"]));
+    if (!value.contains("mesh") || isPrimitiveSpec(value["mesh"].get<std::string>()))
+      return where.at("units").error("applies to a mesh file only (primitives and banks are in metres), got " +
+                                     show(value["units"]));
+    o.units = *units;
   }
   if (value.contains("order")) {
     if (!value["order"].is_number_integer() || (value["order"] != 1 && value["order"] != 2))
@@ -229,6 +248,21 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
 
 }  // namespace
 
+const std::vector<SceneKeyTable>& sceneKeyTables() {
+  static const std::vector<SceneKeyTable> tables = {
+      {"top level",
+       {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes", "contact_damping"}},
+      {"listener", {"position"}},
+      {"ground", {"material", "height"}},
+      {"objects[]",
+       {"name", "mesh", "units", "bank", "material", "order", "size", "static", "shape", "position", "orientation",
+        "velocity", "angular_velocity"}},
+      {"material",
+       {"name", "youngs_pa", "poisson", "density_kg_m3", "loss_factor", "rayleigh_stiffness", "rayleigh_mass"}},
+  };
+  return tables;
+}
+
 Result<Scene> parseScene(const std::string& json_text, const std::string& path) {
   if (std::optional<size_t> at = tooDeepAt(json_text))
     return badInput(path + ":" + lineColumn(json_text, *at) + ": error: JSON nested deeper than " +
@@ -250,9 +284,7 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
   const Where root{path, ""};
   Scene scene;
   scene.path = path;
-  Status keys = checkKeys(doc, Where{path, "(top level)"},
-                          {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes",
-                           "contact_damping"});
+  Status keys = checkKeys(doc, Where{path, "(top level)"}, keysOf("top level"));
   if (!keys) return keys.error();
   if (doc.contains("sample_rate")) {
     Result<double> rate = number(doc["sample_rate"], root.at("sample_rate"));
@@ -290,7 +322,7 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
   }
   if (doc.contains("listener")) {
     const Where where = root.at("listener");
-    Status listener_keys = checkKeys(doc["listener"], where, {"position"});
+    Status listener_keys = checkKeys(doc["listener"], where, keysOf("listener"));
     if (!listener_keys) return listener_keys.error();
     if (doc["listener"].contains("position")) {
       Result<std::array<double, 3>> p = vector<3>(doc["listener"]["position"], where.at("position"));
@@ -305,7 +337,7 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
     if (ground.is_null() || (ground.is_boolean() && !ground.get<bool>())) {
       scene.has_ground = false;
     } else {
-      Status ground_keys = checkKeys(ground, where, {"material", "height"});
+      Status ground_keys = checkKeys(ground, where, keysOf("ground"));
       if (!ground_keys) return ground_keys.error();
       if (ground.contains("material")) {
         Result<Material> m = material(ground["material"], where.at("material"));

@@ -151,7 +151,7 @@ TEST(CApi, BadBanksAreRefusedWithTheRightCode) {
     EXPECT_NE(std::strlen(strike_context_last_error(f.ctx)), 0u);
   }
   std::vector<uint8_t> newer = bytes;
-  newer[8] = static_cast<uint8_t>(strike::kBankFormatVersion + 1);
+  newer[8] = static_cast<uint8_t>(strike::kBankFormatVersionMax + 1);
   EXPECT_EQ(strike_bank_load_memory(f.ctx, newer.data(), newer.size(), &b), STRIKE_ERR_VERSION);
   EXPECT_NE(std::strstr(strike_context_last_error(f.ctx), "newer"), nullptr) << strike_context_last_error(f.ctx);
   std::vector<uint8_t> foreign(bytes.size(), 0x5a);

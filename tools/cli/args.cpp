@@ -24,7 +24,11 @@ Result<SampleEncoding> sampleEncodingFor(const ParsedArgs& args, const std::stri
   const std::string format = args.text("--format", flac ? "pcm24" : "float");
   if (format == "pcm16") return SampleEncoding::Pcm16;
   if (format == "pcm24") return SampleEncoding::Pcm24;
-  if (format == "float") return SampleEncoding::Float32;
+  if (format == "float") {
+    // Refused here, before any work, not by the writer after it (FLAC has no float samples).
+    if (flac) return badInput("--format float with " + output + ": FLAC stores integer PCM only; use pcm16 or pcm24, or a .wav file");
+    return SampleEncoding::Float32;
+  }
   return badInput("--format = '" + format + "' (expected pcm16, pcm24 or float)");
 }
 
@@ -131,10 +135,14 @@ std::string helpText(const CommandSpec& spec) {
       std::string left = "  " + o.name + (o.value_name.empty() ? "" : " " + o.value_name);
       if (left.size() < 30) left.resize(30, ' ');
       else left += "\n" + std::string(30, ' ');
-      out << left << o.help << "\n";
+      std::string help = o.help;  // continuation lines line up under the first
+      for (size_t at = help.find('\n'); at != std::string::npos; at = help.find('\n', at + 1)) help.insert(at + 1, 30, ' ');
+      out << left << help << "\n";
     }
   }
   if (!spec.examples.empty()) out << "\nexamples:\n" << spec.examples;
+  out << "\nEvery command, option, output and exit code: docs/cli.md; the scene file: docs/scene-format.md\n"
+         "(in the source tree; exit codes: 0 success, 1 bad input, 2 internal error).\n";
   return out.str();
 }
 

@@ -6,6 +6,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "output_check.hpp"
 #include "strike/audio.hpp"
 
 namespace strike::cli {
@@ -19,7 +20,7 @@ CommandSpec analyzeSpec() {
       "FFT (FFTW) with sub-bin interpolation: frequency, level relative to the strongest peak, and the\n"
       "amplitude decay rate d of A e^(-d t) fitted per peak (T60 = 6.91 / d).";
   spec.options = {
-      {"--json", "", "print one JSON object on stdout (the contract in ARCHITECTURE.md)"},
+      {"--json", "", "print one JSON object on stdout (the contract in docs/cli.md)"},
       {"--peaks", "N", "report the N strongest peaks; default 20"},
       {"--floor", "DB", "ignore peaks more than DB below the strongest; default -60"},
       {"--spectrogram", "PNG", "also draw a spectrogram (log frequency, 100 dB range) to this PNG file"},
@@ -53,6 +54,9 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
   if (!(*floor_db < 0)) return reportError("analyze", badInput("--floor = " + args->text("--floor") + " (must be < 0 dB)"));
   options.floor_db = *floor_db;
 
+  if (args->has("--spectrogram"))
+    if (Status ok = checkOutputFile("--spectrogram", args->text("--spectrogram"), {".png"}); !ok)
+      return reportError("analyze", ok.error());
   const std::string path = args->positional[0];
   Result<AudioBuffer> audio = readAudio(path);
   if (!audio) return reportError("analyze", audio.error());
@@ -69,7 +73,8 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
     j["channels"] = audio->channels;
     j["duration_s"] = analysis.duration_s;
     j["peak_amplitude"] = analysis.peak_amplitude;
-    j["peak_dbfs"] = 20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30));
+    j["peak_dbfs"] = 20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30));  // -600 when silent (JSON has no -inf)
+    j["silent"] = analysis.peak_amplitude == 0.0;
     j["rms"] = analysis.rms;
     j["clipped_samples"] = analysis.clipped_samples;
     j["peaks"] = nlohmann::json::array();
@@ -83,6 +88,10 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
   }
   std::printf("%s: %.0f Hz, %d channel(s), %.3f s\n", path.c_str(), analysis.sample_rate_hz, audio->channels,
               analysis.duration_s);
+  if (analysis.peak_amplitude == 0.0) {
+    std::printf("silent: every sample is 0 (no peaks)\n");
+    return 0;
+  }
   std::printf("peak %.4g (%.1f dBFS), RMS %.4g (%.1f dBFS)%s\n\n", analysis.peak_amplitude,
               20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30)), analysis.rms,
               20.0 * std::log10(std::max(analysis.rms, 1e-30)),

@@ -22,6 +22,7 @@
 #include "args.hpp"
 #include "bench_studies.hpp"
 #include "commands.hpp"
+#include "output_check.hpp"
 #include "common/beam_theory.hpp"   // tests/unit/common: the Timoshenko free-free bar reference
 #include "extreme/lamb_sphere.hpp"   // tests/unit/extreme: Lamb's free-sphere modes
 #include "strike/precompute.hpp"
@@ -47,7 +48,7 @@ CommandSpec benchSpec() {
       "`leftout` renders SCENE three times (nothing left out; as normal from an empty cache; from the warm\n"
       "cache), writes DIR/leftout.csv and prints the time ratios and the audio difference.\n"
       "`render` times a render phase by phase against a baseline run (see `strike bench render --help`).";
-  spec.options = {{"-o", "DIR", "output directory (must exist)"},
+  spec.options = {{"-o", "DIR", "output folder; created if missing"},
                   {"--plate", "", "accuracy: also the free thick plate (Tet4/Tet10 at 4 sizes against a fine Tet10\n"
                                   "reference; ~45 s more, 1.9 GB peak)"}};
   spec.examples = "  strike bench accuracy -o study/\n  strike bench leftout examples/scenes/bar-drop.json -o study/\n";
@@ -323,6 +324,10 @@ int runBench(const std::vector<std::string>& raw_args) {
   if (!parsed->has("-o")) return reportError("bench", badInput("missing -o DIR"));
   const std::string dir = parsed->text("-o");
   const std::string& study = parsed->positional[0];
+  if (study != "leftout" && (study != "accuracy" || parsed->positional.size() != 1))
+    return reportError("bench", badInput("unknown study '" + study + "' (known: accuracy, leftout SCENE.json, render SCENE.json)"));
+  // The folder is made (or refused) before the study runs, not after it.
+  if (Status ok = prepareOutputDir("-o", dir); !ok) return reportError("bench", ok.error());
   if (study == "leftout") {
     if (parsed->positional.size() != 2) return reportError("bench", badInput("bench leftout needs SCENE.json"));
     Status ok = benchLeftOut(parsed->positional[1], dir);

@@ -14,6 +14,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "output_check.hpp"
 #include "strike/render.hpp"
 #include "strike/scene.hpp"
 
@@ -29,7 +30,7 @@ CommandSpec benchRenderSpec() {
       "the shapes where contacts landed, or eigen-solve), synthesize and total wall times, the process CPU time, the real-time factor (audio seconds per wall second)\n"
       "and the 1-minute load average. Prints the medians and current/baseline ratios. Reads banks from\n"
       "the cache and computes missing ones (the first run then reports their eigen-solves).";
-  spec.options = {{"-o", "DIR", "output directory (must exist)"},
+  spec.options = {{"-o", "DIR", "output folder; created if missing"},
                   {"--cache", "DIR", "mode bank cache folder; default $STRIKE_CACHE_DIR or ~/.cache/strike"},
                   {"--repeat", "N", "renders per configuration; default 5"}};
   spec.examples = "  strike bench render tests/bench/render/bench-20-plates.json -o /tmp --repeat 5\n";
@@ -70,6 +71,7 @@ int runBenchRender(const std::vector<std::string>& raw_args) {
   Result<ParsedArgs> parsed = parseArgs(spec, raw_args);
   if (!parsed) return reportError("bench", parsed.error());
   if (!parsed->has("-o")) return reportError("bench", badInput("missing -o DIR"));
+  if (Status ok = prepareOutputDir("-o", parsed->text("-o")); !ok) return reportError("bench", ok.error());
   Result<long long> repeat = parsed->integer("--repeat", 5);
   if (!repeat) return reportError("bench", repeat.error());
   if (*repeat < 1 || *repeat > 1000)

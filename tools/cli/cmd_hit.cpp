@@ -2,10 +2,12 @@
 // `strike hit BANK.modes -o OUT.wav`: one impact on one object, rendered to a sound file.
 #include <cmath>
 #include <cstdio>
+#include <algorithm>
 #include <limits>
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "output_check.hpp"
 #include "strike/audio.hpp"
 #include "strike/bank.hpp"
 #include "strike/materials.hpp"
@@ -29,7 +31,8 @@ CommandSpec hitSpec() {
   spec.options = {
       {"-o", "OUT.wav", "output sound file, .wav or .flac (required); written atomically"},
       {"--vertex", "I", "strike surface vertex I (see `strike info`); default: the vertex that excites most"},
-      {"--at", "X,Y,Z", "strike the surface point nearest to X,Y,Z (metres, mesh frame)"},
+      {"--at", "X,Y,Z", "strike the surface point nearest to X,Y,Z (metres, mesh frame); prints that point and\n"
+                        "how far it is from X,Y,Z, and warns past 2% of the object's size"},
       {"--impulse", "X,Y,Z", "impulse vector, N s; default 0.01 N s into the surface along its normal"},
       {"--duration", "S", "length of the output, s; default 2"},
       {"--rate", "HZ", "sample rate; default 48000"},
@@ -40,7 +43,7 @@ CommandSpec hitSpec() {
       {"--striker", "MATERIAL", "striker sphere material for the Hertz contact time; default steel"},
       {"--striker-radius", "M", "striker sphere radius, m; default 0.005"},
       {"--simd", "KERNEL", kSimdHelp},
-      {"--quiet", "", "no summary on stderr"},
+      {"--quiet", "", "no summary on stderr (warnings are still printed)"},
   };
   spec.examples =
       "  strike hit bar.modes -o hit.wav --vertex 12 --impulse 0,0,-0.01 --duration 2\n"
@@ -68,6 +71,17 @@ size_t loudestVertex(const ModeBank& bank) {
   return best;
 }
 
+/// The largest side of the bank's surface bounding box, m.
+double objectSizeM(const ModeBank& bank) {
+  double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (size_t v = 0; v < bank.surfaceVertexCount(); ++v)
+    for (int a = 0; a < 3; ++a) {
+      low[a] = std::min(low[a], double(bank.surface_positions[v * 3 + a]));
+      high[a] = std::max(high[a], double(bank.surface_positions[v * 3 + a]));
+    }
+  return std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2], 0.0});
+}
+
 }  // namespace
 
 int runHit(const std::vector<std::string>& raw_args) {
@@ -81,6 +95,8 @@ int runHit(const std::vector<std::string>& raw_args) {
   const ParsedArgs& args = *parsed;
   if (!args.has("-o")) return reportError("hit", badInput("missing -o OUT.wav (where to write the sound)"));
   if (args.has("--vertex") && args.has("--at")) return reportError("hit", badInput("give --vertex or --at, not both"));
+  if (Status ok = checkOutputFile("-o", args.text("-o"), {".wav", ".flac"}); !ok) return reportError("hit", ok.error());
+  if (Result<SampleEncoding> e = sampleEncodingFor(args, args.text("-o")); !e) return reportError("hit", e.error());
 
   Result<ModeBank> loaded = readBank(args.positional[0]);
   if (!loaded) return reportError("hit", loaded.error());
@@ -107,16 +123,26 @@ int runHit(const std::vector<std::string>& raw_args) {
   // Where: a vertex, or the nearest surface point to --at.
   size_t vertex = 0;
   double point[3];
+  double requested[3] = {0, 0, 0};
+  double off_surface_m = 0.0;  // --at: distance from the requested point to the surface point struck
   if (args.has("--at")) {
     Result<std::array<double, 3>> at = args.vector3("--at", {});
     if (!at) return reportError("hit", at.error());
-    for (int a = 0; a < 3; ++a) point[a] = (*at)[a];
-    double best = std::numeric_limits<double>::infinity();
-    for (size_t v = 0; v < bank.surfaceVertexCount(); ++v) {
-      double d2 = 0;
-      for (int a = 0; a < 3; ++a) d2 += std::pow(bank.surface_positions[v * 3 + a] - point[a], 2);
-      if (d2 < best) best = d2, vertex = v;  // for the default impulse direction only
+    for (int a = 0; a < 3; ++a) requested[a] = point[a] = (*at)[a];
+    // The point struck is the nearest point on the surface (what projectImpulse uses): report
+    // it, not the point asked for, and how far apart they are.
+    const SurfaceLocator locator(bank);
+    uint32_t corners[3] = {0, 0, 0};
+    double weights[3] = {1, 0, 0};
+    locator.nearest(requested, corners, weights);
+    double best_weight = -1.0;
+    point[0] = point[1] = point[2] = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      if (weights[k] > best_weight) best_weight = weights[k], vertex = corners[k];  // the impulse's default normal
+      for (int a = 0; a < 3; ++a) point[a] += weights[k] * bank.surface_positions[corners[k] * 3 + a];
     }
+    off_surface_m = std::sqrt(std::pow(point[0] - requested[0], 2) + std::pow(point[1] - requested[1], 2) +
+                              std::pow(point[2] - requested[2], 2));
   } else {
     Result<long long> chosen = args.integer("--vertex", static_cast<long long>(loudestVertex(bank)));
     if (!chosen) return reportError("hit", chosen.error());
@@ -132,7 +158,7 @@ int runHit(const std::vector<std::string>& raw_args) {
   if (!impulse_arg) return reportError("hit", impulse_arg.error());
   const double impulse[3] = {(*impulse_arg)[0], (*impulse_arg)[1], (*impulse_arg)[2]};
   const std::vector<double> modal_impulse =
-      args.has("--at") ? projectImpulse(bank, point, impulse) : projectImpulseAtVertex(bank, vertex, impulse);
+      args.has("--at") ? projectImpulse(bank, requested, impulse) : projectImpulseAtVertex(bank, vertex, impulse);
 
   // How long the contact lasts: Hertz theory for a sphere striking a locally flat surface, at the
   // speed that gives this impulse in an elastic rebound (J = 2 m* v).
@@ -193,19 +219,41 @@ int runHit(const std::vector<std::string>& raw_args) {
   Status written = writeAudio(output, audio, encoding);
   if (!written) return reportError("hit", written.error());
 
+  // A point asked for far from the surface is probably a mistake (a unit, a sign, another
+  // object's frame): warn past 2% of the object's size (1 mm at least), even with --quiet.
+  const double size_m = objectSizeM(bank);
+  if (args.has("--at") && off_surface_m > std::max(1e-3, 0.02 * size_m))
+    std::fprintf(stderr,
+                 "strike hit: warning: --at %s is %.4g m from the object's surface (the object is %.4g m across); "
+                 "struck the nearest surface point (%.4g, %.4g, %.4g) m instead\n",
+                 args.text("--at").c_str(), off_surface_m, size_m, point[0], point[1], point[2]);
+  const SynthStats stats = synth.stats();
+  if (stats.modes_total == stats.modes_out_of_band)
+    std::fprintf(stderr, "strike hit: warning: silent: no mode in the audible band (%s)\n",
+                 bank.modeCount() == 0 ? "the bank has no elastic mode below its cut-off: too small or too stiff to ring"
+                                       : "every mode of the bank is outside 20 Hz to min(20 kHz, 0.45 x --rate)");
   if (!args.has("--quiet")) {
-    const SynthStats stats = synth.stats();
-    std::fprintf(stderr, "strike hit: %s, vertex %zu at (%.4g, %.4g, %.4g) m, impulse (%.3g, %.3g, %.3g) N s\n",
-                 args.positional[0].c_str(), vertex, point[0], point[1], point[2], impulse[0], impulse[1], impulse[2]);
+    if (args.has("--at"))
+      std::fprintf(stderr, "strike hit: %s, surface point (%.4g, %.4g, %.4g) m (nearest vertex %zu), %.3g m from --at, "
+                   "impulse (%.3g, %.3g, %.3g) N s\n",
+                   args.positional[0].c_str(), point[0], point[1], point[2], vertex, off_surface_m, impulse[0], impulse[1],
+                   impulse[2]);
+    else
+      std::fprintf(stderr, "strike hit: %s, vertex %zu at (%.4g, %.4g, %.4g) m, impulse (%.3g, %.3g, %.3g) N s\n",
+                   args.positional[0].c_str(), vertex, point[0], point[1], point[2], impulse[0], impulse[1], impulse[2]);
     std::fprintf(stderr, "  contact     %.3g ms (%s)\n", contact_time_s * 1e3,
                  args.has("--contact-time") ? "given" : "Hertz");
     std::fprintf(stderr, "  modes       %llu in the bank, %llu out of band, %llu started\n",
                  static_cast<unsigned long long>(stats.modes_total),
                  static_cast<unsigned long long>(stats.modes_out_of_band),
                  static_cast<unsigned long long>(stats.mode_starts));
-    std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL at %.3g m)\n", peak,
-                 20.0 * std::log10(std::max(peak, 1e-30)), 20.0 * std::log10(std::max(peak * kFullScalePascal / *gain, 1e-30) / 20e-6),
-                 *distance);
+    if (peak == 0.0)
+      std::fprintf(stderr, "  level       silent: every sample is 0 (%s)\n",
+                   stats.modes_total == stats.modes_out_of_band ? "no mode in the audible band"
+                                                                : "the impulse excites no mode at this point and direction");
+    else
+      std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL at %.3g m)\n", peak, 20.0 * std::log10(peak),
+                   20.0 * std::log10(peak * kFullScalePascal / *gain / 20e-6), *distance);
     if (clipped > 0)
       std::fprintf(stderr, "  CLIPPING    %zu samples at or above full scale%s; lower --gain\n", clipped,
                    encoding == SampleEncoding::Float32 ? " (kept in the float file)" : " (clipped in the file)");

@@ -17,7 +17,7 @@ CommandSpec infoSpec() {
   spec.summary =
       "Shows a mode bank: material, mesh, mass properties, and per mode the undamped frequency,\n"
       "the amplitude decay rate d = (a1 lambda + a2) / 2 and T60 = ln(1000) / d (time to fall by 60 dB).";
-  spec.options = {{"--json", "", "print one JSON object on stdout (the contract in ARCHITECTURE.md)"}};
+  spec.options = {{"--json", "", "print one JSON object on stdout (the contract in docs/cli.md)"}};
   spec.examples = "  strike info bar.modes\n  strike info bar.modes --json | jq '.frequencies_hz[:5]'\n";
   spec.min_positional = 1;
   spec.max_positional = 1;

@@ -5,6 +5,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "output_check.hpp"
 #include "progress_reporter.hpp"
 #include "strike/error_estimate.hpp"
 #include "strike/materials.hpp"
@@ -35,12 +36,15 @@ CommandSpec modesSpec() {
       {"--rayleigh-mass", "A2", "Rayleigh damping a2 (1/s); default 0 or the material's"},
       {"--order", "1|2", "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default 1"},
       {"--size", "METRES", "target tet edge length; default: chosen from the object's size"},
+      {"--units", "m|cm|mm", "unit of a mesh file's coordinates (not of primitives); default m"},
       {"--max-freq", "HZ", "keep every mode up to this frequency; default 20000"},
       {"--max-modes", "N", "but at most N modes (lowest first); default 200, cap 100000"},
       {"--max-tets", "N", "refuse meshes with more tets than this (memory and time cap); default 2000000"},
       {"--error-estimate", "", "estimate each mode's frequency error (default: on for primitives and surfaces)"},
       {"--no-error-estimate", "", "skip the error estimate"},
       {"--tolerance", "PCT", "pick the cheapest order and --size whose estimated error is below PCT (e.g. 0.5%)"},
+      {"--compact", "", "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
+                        "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
       {"--quiet", "", "no progress or summary on stderr"},
       {"--list-materials", "", "print the material table with sources and exit"},
   };
@@ -185,6 +189,7 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (args.has("--list-materials")) return listMaterials();
   if (args.positional.empty()) return reportError("modes", badInput("missing MESH; usage: " + spec.usage));
   if (!args.has("-o")) return reportError("modes", badInput("missing -o BANK.modes (where to write the bank)"));
+  if (Status ok = checkOutputFile("-o", args.text("-o"), {}); !ok) return reportError("modes", ok.error());
 
   PrecomputeSettings settings;
   settings.mesh_spec = args.positional[0];
@@ -200,6 +205,12 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (!size) return reportError("modes", size.error());
   if (args.has("--size") && !(*size > 0)) return reportError("modes", badInput("--size = " + args.text("--size") + " (must be > 0 metres)"));
   settings.target_edge_m = *size;
+  const std::string units = args.text("--units", "m");
+  if (units != "m" && units != "cm" && units != "mm")
+    return reportError("modes", badInput("--units = '" + units + "' (expected m, cm or mm)"));
+  if (units != "m" && isPrimitiveSpec(settings.mesh_spec))
+    return reportError("modes", badInput("--units applies to a mesh file; primitives are in metres"));
+  settings.mesh_scale = units == "mm" ? 0.001 : units == "cm" ? 0.01 : 1.0;
   Result<double> max_freq = args.number("--max-freq", 20000.0);
   if (!max_freq) return reportError("modes", max_freq.error());
   if (!(*max_freq > 0)) return reportError("modes", badInput("--max-freq = " + args.text("--max-freq") + " (must be > 0 Hz)"));
@@ -231,7 +242,7 @@ int runModes(const std::vector<std::string>& raw_args) {
     for (const MeshWarning& warning : result->report.warnings)
       std::fprintf(stderr, "strike modes: warning: %s\n", warning.message.c_str());
   const std::string output = args.text("-o");
-  Status written = writeBank(output, result->bank);
+  Status written = writeBank(output, result->bank, args.has("--compact") ? ShapeEncoding::Int16 : ShapeEncoding::Float32);
   if (!written) return reportError("modes", written.error());
   if (!quiet) printSummary(settings, *result, output);
   return 0;

@@ -2,11 +2,14 @@
 // `strike render SCENE.json -o OUT.wav`: the main job.
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "output_check.hpp"
 #include "progress_reporter.hpp"
 #include "strike/audio.hpp"
+#include "strike/bank_cache.hpp"
 #include "strike/render.hpp"
 #include "strike/scene.hpp"
 
@@ -22,7 +25,7 @@ CommandSpec renderSpec() {
       "loaded from the cache or computed, only for objects struck hard enough to be heard; each contact\n"
       "impulse is projected onto the struck body's modes (impacts as Hertz pulses, resting contact as a\n"
       "force over the step, so it is silent when steady) and the oscillator bank renders the listener's\n"
-      "pressure: output 1.0 = 20 Pa (120 dB SPL) times --gain. The scene format is in ARCHITECTURE.md.";
+      "pressure: output 1.0 = 20 Pa (120 dB SPL) times --gain. The scene file format is in docs/scene-format.md,\nthe command line's contracts in docs/cli.md.";
   spec.options = {
       {"-o", "OUT.wav", "output sound file, .wav or .flac (required); written atomically"},
       {"--rate", "HZ", "sample rate; default the scene's sample_rate (48000)"},
@@ -32,10 +35,12 @@ CommandSpec renderSpec() {
       {"--gain", "G", "multiply the output (1.0 full scale = 20 Pa); default 1"},
       {"--cache", "DIR", "mode bank cache folder; default $STRIKE_CACHE_DIR or ~/.cache/strike"},
       {"--no-cache", "", "compute every bank, read and write no cache"},
+      {"--cache-max-size", "SIZE", "after the render, remove the least recently used banks until the cache fits\n"
+                                   "in SIZE (e.g. 500M, 2G; 0 = no cap); default 2G. See `strike cache`"},
       {"--max-tets", "N", "refuse object meshes with more tets than this (memory cap); default 2000000"},
       {"--max-events", "N", "stop if the simulation records more contact events (memory cap); default 20000000"},
       {"--simd", "KERNEL", kSimdHelp},
-      {"--quiet", "", "no progress or summary on stderr"},
+      {"--quiet", "", "no progress or summary on stderr (warnings are still printed)"},
   };
   spec.examples =
       "  strike render examples/scenes/bar-drop.json -o bar-drop.wav\n"
@@ -45,18 +50,32 @@ CommandSpec renderSpec() {
   return spec;
 }
 
+/// Why a render came out silent, from what the report counted.
+std::string silenceReason(const RenderReport& r) {
+  if (r.objects_struck == 0) return "no object was struck";
+  if (r.objects_sounded == 0 && r.objects_silent > 0) return "the struck objects have no mode in the audible band; see the warnings";
+  if (r.objects_sounded == 0) return "every struck object was struck too softly to hear";
+  return "every contribution was below the audibility threshold of 20 uPa";
+}
+
 void printSummary(const RenderResult& result, const std::string& output, double rate, double duration) {
   const RenderReport& r = result.report;
   std::fprintf(stderr, "strike render: wrote %s (%.3g s at %.0f Hz)\n", output.c_str(), duration, rate);
-  std::fprintf(stderr, "  objects     %zu in the scene, %zu struck, %zu sounded, %zu too soft to hear, %zu never struck\n",
-               r.objects, r.objects_struck, r.objects_sounded, r.objects_inaudible, r.objects - r.objects_struck);
+  std::fprintf(stderr, "  objects     %zu in the scene, %zu struck, %zu sounded, %zu silent (no mode in the audible band), "
+               "%zu too soft to hear, %zu never struck\n",
+               r.objects, r.objects_struck, r.objects_sounded, r.objects_silent, r.objects_inaudible, r.objects - r.objects_struck);
   std::fprintf(stderr, "  banks       %zu given, %zu from the cache, %zu computed, %zu shared between identical objects\n",
                r.banks_given, r.banks_cached, r.banks_computed, r.banks_shared);
   if (r.shape_vertices_total > 0)
     std::fprintf(stderr, "  shapes      read at %zu of the bank files' %zu surface vertices (%.1f%%: where contacts landed)\n",
                  r.shape_vertices_read, r.shape_vertices_total, 100.0 * double(r.shape_vertices_read) / double(r.shape_vertices_total));
-  std::fprintf(stderr, "  events      %zu contacts: %zu impacts, %zu sustained-contact steps\n", r.events, r.impacts,
-               r.sustained_contacts);
+  // Events are contact points (one per point per 1 ms step); what reaches the oscillators counts
+  // each event once per sounding body it acts on (both bodies when both sound).
+  std::fprintf(stderr, "  events      %zu contact points recorded: %zu impacts (closing > 5 cm/s) + %zu resting or sliding\n",
+               r.events, r.impact_events, r.sustained_events);
+  std::fprintf(stderr, "  heard       %zu impact pulses and %zu resting/sliding impulses on sounding bodies "
+               "(an event counts once per sounding body it touches)\n",
+               r.impacts, r.sustained_contacts);
   std::fprintf(stderr, "  modes       %llu in the banks, %llu out of the audible band, at most %llu ringing at once\n",
                static_cast<unsigned long long>(r.modes_total), static_cast<unsigned long long>(r.modes_out_of_band),
                static_cast<unsigned long long>(r.max_active_modes));
@@ -66,12 +85,19 @@ void printSummary(const RenderResult& result, const std::string& output, double 
   if (all_mode_samples > 0)
     std::fprintf(stderr, "  sleeping    %.3g mode-samples synthesized, %.1f%% of every in-band mode over the whole render\n",
                  double(r.mode_samples), 100.0 * double(r.mode_samples) / all_mode_samples);
-  std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL)%s\n", r.peak, 20.0 * std::log10(std::max(r.peak, 1e-30)),
-               20.0 * std::log10(std::max(r.peak * kFullScalePascal, 1e-30) / 20e-6),
-               r.clipped_samples ? (", CLIPPING: " + std::to_string(r.clipped_samples) + " samples at or above full scale; lower --gain").c_str() : "");
+  if (r.peak == 0.0) {
+    std::fprintf(stderr, "  level       silent: every sample is 0 (%s)\n", silenceReason(r).c_str());
+  } else {
+    std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL)%s\n", r.peak, 20.0 * std::log10(r.peak),
+                 20.0 * std::log10(r.peak * kFullScalePascal / 20e-6),
+                 r.clipped_samples ? (", CLIPPING: " + std::to_string(r.clipped_samples) + " samples at or above full scale; lower --gain").c_str() : "");
+  }
   std::fprintf(stderr, "  time        load %.2f s, simulate %.2f s, modes %.2f s, synthesize %.2f s, total %.2f s (%.1fx real time)\n",
                r.load_seconds, r.simulate_seconds, r.precompute_seconds, r.synthesize_seconds, r.total_seconds,
                r.total_seconds > 0 ? duration / r.total_seconds : 0.0);
+  if (r.cache_pruned > 0)
+    std::fprintf(stderr, "  cache       removed %zu least recently used banks (%.1f MB) to keep the cache under its cap (--cache-max-size)\n",
+                 r.cache_pruned, double(r.cache_pruned_bytes) / 1e6);
   if (r.precompute_saved_seconds > 0)
     std::fprintf(stderr, "  saved       %.2f s of eigen-solves answered by the cache\n", r.precompute_saved_seconds);
 }
@@ -88,6 +114,11 @@ int runRender(const std::vector<std::string>& raw_args) {
   if (!parsed) return reportError("render", parsed.error());
   const ParsedArgs& args = *parsed;
   if (!args.has("-o")) return reportError("render", badInput("missing -o OUT.wav (where to write the sound)"));
+  // Outputs first: a typo in a path must not cost a simulation and an eigen-solve.
+  if (Status ok = checkOutputFile("-o", args.text("-o"), {".wav", ".flac"}); !ok) return reportError("render", ok.error());
+  if (args.has("--events"))
+    if (Status ok = checkOutputFile("--events", args.text("--events"), {}); !ok) return reportError("render", ok.error());
+  if (Result<SampleEncoding> e = sampleEncodingFor(args, args.text("-o")); !e) return reportError("render", e.error());
   Result<Scene> scene = loadScene(args.positional[0]);
   if (!scene) return reportError("render", scene.error());
 
@@ -118,6 +149,11 @@ int runRender(const std::vector<std::string>& raw_args) {
   if (!simd) return reportError("render", simd.error());
   settings.simd = *simd;
   settings.cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
+  if (args.has("--cache-max-size")) {
+    Result<uint64_t> cap = parseByteSize(args.text("--cache-max-size"), "--cache-max-size");
+    if (!cap) return reportError("render", cap.error());
+    settings.cache_max_bytes = *cap;
+  }
 
   const std::string output = args.text("-o");
   Result<SampleEncoding> encoding_result = sampleEncodingFor(args, output);
@@ -127,6 +163,12 @@ int runRender(const std::vector<std::string>& raw_args) {
   const bool quiet = args.has("--quiet");
   ProgressReporter progress(quiet);
   settings.progress = progress.callback();
+  // Warnings are printed as they are found, even with --quiet: they say the result is probably
+  // not what was meant, and the scene's are known before the simulation starts.
+  settings.on_warning = [&progress](const std::string& warning) {
+    progress.finish();  // end a progress line first
+    std::fprintf(stderr, "strike render: warning: %s\n", warning.c_str());
+  };
   Result<RenderResult> result = renderScene(*scene, settings);
   progress.finish();
   if (!result) return reportError("render", result.error());

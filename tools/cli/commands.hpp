@@ -16,6 +16,7 @@ int runHit(const std::vector<std::string>& args);
 int runAnalyze(const std::vector<std::string>& args);
 int runRender(const std::vector<std::string>& args);
 int runBench(const std::vector<std::string>& args);
+int runCache(const std::vector<std::string>& args);
 int runBenchRender(const std::vector<std::string>& args);  // strike bench render (cmd_bench_render.cpp)
 
 /// Prints "strike <command>: error: <message>" and returns the exit code for the error's kind.

@@ -20,6 +20,17 @@ namespace strike {
 /// vertex in separately checksummed blocks, so a render reads only the vertices it strikes
 /// (docs/bank-format.md).
 constexpr uint32_t kBankFormatVersion = 3;
+/// The newest version this build reads. Version 4 is version 3 with the shapes stored as 16-bit
+/// integers and a scale per mode (ShapeEncoding::Int16, `strike modes --compact`): half the
+/// shape bytes, each value within 1.54e-5 of its mode's largest surface amplitude
+/// (half a step, 1/65534, plus float rounding).
+constexpr uint32_t kBankFormatVersionMax = 4;
+
+/// How a bank file stores its mode shapes.
+enum class ShapeEncoding {
+  Float32,  ///< format 3: IEEE single precision, exact copies of the computed shapes
+  Int16,    ///< format 4: round(value / scale_i), scale_i = (largest |value| of mode i) / 32767
+};
 
 struct ModeBank {
   uint32_t format_version = kBankFormatVersion;
@@ -70,7 +81,7 @@ struct ModeBank {
   double frequencyHz(size_t mode) const;
   /// Rayleigh damping c = a1 lambda + a2 (1/s); an under-damped mode decays as exp(-c t / 2).
   double dampingCoefficient(size_t mode) const;
-  /// Amplitude decay rate c/2 (1/s), the ARCHITECTURE's `decay_per_s`.
+  /// Amplitude decay rate c/2 (1/s), `decay_per_s` of `strike info --json` (docs/cli.md).
   double decayPerS(size_t mode) const { return 0.5 * dampingCoefficient(mode); }
   /// Mode shape at surface vertex v: 3 floats.
   const float* shapeAt(size_t mode, size_t vertex) const {
@@ -116,7 +127,12 @@ class BankFile {
   BankFile() = default;
   std::shared_ptr<const Source> source_;  ///< the file (or bytes) and its name
   ModeBank bank_;
-  bool vertex_major_ = false;             ///< format 3 (MODV) or 1-2 (MODE, [mode][vertex][xyz])
+  bool vertex_major_ = false;             ///< format 3-4 (MODV, MODQ) or 1-2 (MODE, [mode][vertex][xyz])
+  bool int16_shapes_ = false;             ///< format 4 (MODQ): values are int16 times shape_scale_[mode]
+  std::vector<float> shape_scale_;        ///< format 4: per mode
+  size_t shapeValueBytes() const { return int16_shapes_ ? 2 : 4; }
+  /// Rows of `count` vertices as stored (f32 or i16) -> floats.
+  void decodeRows(const uint8_t* bytes, size_t count, float* out) const;
   uint32_t vertices_per_block_ = 0;
   std::vector<uint64_t> block_checksums_;  ///< format 3: one per block of vertices
   uint64_t shapes_offset_ = 0;             ///< where the f32 shapes start in the file
@@ -127,9 +143,9 @@ class BankFile {
 };
 
 /// Writes atomically: to PATH.tmp-XXXX in the same directory, then rename().
-Status writeBank(const std::string& path, const ModeBank& bank);
+Status writeBank(const std::string& path, const ModeBank& bank, ShapeEncoding shapes = ShapeEncoding::Float32);
 /// Serializes to bytes (what writeBank writes).
-std::vector<uint8_t> encodeBank(const ModeBank& bank);
+std::vector<uint8_t> encodeBank(const ModeBank& bank, ShapeEncoding shapes = ShapeEncoding::Float32);
 /// Reads and verifies magic, version, size and checksums; errors name the file and the problem.
 /// BankFile::open(path) then readAll().
 Result<ModeBank> readBank(const std::string& path);

@@ -49,6 +49,10 @@ struct MeshOptions {
   /// Size cap (memory and time of the FEM and eigen-solve): a mesh with more tets, or a surface
   /// whose TetGen estimate exceeds it, is refused with a message naming the cap (`--max-tets`).
   int64_t max_tets = kDefaultMaxTets;
+  /// Metres per unit of the mesh file's coordinates: 0.001 for a file in millimetres (the scene
+  /// key "units": "mm", `strike modes --units mm`). Applied to the coordinates as read, before
+  /// meshing, so target_edge_m stays in metres. Primitives are always in metres.
+  double scale = 1.0;
   ProgressFn progress;            ///< optional
 };
 

@@ -18,6 +18,7 @@ struct PrecomputeSettings {
   Material material;
   int order = 1;            ///< 1 Tet4, 2 Tet10
   double target_edge_m = 0; ///< 0: automatic
+  double mesh_scale = 1.0;  ///< metres per unit of a mesh file (MeshOptions::scale); primitives ignore it
   double max_freq_hz = 20000.0;
   int max_modes = 200;
   int64_t max_tets = kDefaultMaxTets;  ///< size cap of the tet mesh (--max-tets), see MeshOptions

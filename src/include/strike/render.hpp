@@ -6,10 +6,12 @@
 //      contact impulses projected onto modes, oscillator bank, mix.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "strike/audio.hpp"
+#include "strike/bank_cache.hpp"
 #include "strike/mesh.hpp"
 #include "strike/progress.hpp"
 #include "strike/scene.hpp"
@@ -25,6 +27,9 @@ struct RenderSettings {
   double sample_rate_hz = 0.0;   ///< 0: the scene's
   double duration_s = 0.0;       ///< 0: the scene's
   std::string cache_dir;         ///< where banks are cached by content hash; empty: no cache
+  /// After the render, the cache's least recently used banks are removed until it fits in this
+  /// (strike/bank_cache.hpp); 0: no cap.
+  uint64_t cache_max_bytes = kDefaultCacheMaxBytes;
   double gain = 1.0;             ///< output scale on top of kFullScalePascal
   int64_t max_tets = kDefaultMaxTets;  ///< size cap of each object's tet mesh (PrecomputeSettings::max_tets)
   size_t max_events = SimSettings{}.max_events;  ///< cap on recorded contact events (SimSettings::max_events)
@@ -42,21 +47,36 @@ struct RenderSettings {
   /// The synthesizer's kernel (SynthSettings::simd): kernels differ only in the last bits.
   SimdLevel simd = SimdLevel::Auto;
   ProgressFn progress;
+  /// Called with each warning as soon as it is found (before the simulation for the scene's
+  /// placement, so a long render does not hide it until the end); also kept in report.warnings.
+  std::function<void(const std::string&)> on_warning;
 };
 
 struct RenderReport {
-  size_t objects = 0, objects_struck = 0, objects_sounded = 0;
+  size_t objects = 0, objects_struck = 0;
+  size_t objects_sounded = 0;    ///< struck audibly and with at least one mode in the synthesized band
+  size_t objects_silent = 0;     ///< struck audibly, but no mode in the synthesized band (warnings say why)
   size_t objects_inaudible = 0;  ///< struck, but too softly to hear: no eigen-solve
   size_t banks_given = 0, banks_cached = 0, banks_computed = 0, banks_shared = 0;
   /// Surface vertices whose mode shapes were read from given or cached bank files, of all theirs
   /// (a render reads shapes only where its contacts land).
   size_t shape_vertices_read = 0, shape_vertices_total = 0;
-  size_t events = 0, impacts = 0, sustained_contacts = 0;
+  /// Contact points Bullet recorded (one per point per step), split by their closing speed into
+  /// impacts (> 5 cm/s) and resting or sliding contact.
+  size_t events = 0, impact_events = 0, sustained_events = 0;
+  /// What reached the oscillators: one impact pulse, or one resting/sliding impulse, per event
+  /// per sounding body (objects_sounded) it acts on. An event between two sounding bodies counts
+  /// for both; one against the ground, a silent body or one that was not heard, for one or none.
+  size_t impacts = 0, sustained_contacts = 0;
+  /// Scenes that cannot be right, and silent results, in words with numbers (scene_checks.hpp).
+  std::vector<std::string> warnings;
   uint64_t modes_total = 0, modes_out_of_band = 0, mode_samples = 0, max_active_modes = 0;
   double peak = 0.0;
   size_t clipped_samples = 0;
   double load_seconds = 0, simulate_seconds = 0, precompute_seconds = 0, synthesize_seconds = 0, total_seconds = 0;
   double precompute_saved_seconds = 0;  ///< eigen-solve time the cache answered (as recorded in the banks)
+  size_t cache_pruned = 0;              ///< banks removed from the cache by its size cap after this render
+  uint64_t cache_pruned_bytes = 0;
 };
 
 struct RenderResult {

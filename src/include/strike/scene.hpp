@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The scene file (JSON, see ARCHITECTURE.md): what is in the world, how it moves at t = 0, and
+// The scene file (JSON, docs/scene-format.md): what is in the world, how it moves at t = 0, and
 // where the listener is. Parsing is strict: unknown keys and wrong types are errors that name
 // the key path and the value.
 #pragma once
@@ -19,6 +19,8 @@ struct SceneObject {
   std::string mesh;          ///< primitive spec, or a path resolved against the scene's folder
   std::string bank;          ///< optional precomputed bank path (resolved); empty: compute or cache
   Material material;
+  std::string units = "m";   ///< unit of the mesh file's coordinates: "m", "cm" or "mm"
+  double mesh_scale = 1.0;   ///< metres per mesh unit (1, 0.01, 0.001), from units
   int order = 1;             ///< element order when the bank is computed
   double size_m = 0.0;       ///< target tet edge when the bank is computed (0 = automatic)
   bool is_static = false;    ///< never moves (a table); still sounds when struck
@@ -46,6 +48,14 @@ struct Scene {
   int max_modes = 200;
   std::vector<SceneObject> objects;
 };
+
+/// The keys the parser accepts, per place in the file ("top level", "listener", "ground",
+/// "objects[]", "material"): the one table both the parser and the documentation test read.
+struct SceneKeyTable {
+  const char* where;
+  std::vector<const char*> keys;
+};
+const std::vector<SceneKeyTable>& sceneKeyTables();
 
 /// Parses scene JSON. `path` names the file in messages and anchors relative paths.
 Result<Scene> parseScene(const std::string& json_text, const std::string& path);

@@ -113,7 +113,7 @@ TEST(BankFile, RefusesForeignAndNewerFiles) {
   EXPECT_NE(read.error().message.find("magic"), std::string::npos) << read.error().message;
 
   std::vector<uint8_t> newer = bytes;
-  const uint32_t version = kBankFormatVersion + 1;
+  const uint32_t version = kBankFormatVersionMax + 1;
   std::memcpy(newer.data() + 8, &version, 4);
   read = decodeBank(newer.data(), newer.size(), "new.modes");
   ASSERT_FALSE(read);

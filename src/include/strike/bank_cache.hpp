@@ -1,0 +1,56 @@
+// SPDX-License-Identifier: MIT
+// The bank cache folder (`--cache DIR`, default ~/.cache/strike): list, measure and prune it
+// (`strike cache`), and the size cap a render applies after writing to it (issue 15, item 14).
+//
+// Entries are the files "<16 hex digits>.modes" (the content-hash key of src/scene/render.cpp);
+// nothing else in the folder is touched except write temporaries ("*.modes.tmp-*") left behind
+// by a crash more than a day ago. A render marks an entry it reads as used (its modification
+// time), so pruning removes the least recently used first. Removal is an unlink: a render that
+// has the bank open keeps reading it through its descriptor (BankFile reads with pread), and a
+// render that opens it after the unlink misses the cache and recomputes. Two prunes at once are
+// safe: an entry already gone is skipped.
+#pragma once
+
+#include <cstdint>
+#include <ctime>
+#include <string>
+#include <vector>
+
+#include "strike/result.hpp"
+
+namespace strike {
+
+/// Default size cap of the cache, applied after every render that wrote to it: 2 GiB (about 80
+/// banks of a 137-mode plate). `strike render --cache-max-size` changes it; 0 turns it off.
+constexpr uint64_t kDefaultCacheMaxBytes = uint64_t(2) << 30;
+
+struct CacheEntry {
+  std::string path;
+  uint64_t bytes = 0;
+  std::time_t last_used = 0;  ///< modification time: written, or last read by a render
+};
+
+/// The cache's entries, least recently used first (ties by name). A missing folder is empty.
+Result<std::vector<CacheEntry>> listCache(const std::string& dir);
+
+/// Marks an entry as just used (so the size cap removes it last). Failure is harmless.
+void touchCacheEntry(const std::string& path);
+
+struct PruneReport {
+  size_t removed = 0, kept = 0;
+  uint64_t bytes_removed = 0, bytes_kept = 0;
+  std::vector<std::string> removed_paths;
+};
+
+/// Removes entries last used more than `max_age_s` before `now` (max_age_s < 0: no age limit),
+/// then the least recently used until the rest fit in `max_bytes` (0: no size limit), and stale
+/// write temporaries. `dry_run` reports what would go without removing it.
+Result<PruneReport> pruneCache(const std::string& dir, uint64_t max_bytes, double max_age_s, std::time_t now,
+                               bool dry_run = false);
+
+/// Parses a size such as "500M", "2G", "1.5GiB", "800000" (bytes; K/M/G/T are powers of 1024).
+Result<uint64_t> parseByteSize(const std::string& text, const std::string& what);
+/// Parses an age such as "30d", "12h", "90m", "45s" (a bare number is days).
+Result<double> parseAgeSeconds(const std::string& text, const std::string& what);
+
+}  // namespace strike

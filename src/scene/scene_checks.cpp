@@ -1,0 +1,218 @@
+// SPDX-License-Identifier: MIT
+#include "strike/scene_checks.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace strike {
+namespace {
+
+using Vec = std::array<double, 3>;
+
+Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec cross(const Vec& a, const Vec& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
+double length(const Vec& a) { return std::sqrt(dot(a, a)); }
+
+/// Rotates v by the unit quaternion q = (w, x, y, z).
+Vec rotate(const std::array<double, 4>& q, const Vec& v) {
+  const Vec u{q[1], q[2], q[3]};
+  const Vec t = cross(u, v);
+  const Vec t2{2 * t[0], 2 * t[1], 2 * t[2]};
+  const Vec c = cross(u, t2);
+  return {v[0] + q[0] * t2[0] + c[0], v[1] + q[0] * t2[1] + c[1], v[2] + q[0] * t2[2] + c[2]};
+}
+
+/// Squared distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
+double distanceSquaredToTriangle(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
+  const Vec ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  auto dist2 = [&](const Vec& q) { const Vec d = sub(p, q); return dot(d, d); };
+  if (d1 <= 0 && d2 <= 0) return dist2(a);
+  const Vec bp = sub(p, b);
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return dist2(b);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    return dist2({a[0] + v * ab[0], a[1] + v * ab[1], a[2] + v * ab[2]});
+  }
+  const Vec cp = sub(p, c);
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return dist2(c);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double w = d2 / (d2 - d6);
+    return dist2({a[0] + w * ac[0], a[1] + w * ac[1], a[2] + w * ac[2]});
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return dist2({b[0] + w * (c[0] - b[0]), b[1] + w * (c[1] - b[1]), b[2] + w * (c[2] - b[2])});
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  return dist2({a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w});
+}
+
+/// A body's surface in world coordinates and its bounding box.
+struct WorldSurface {
+  std::vector<double> positions;
+  std::vector<double> probes;  ///< the vertices and the triangles' centroids: where overlap is tested
+  Vec low{}, high{};
+};
+
+WorldSurface toWorld(const SimBodyDesc& body) {
+  WorldSurface w;
+  const double inf = std::numeric_limits<double>::infinity();
+  w.low = {inf, inf, inf};
+  w.high = {-inf, -inf, -inf};
+  for (size_t v = 0; v + 2 < body.surface_positions.size(); v += 3) {
+    const Vec local{body.surface_positions[v], body.surface_positions[v + 1], body.surface_positions[v + 2]};
+    const Vec r = rotate(body.orientation_wxyz, local);
+    for (int a = 0; a < 3; ++a) {
+      const double x = r[a] + body.position_m[a];
+      w.positions.push_back(x);
+      w.low[a] = std::min(w.low[a], x);
+      w.high[a] = std::max(w.high[a], x);
+    }
+  }
+  // Centroids too: two boxes can overlap with every corner of each on the other's faces.
+  w.probes = w.positions;
+  for (size_t t = 0; t + 2 < body.surface_triangles.size(); t += 3)
+    for (int a = 0; a < 3; ++a) {
+      double sum = 0.0;
+      for (int k = 0; k < 3; ++k) sum += w.positions[body.surface_triangles[t + k] * size_t(3) + a];
+      w.probes.push_back(sum / 3.0);
+    }
+  return w;
+}
+
+std::string format(const char* fmt, double a = 0, double b = 0, double c = 0, double d = 0) {
+  char text[256];
+  std::snprintf(text, sizeof text, fmt, a, b, c, d);
+  return text;
+}
+
+/// Deepest penetration of `a`'s probe points (those inside b's box) into b's closed surface.
+double deepestVertexInside(const WorldSurface& a, const WorldSurface& b, const SimBodyDesc& b_desc, size_t max_tested) {
+  std::vector<size_t> candidates;
+  for (size_t v = 0; v + 2 < a.probes.size(); v += 3) {
+    bool in_box = true;
+    for (int k = 0; k < 3; ++k) in_box = in_box && a.probes[v + k] >= b.low[k] && a.probes[v + k] <= b.high[k];
+    if (in_box) candidates.push_back(v);
+  }
+  // Each probe costs a pass over b's triangles: keep a pair under ~2e7 triangle visits (~0.3 s).
+  const size_t triangles = std::max<size_t>(1, b_desc.surface_triangles.size() / 3);
+  max_tested = std::clamp<size_t>(size_t(2e7) / triangles, 64, max_tested);
+  const size_t stride = std::max<size_t>(1, (candidates.size() + max_tested - 1) / max_tested);
+  double deepest = 0.0;
+  for (size_t i = 0; i < candidates.size(); i += stride)
+    deepest = std::max(deepest, depthInside(&a.probes[candidates[i]], b.positions, b_desc.surface_triangles));
+  return deepest;
+}
+
+}  // namespace
+
+double depthInside(const double p[3], const std::vector<double>& positions, const std::vector<uint32_t>& triangles) {
+  const Vec point{p[0], p[1], p[2]};
+  double solid_angle = 0.0, nearest2 = std::numeric_limits<double>::infinity();
+  for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
+    Vec corner[3];
+    for (int k = 0; k < 3; ++k) {
+      const size_t v = triangles[t + k] * size_t(3);
+      corner[k] = {positions[v], positions[v + 1], positions[v + 2]};
+    }
+    nearest2 = std::min(nearest2, distanceSquaredToTriangle(point, corner[0], corner[1], corner[2]));
+    // Solid angle of the triangle seen from p: tan(Omega/2) = a.(b x c) / (|a||b||c| + (a.b)|c| + (a.c)|b| + (b.c)|a|).
+    const Vec a = sub(corner[0], point), b = sub(corner[1], point), c = sub(corner[2], point);
+    const double la = length(a), lb = length(b), lc = length(c);
+    const double numerator = dot(a, cross(b, c));
+    const double denominator = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+    solid_angle += 2.0 * std::atan2(numerator, denominator);
+  }
+  const double winding = solid_angle / (4.0 * M_PI);  // 1 inside a closed CCW surface, 0 outside
+  return winding > 0.5 ? std::sqrt(nearest2) : 0.0;
+}
+
+std::vector<std::string> checkStartingPlacement(const Scene& scene, const std::vector<SimBodyDesc>& bodies,
+                                                const PlacementLimits& limits) {
+  std::vector<std::string> warnings;
+  std::vector<WorldSurface> world;
+  for (const SimBodyDesc& body : bodies) world.push_back(toWorld(body));
+  for (size_t i = 0; i < bodies.size() && i < scene.objects.size(); ++i) {
+    const SimBodyDesc& body = bodies[i];
+    const SceneObject& object = scene.objects[i];
+    const WorldSurface& w = world[i];
+    if (w.positions.empty()) continue;
+    const std::string who = "objects \"" + body.name + "\": ";
+    // Size and mass: a mesh file in millimetres read as metres is 1000x too long, 1e9x too heavy.
+    const Vec extent = sub(w.high, w.low);
+    const double largest = std::max({extent[0], extent[1], extent[2]});
+    const bool mesh_file = !object.mesh.empty() && object.bank.empty() && object.mesh.find(':') == std::string::npos;
+    const bool too_heavy = !body.is_static && body.mass_kg > limits.max_dynamic_mass_kg;
+    if (largest > limits.max_extent_m || too_heavy) {
+      std::string hint = mesh_file && object.units == "m" ? "; if the mesh file is in millimetres, add \"units\": \"mm\" to the object"
+                                                          : "; check the mesh's units and the material's density";
+      warnings.push_back(who + format("%.3g x %.3g x %.3g m, ", extent[0], extent[1], extent[2]) +
+                         format("%.3g kg (%.3g tonnes): implausibly ", body.mass_kg, body.mass_kg / 1000.0) +
+                         (largest > limits.max_extent_m ? "large" : "heavy") + " for a sounding object" + hint);
+    } else if (largest < limits.min_extent_m) {
+      warnings.push_back(who + format("%.3g x %.3g x %.3g mm: implausibly small for a sounding object", extent[0] * 1e3,
+                                      extent[1] * 1e3, extent[2] * 1e3) +
+                         (mesh_file ? "; check its \"units\" (a mesh file is read in metres unless \"units\" says otherwise)" : ""));
+    }
+    // Inside the ground: Bullet pushes it out at once, and the push sounds like a blow.
+    if (scene.has_ground && !body.is_static) {
+      const double depth = scene.ground_height_m - w.low[2];
+      if (depth > limits.overlap_tolerance_m)
+        warnings.push_back(who + format("starts %.3g mm inside the ground (its lowest point is at z = %.4g m, the ground at z = %.4g m); "
+                                        "it will be thrown out with a bang",
+                                        depth * 1e3, w.low[2], scene.ground_height_m));
+    }
+  }
+  // Inside each other: boxes first, then vertices inside the other's closed surface.
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    for (size_t j = i + 1; j < bodies.size(); ++j) {
+      if (bodies[i].is_static && bodies[j].is_static) continue;  // never simulated against each other
+      const WorldSurface &a = world[i], &b = world[j];
+      if (a.positions.empty() || b.positions.empty()) continue;
+      bool boxes_meet = true;
+      for (int k = 0; k < 3; ++k)
+        boxes_meet = boxes_meet && a.low[k] < b.high[k] - limits.overlap_tolerance_m && b.low[k] < a.high[k] - limits.overlap_tolerance_m;
+      if (!boxes_meet) continue;
+      const double depth = std::max(deepestVertexInside(a, b, bodies[j], limits.max_vertices_tested),
+                                    deepestVertexInside(b, a, bodies[i], limits.max_vertices_tested));
+      if (depth > limits.overlap_tolerance_m)
+        warnings.push_back("objects \"" + bodies[i].name + "\" and \"" + bodies[j].name +
+                           format("\" start inside each other (a surface point %.3g mm deep); ", depth * 1e3) +
+                           "they will be pushed apart with a bang: move them apart");
+    }
+  }
+  return warnings;
+}
+
+std::string neverStruckWarning(const Scene& scene, const SimBodyDesc& body, double duration_s) {
+  const WorldSurface w = toWorld(body);
+  std::string text = "objects \"" + body.name + "\": never struck (it starts at " +
+                     format("(%.4g, %.4g, %.4g) m", body.position_m[0], body.position_m[1], body.position_m[2]);
+  const double g = -scene.gravity_m_s2[2];
+  if (scene.has_ground && !w.positions.empty()) {
+    const double height = w.low[2] - scene.ground_height_m;
+    text += format(", its lowest point %.4g m above the ground", height);
+    const double v = body.velocity_m_s[2];
+    if (g > 0 && height > 0) {
+      // Time to fall `height` from vertical speed v: height = -v t + g t^2 / 2.
+      const double t = (v + std::sqrt(v * v + 2.0 * g * height)) / g;
+      text += format("; falling from there takes %.3g s, the render lasts %.3g s", t, duration_s);
+    }
+  } else if (!scene.has_ground) {
+    text += "; the scene has no ground";
+  }
+  return text + ")";
+}
+
+}  // namespace strike

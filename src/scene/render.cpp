@@ -64,6 +64,7 @@ struct Body {
   double sustained_time_s = -1.0;           ///< substep whose sustained contacts are being summed
   double last_sustained_time_s = -1.0;      ///< the last substep with sustained contact
   std::vector<double> sustained_modal;      ///< their summed modal impulses
+  std::vector<uint32_t> sustained_partners; ///< the bodies it touched in that substep
   double box_start_s = 0.0;                 ///< the open run of steady sustained force: start,
   int box_steps = 0;                        ///< length in substeps,
   std::vector<double> box_force;            ///< and modal impulse per substep
@@ -460,7 +461,9 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
           flushSustained(body);
           body.sustained_time_s = event.time_s;
           body.sustained_modal.assign(modal.size(), 0.0);
+          body.sustained_partners.clear();
         }
+        body.sustained_partners.push_back(other);
         for (size_t i = 0; i < modal.size(); ++i) body.sustained_modal[i] += modal[i];
         ++report.sustained_contacts;
       }
@@ -473,11 +476,24 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
 
   // A body Bullet puts to sleep reports no more contacts, but it still rests on its support: its
   // last resting force is held to the end, or its disappearance would ring the modes like a lift.
+  // The same for a static body (a table) whose last sustained contacts were all with bodies that
+  // fell asleep on it: the weight it carries stays.
+  const std::vector<double>& asleep_since = simulated->sleep_start_s;
+  auto asleepAtEnd = [&](uint32_t index) {
+    return index != kGroundBody && index < asleep_since.size() && std::isfinite(asleep_since[index]);
+  };
   for (size_t index = 0; index < bodies.size(); ++index) {
     Body& body = bodies[index];
-    if (!body.sounded || body.last_sustained_time_s < 0 || body.object->is_static) continue;
+    if (!body.sounded || body.last_sustained_time_s < 0) continue;
     const double hold_start = body.last_sustained_time_s + substep;
-    if (hold_start >= duration || norm(simulated->final_velocity_m_s[index]) > kImpactSpeed_m_s) continue;
+    if (hold_start >= duration) continue;
+    if (body.object->is_static) {
+      bool all_asleep = !body.sustained_partners.empty();
+      for (uint32_t other : body.sustained_partners) all_asleep = all_asleep && asleepAtEnd(other);
+      if (!all_asleep) continue;
+    } else if (norm(simulated->final_velocity_m_s[index]) > kImpactSpeed_m_s) {
+      continue;
+    }
     bool later_impact = false;
     for (const ContactEvent& event : result.events)
       if ((event.body_a == index || event.body_b == index) && event.step_time_s > body.last_sustained_time_s) later_impact = true;

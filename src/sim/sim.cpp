@@ -33,6 +33,8 @@ using Vec3 = std::array<double, 3>;
 
 /// Hulls up to this many vertices get SAT + clipping contacts (see buildBody).
 constexpr int kMaxPolyhedralVertices = 128;
+/// BodyState::still_since_step of a body whose pose clock has not started.
+constexpr uint64_t kNotStill = ~uint64_t(0);
 
 btVector3 toBt(const Vec3& v) { return btVector3(v[0], v[1], v[2]); }
 Vec3 fromBt(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
@@ -223,6 +225,10 @@ struct BodyState {
   // Saved at the start of each substep (pre-tick callback).
   btTransform pre_transform;
   btVector3 pre_linear{0, 0, 0}, pre_angular{0, 0, 0};
+  // The pose still-clock (Simulation::hastenSleep): the pose when it started, and the substep.
+  btTransform still_anchor = btTransform::getIdentity();
+  uint64_t still_since_step = kNotStill;
+  double sleep_start_s = NAN;  // when it fell asleep; NaN while awake
 };
 
 /// btDiscreteDynamicsWorld keeps its CCD predictive manifolds protected; their points sit at the
@@ -569,12 +575,46 @@ void Simulation::hastenSleep() {
   // library must not change; each body's still-time is its own, so a body still for
   // sleep_after_still_s has its clock moved past the global's limit instead. Bullet resets the
   // clock whenever the body moves, and sleeps an island only when all its bodies are still.
+  //
+  // Bullet's clock reads the velocity of one substep, and a body resting on a mesh (GImpact)
+  // never keeps it still for long: its contact manifold is rebuilt every substep with 2 to 4 of
+  // the touching triangles' points, so the solver rocks it at up to 0.05 rad/s (the angular
+  // threshold) every few hundred ms while it stays where it is, and Bullet's clock restarts each
+  // time (a resting glass stayed awake to the end, humming). So a second clock measures where the
+  // body is, not how fast it moves: it runs while every point of the body stays within
+  // kStillExcursion of the body's size from where it was when the clock started, and restarts
+  // from the present pose when it does not. A body resting there for sleep_after_still_s sleeps.
+  constexpr double kStillExcursion = 1e-3;  // of the body's size; solver rocking moves ~1e-4
+  const double dt = settings_.substep_s;
   for (auto& b : bodies_) {
     btRigidBody& rigid = *b->rigid;
-    if (b->is_static || !rigid.isActive()) continue;
+    if (b->is_static || !rigid.isActive()) {
+      if (!b->is_static && rigid.getActivationState() == ISLAND_SLEEPING && std::isnan(b->sleep_start_s))
+        b->sleep_start_s = double(step_ + 1) * dt;
+      b->still_since_step = kNotStill;  // woken, it starts afresh
+      continue;
+    }
+    b->sleep_start_s = NAN;
     const btScalar still_s = rigid.getDeactivationTime();
     if (still_s >= settings_.sleep_after_still_s && still_s <= gDeactivationTime)
-      rigid.setDeactivationTime(gDeactivationTime + settings_.substep_s);
+      rigid.setDeactivationTime(gDeactivationTime + dt);
+    // The pose clock. The farthest a body point moves: the origin's shift plus the rotation angle
+    // times the half-size (a bound for points within size / 2 of the centre of mass).
+    const btTransform& now = rigid.getWorldTransform();
+    const btQuaternion turn = b->still_anchor.getRotation().inverse() * now.getRotation();
+    const double excursion_m = (now.getOrigin() - b->still_anchor.getOrigin()).length() +
+                               0.5 * b->size_m * std::abs(turn.getAngleShortestPath());
+    if (b->still_since_step == kNotStill || excursion_m > kStillExcursion * b->size_m) {
+      b->still_anchor = now;
+      b->still_since_step = step_;
+      continue;
+    }
+    if (double(step_ - b->still_since_step) * dt >= settings_.sleep_after_still_s) {
+      // Asks to sleep as Bullet's own clock would (btRigidBody::wantsSleeping): the island sleeps
+      // in the next substep if all its bodies agree, and Bullet zeroes the velocities then.
+      rigid.setActivationState(WANTS_DEACTIVATION);
+      rigid.setDeactivationTime(gDeactivationTime + dt);
+    }
   }
 }
 
@@ -967,6 +1007,7 @@ Result<SimResult> Simulation::run() {
     result.final_angular_velocity_rad_s.push_back(fromBt(rb.getAngularVelocity()));
     result.shape_used.push_back(b->shape_used);
     result.collision_margin_m.push_back(b->margin_m);
+    result.sleep_start_s.push_back(b->sleep_start_s);
   }
   result.events = std::move(events_);
   result.substeps = substeps;

@@ -53,8 +53,8 @@ struct SimSettings {
   /// early once the largest squared impulse change per iteration is below the threshold, (N s)^2.
   int solver_iterations = 1000;
   double solver_residual_threshold = 1e-12;
-  /// Let Bullet put bodies to sleep once they have been still (below 1 cm/s and 0.05 rad/s) for
-  /// sleep_after_still_s. A sleeping body reports no contacts (no impulse is applied to it), which
+  /// Let Bullet put bodies to sleep once they have been still (below 1 cm/s and 0.05 rad/s, or
+  /// every point within 0.1% of the body's size of where it was) for sleep_after_still_s. A sleeping body reports no contacts (no impulse is applied to it), which
   /// is what makes resting objects quiet and cheap; it wakes when something strikes it.
   bool allow_sleep = true;
   /// Seconds of stillness before sleep, at most Bullet's own 2 s. A still body's contacts are a
@@ -107,6 +107,8 @@ struct SimResult {
   /// Per body: the collision shape actually used (Auto resolved) and its collision margin, m.
   std::vector<SimBodyDesc::Shape> shape_used;
   std::vector<double> collision_margin_m;
+  /// Per body: when it fell asleep and stayed so to the end, s; NaN if awake at the end (or static).
+  std::vector<double> sleep_start_s;
   double simulate_seconds = 0.0;       ///< wall time
   uint64_t substeps = 0;
 };

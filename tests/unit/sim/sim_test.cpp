@@ -292,6 +292,9 @@ TEST(SimResting, SleepingBodyIsQuiet) {
   // Still from ~0.1 s on, asleep sleep_after_still_s (0.5 s) later, not after Bullet's 2 s.
   EXPECT_LT(r.events.back().time_s, 1.0);
   EXPECT_GT(r.events.back().time_s, SimSettings{}.sleep_after_still_s);
+  // It reports when it fell asleep: the substep after its last contact.
+  ASSERT_EQ(r.sleep_start_s.size(), 1u);
+  EXPECT_NEAR(r.sleep_start_s[0], r.events.back().step_time_s + 2e-3, 1.5e-3);
 }
 
 TEST(SimMeshFrame, PointsLieOnTheBoxSurfaceInMeshCoordinates) {

@@ -20,6 +20,7 @@
 #include "strike/materials.hpp"
 #include "strike/precompute.hpp"
 #include "strike/synth.hpp"
+#include "pieces_cache.hpp"
 
 namespace strike {
 namespace {
@@ -199,6 +200,7 @@ SimBodyDesc simBody(const Body& body) {
   desc.friction = contact.friction;
   desc.shape = object.shape == "convex"    ? SimBodyDesc::Shape::ConvexHull
                : object.shape == "concave" ? SimBodyDesc::Shape::Concave
+               : object.shape == "pieces"  ? SimBodyDesc::Shape::ConvexPieces
                                            : SimBodyDesc::Shape::Auto;
   return desc;
 }
@@ -249,6 +251,14 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   const auto simulate_start = std::chrono::steady_clock::now();
   std::vector<SimBodyDesc> sim_bodies;
   for (const Body& body : bodies) sim_bodies.push_back(simBody(body));
+  // Convex pieces of concave moving bodies from the cache (computed ones are written after).
+  std::vector<uint64_t> surface_hashes(bodies.size(), 0);
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    if (settings.cache_dir.empty() || bodies[i].object->is_static) continue;
+    surface_hashes[i] = surfaceHash(sim_bodies[i].surface_positions, sim_bodies[i].surface_triangles);
+    Result<ConvexPiecePoints> cached = readPieces(piecesPath(settings.cache_dir, surface_hashes[i]), surface_hashes[i]);
+    if (cached) sim_bodies[i].convex_pieces_m = std::move(*cached);
+  }
   SimSettings sim;
   sim.duration_s = duration;
   sim.gravity_m_s2 = scene.gravity_m_s2;
@@ -264,6 +274,26 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   Result<SimResult> simulated = simulate(sim_bodies, sim);
   if (!simulated) return simulated.error();
   report.simulate_seconds = secondsSince(simulate_start);
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    const std::string& name = scene.objects[i].name;
+    const SimBodyDesc::Shape used = simulated->shape_used[i];
+    if (used == SimBodyDesc::Shape::ConvexPieces) {
+      char note[160];
+      if (simulated->pieces_computed[i]) {
+        report.pieces_seconds += simulated->pieces_seconds[i];
+        const bool cached = surface_hashes[i] != 0 &&
+            writePieces(piecesPath(settings.cache_dir, surface_hashes[i]), surface_hashes[i], simulated->convex_pieces_m[i]);
+        std::snprintf(note, sizeof note, "%s: %zu convex pieces (computed in %.2f s%s)", name.c_str(),
+                      simulated->collision_pieces[i], simulated->pieces_seconds[i], cached ? ", cached" : "");
+      } else {
+        std::snprintf(note, sizeof note, "%s: %zu convex pieces (from the cache)", name.c_str(), simulated->collision_pieces[i]);
+      }
+      report.collision_notes.push_back(note);
+    } else if (used == SimBodyDesc::Shape::Concave && !scene.objects[i].is_static) {
+      report.collision_notes.push_back(name + ": exact mesh (GImpact, " + std::to_string(sim_bodies[i].surface_triangles.size() / 3) +
+                                       " triangles): slow to simulate; \"shape\": \"pieces\" (the default) is ~5-20x faster");
+    }
+  }
   result.events = std::move(simulated->events);
   report.events = result.events.size();
 

@@ -201,8 +201,8 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
   if (value.contains("shape")) {
     Result<std::string> shape = text(value["shape"], where.at("shape"));
     if (!shape) return shape.error();
-    if (*shape != "auto" && *shape != "convex" && *shape != "concave")
-      return where.at("shape").error("expected \"auto\", \"convex\" or \"concave\", got " + show(value["shape"]));
+    if (*shape != "auto" && *shape != "convex" && *shape != "concave" && *shape != "pieces")
+      return where.at("shape").error("expected \"auto\", \"convex\", \"pieces\" or \"concave\", got " + show(value["shape"]));
     o.shape = *shape;
   }
   struct Vec3Field {

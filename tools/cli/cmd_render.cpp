@@ -71,6 +71,7 @@ void printSummary(const RenderResult& result, const std::string& output, double 
   std::fprintf(stderr, "  time        load %.2f s, simulate %.2f s, modes %.2f s, synthesize %.2f s, total %.2f s (%.1fx real time)\n",
                r.load_seconds, r.simulate_seconds, r.precompute_seconds, r.synthesize_seconds, r.total_seconds,
                r.total_seconds > 0 ? duration / r.total_seconds : 0.0);
+  for (const std::string& note : r.collision_notes) std::fprintf(stderr, "  collision   %s\n", note.c_str());
   if (r.precompute_saved_seconds > 0)
     std::fprintf(stderr, "  saved       %.2f s of eigen-solves answered by the cache\n", r.precompute_saved_seconds);
 }

@@ -56,6 +56,10 @@ struct RenderReport {
   size_t clipped_samples = 0;
   double load_seconds = 0, simulate_seconds = 0, precompute_seconds = 0, synthesize_seconds = 0, total_seconds = 0;
   double precompute_saved_seconds = 0;  ///< eigen-solve time the cache answered (as recorded in the banks)
+  double pieces_seconds = 0;  ///< of simulate_seconds: computing convex pieces (cached for the next render)
+  /// One line per concave moving body: its collision shape and what it cost (the summary's
+  /// "collision" lines; exact meshes are named as the slow choice).
+  std::vector<std::string> collision_notes;
 };
 
 struct RenderResult {

@@ -22,7 +22,7 @@ struct SceneObject {
   int order = 1;             ///< element order when the bank is computed
   double size_m = 0.0;       ///< target tet edge when the bank is computed (0 = automatic)
   bool is_static = false;    ///< never moves (a table); still sounds when struck
-  std::string shape = "auto";  ///< collision shape: auto, convex, concave
+  std::string shape = "auto";  ///< collision shape: auto, convex, pieces, concave (docs/contact.md)
   std::array<double, 3> position_m{};
   std::array<double, 4> orientation_wxyz{1, 0, 0, 0};
   std::array<double, 3> velocity_m_s{};

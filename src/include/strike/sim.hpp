@@ -30,9 +30,14 @@ struct SimBodyDesc {
   std::array<double, 3> angular_velocity_rad_s{};     ///< world
   double restitution = 0.5;                ///< Bullet combines the two bodies' values by product
   double friction = 0.5;
-  /// Collision shape: "auto" picks a convex hull when the mesh fills >= 90% of its hull's volume,
-  /// else a concave shape (GImpact) so things can fall inside (a bowl, a mug).
-  enum class Shape { Auto, ConvexHull, Concave } shape = Shape::Auto;
+  /// Collision shape: "auto" picks a convex hull when the mesh fills >= 90% of its hull's volume;
+  /// else, so things can fall inside (a bowl, a mug), convex pieces for a moving body (a
+  /// decomposition within 1% of its size, see convex_pieces.hpp) and the exact triangle mesh for
+  /// a static one. Concave: the exact mesh, moving or not (GImpact: ~100x slower than pieces).
+  enum class Shape { Auto, ConvexHull, Concave, ConvexPieces } shape = Shape::Auto;
+  /// A ConvexPieces shape's pieces, if known (from a previous run, SimResult::convex_pieces_m):
+  /// per piece its hull points (x, y, z, ...), mesh frame. Empty: computed (~0.1-1 s a body).
+  std::vector<std::vector<double>> convex_pieces_m;
 };
 
 struct SimSettings {
@@ -107,6 +112,13 @@ struct SimResult {
   /// Per body: the collision shape actually used (Auto resolved) and its collision margin, m.
   std::vector<SimBodyDesc::Shape> shape_used;
   std::vector<double> collision_margin_m;
+  std::vector<size_t> collision_pieces;  ///< per body: convex pieces of a ConvexPieces shape, else 0
+  /// Per body: a ConvexPieces shape's pieces (as SimBodyDesc::convex_pieces_m), to reuse; and
+  /// whether they were computed in this run (not given), and the seconds that took (identical
+  /// bodies share one decomposition: the first has the time, the rest 0).
+  std::vector<std::vector<std::vector<double>>> convex_pieces_m;
+  std::vector<bool> pieces_computed;
+  std::vector<double> pieces_seconds;
   /// Per body: when it fell asleep and stayed so to the end, s; NaN if awake at the end (or static).
   std::vector<double> sleep_start_s;
   double simulate_seconds = 0.0;       ///< wall time

@@ -467,14 +467,18 @@ TEST_P(SimTunnelling, FastBoxHitsTheGround) {
 
 INSTANTIATE_TEST_SUITE_P(Speeds, SimTunnelling, ::testing::Values(50.0, 100.0));
 
-void expectBallInTray(bool tray_static) {
+void expectBallInTray(bool tray_static, SimBodyDesc::Shape shape, SimBodyDesc::Shape expected_shape) {
   SimBodyDesc tray = makeTray("tray", 0.2, 0.06, 0.01, 1000.0);
   tray.is_static = tray_static;
+  tray.shape = shape;
   SimBodyDesc ball = makeBall("ball", 0.02, 0.05);
   ball.position_m = {0.02, -0.01, 0.3};
   ball.restitution = 0.3;
-  const SimResult r = run({tray, ball}, settingsFor(1.5), tray_static ? "ball into static tray" : "ball into GImpact tray");
-  EXPECT_EQ(r.shape_used[0], SimBodyDesc::Shape::Concave);
+  const char* label = tray_static                                    ? "ball into static tray"
+                      : expected_shape == SimBodyDesc::Shape::Concave ? "ball into GImpact tray"
+                                                                      : "ball into tray of convex pieces";
+  const SimResult r = run({tray, ball}, settingsFor(1.5), label);
+  EXPECT_EQ(r.shape_used[0], expected_shape);
   EXPECT_EQ(r.shape_used[1], SimBodyDesc::Shape::ConvexHull);
   const Vec3 t = r.final_position_m[0], b = r.final_position_m[1];
   EXPECT_NEAR(t[2], 0.0, 2e-3) << "tray left the ground";
@@ -495,17 +499,24 @@ void expectBallInTray(bool tray_static) {
   if (!tray_static) expectNoEnergyGain(r, "tray");
 }
 
-TEST(SimConcave, BallLandsInsideDynamicTray) { expectBallInTray(false); }
-TEST(SimConcave, BallLandsInsideStaticTray) { expectBallInTray(true); }
+using Shape = SimBodyDesc::Shape;
+TEST(SimConcave, BallLandsInsideDynamicTray) { expectBallInTray(false, Shape::Concave, Shape::Concave); }
+TEST(SimConcave, BallLandsInsideDynamicTrayOfConvexPieces) { expectBallInTray(false, Shape::Auto, Shape::ConvexPieces); }
+TEST(SimConcave, BallLandsInsideStaticTray) { expectBallInTray(true, Shape::Auto, Shape::Concave); }
 
 TEST(SimShape, AutoPicksHullForConvexAndConcaveForTray) {
   SimBodyDesc box = makeBox("box", {0.1, 0.05, 0.02}, 0.5);
   box.position_m = {0, 0, 0.5};
   SimBodyDesc tray = makeTray("tray", 0.2, 0.06, 0.01, 1000.0);
   tray.position_m = {1, 0, 0};
-  const SimResult r = run({box, tray}, settingsFor(0.01), "shape choice");
+  SimBodyDesc fixed_tray = tray;
+  fixed_tray.is_static = true;
+  fixed_tray.position_m = {-1, 0, 0};
+  const SimResult r = run({box, tray, fixed_tray}, settingsFor(0.01), "shape choice");
   EXPECT_EQ(r.shape_used[0], SimBodyDesc::Shape::ConvexHull);
-  EXPECT_EQ(r.shape_used[1], SimBodyDesc::Shape::Concave);
+  EXPECT_EQ(r.shape_used[1], SimBodyDesc::Shape::ConvexPieces);  // a moving concave body
+  EXPECT_GE(r.collision_pieces[1], 5u);  // a floor and four walls at least
+  EXPECT_EQ(r.shape_used[2], SimBodyDesc::Shape::Concave);       // a static one: its exact mesh
   EXPECT_GT(r.collision_margin_m[0], 0.0);
   // A small hull (polyhedral contacts on its bare points): 0.1% of the thinnest extent.
   EXPECT_LE(r.collision_margin_m[0], 0.001 * 0.02 + 1e-12);

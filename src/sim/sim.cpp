@@ -108,6 +108,17 @@ Status checkSettings(const SimSettings& settings) {
     return badInput("sim settings: sleep_after_still_s = " + fmt(settings.sleep_after_still_s) +
                     " (must be in [0, 2] s)");
   }
+  for (size_t k = 0; k < settings.contact_pairs.size(); ++k) {
+    const SimSettings::ContactPair& pair = settings.contact_pairs[k];
+    const std::string where = "sim settings: contact_pairs[" + std::to_string(k) + "]";
+    if (!std::isnan(pair.restitution) && !(pair.restitution >= 0.0 && pair.restitution <= 1.0))
+      return badInput(where + ".restitution = " + fmt(pair.restitution) + " (must be in [0, 1])");
+    if (!std::isnan(pair.friction) && !(pair.friction >= 0.0 && std::isfinite(pair.friction)))
+      return badInput(where + ".friction = " + fmt(pair.friction) + " (must be finite and >= 0)");
+  }
+  if (!(settings.ground_compliance_per_pa >= 0.0 && std::isfinite(settings.ground_compliance_per_pa)))
+    return badInput("sim settings: ground_compliance_per_pa = " + fmt(settings.ground_compliance_per_pa) +
+                    " (must be finite and >= 0)");
   if (settings.solver_iterations < 1 || settings.solver_iterations > 10000) {
     return badInput("sim settings: solver_iterations = " + std::to_string(settings.solver_iterations) +
                     " (must be in [1, 10000])");
@@ -155,7 +166,8 @@ Status checkBody(const SimBodyDesc& body, size_t index, btQuaternion& orientatio
   }
   orientation = btQuaternion(q[1] / norm, q[2] / norm, q[3] / norm, q[0] / norm);  // Bullet is (x, y, z, w)
   for (const auto& [name, value] : {std::pair<const char*, double>{"restitution", body.restitution},
-                                    std::pair<const char*, double>{"friction", body.friction}}) {
+                                    std::pair<const char*, double>{"friction", body.friction},
+                                    std::pair<const char*, double>{"compliance_per_pa", body.compliance_per_pa}}) {
     if (!std::isfinite(value) || value < 0.0) {
       return badInput(label + ": " + name + " = " + fmt(value) + " (must be finite and >= 0)");
     }
@@ -312,6 +324,7 @@ class Simulation {
   void postTick();
   double energy(std::vector<double>* kinetic) const;
   void hastenSleep();
+  ContactCoefficients coefficients(int index_a, int index_b) const;
   static void preTickThunk(btDynamicsWorld* world, btScalar) {
     static_cast<Simulation*>(world->getWorldUserInfo())->preTick();
   }
@@ -631,6 +644,23 @@ Status Simulation::build(const std::vector<btQuaternion>& orientations) {
   return {};
 }
 
+ContactCoefficients Simulation::coefficients(int index_a, int index_b) const {
+  // Bullet's user index: the body, or -1 for the ground.
+  auto side = [&](int index) {
+    if (index < 0) return ContactSide{settings_.ground_restitution, settings_.ground_friction, settings_.ground_compliance_per_pa};
+    const SimBodyDesc& d = descs_[size_t(index)];
+    return ContactSide{d.restitution, d.friction, d.compliance_per_pa};
+  };
+  ContactCoefficients c = combineContact(side(index_a), side(index_b));
+  const uint32_t a = index_a < 0 ? kGroundBody : uint32_t(index_a), b = index_b < 0 ? kGroundBody : uint32_t(index_b);
+  for (const SimSettings::ContactPair& pair : settings_.contact_pairs) {  // the last one given wins
+    if (!((pair.body_a == a && pair.body_b == b) || (pair.body_a == b && pair.body_b == a))) continue;
+    if (!std::isnan(pair.restitution)) c.restitution = pair.restitution;
+    if (!std::isnan(pair.friction)) c.friction = pair.friction;
+  }
+  return c;
+}
+
 void Simulation::hastenSleep() {
   // Bullet sleeps a body still for longer than gDeactivationTime (2 s), a process global that a
   // library must not change; each body's still-time is its own, so a body still for
@@ -774,16 +804,22 @@ void Simulation::timeImpacts() {
   const int manifold_count = dispatcher_->getNumManifolds();
   for (int m = 0; m < manifold_count; ++m) {
     btPersistentManifold* manifold = dispatcher_->getManifoldByIndexInternal(m);
+    const btCollisionObject* a = manifold->getBody0();
+    const btCollisionObject* b = manifold->getBody1();
+    // The pair's coefficients (combineContact or the scene's override), not Bullet's products;
+    // set on every point each substep (this also undoes a previous substep's change below).
+    const ContactCoefficients pair = coefficients(a->getUserIndex(), b->getUserIndex());
+    const double restitution = pair.restitution;
+    for (int p = 0; p < manifold->getNumContacts(); ++p) {
+      manifold->getContactPoint(p).m_combinedRestitution = restitution;
+      manifold->getContactPoint(p).m_combinedFriction = pair.friction;
+    }
     // A CCD predictive point is left to Bullet: its distance is a swept sphere's, whose time of
     // impact Bullet finds only to about half a millimetre (a 2 mm plate landing at 1.5 m/s).
     if (world_->isPredictive(manifold)) continue;
-    const btCollisionObject* a = manifold->getBody0();
-    const btCollisionObject* b = manifold->getBody1();
-    const double restitution = a->getRestitution() * b->getRestitution();  // Bullet's combination
     const btVector3 relative_accel = freeAcceleration(a) - freeAcceleration(b);
     for (int p = 0; p < manifold->getNumContacts(); ++p) {
       btManifoldPoint& pt = manifold->getContactPoint(p);
-      pt.m_combinedRestitution = restitution;  // undo a previous substep's change
       const btVector3& normal = pt.m_normalWorldOnB;  // from b to a
       const double closing =
           -(velocityAt(a, pt.getPositionWorldOnA()) - velocityAt(b, pt.getPositionWorldOnB())).dot(normal);
@@ -1081,6 +1117,16 @@ Result<SimResult> Simulation::run() {
 }
 
 }  // namespace
+
+ContactCoefficients combineContact(const ContactSide& a, const ContactSide& b) {
+  const double ka = a.compliance_per_pa, kb = b.compliance_per_pa;
+  const double wa = ka + kb > 0.0 ? ka / (ka + kb) : 0.5;
+  const double loss = wa * (1.0 - a.restitution * a.restitution) + (1.0 - wa) * (1.0 - b.restitution * b.restitution);
+  ContactCoefficients c;
+  c.restitution = std::sqrt(std::clamp(1.0 - loss, 0.0, 1.0));
+  c.friction = std::sqrt(a.friction * b.friction);
+  return c;
+}
 
 Result<SimResult> simulate(const std::vector<SimBodyDesc>& bodies, const SimSettings& settings) {
   try {

@@ -180,6 +180,9 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   return {};
 }
 
+/// (1 - nu^2) / E: how a material's restitution weighs against another's (combineContact).
+double compliance(const Material& m) { return (1.0 - m.poisson * m.poisson) / m.youngs_pa; }
+
 SimBodyDesc simBody(const Body& body) {
   const SceneObject& object = *body.object;
   const MaterialTable& table = builtinMaterials();
@@ -196,8 +199,9 @@ SimBodyDesc simBody(const Body& body) {
   desc.velocity_m_s = object.velocity_m_s;
   desc.angular_velocity_rad_s = object.angular_velocity_rad_s;
   const ContactProperties contact = table.contactProperties(body.bank.material.name);
-  desc.restitution = contact.restitution;
-  desc.friction = contact.friction;
+  desc.restitution = std::isnan(object.restitution) ? contact.restitution : object.restitution;
+  desc.friction = std::isnan(object.friction) ? contact.friction : object.friction;
+  desc.compliance_per_pa = compliance(body.bank.material);
   desc.shape = object.shape == "convex"    ? SimBodyDesc::Shape::ConvexHull
                : object.shape == "concave" ? SimBodyDesc::Shape::Concave
                : object.shape == "pieces"  ? SimBodyDesc::Shape::ConvexPieces
@@ -268,8 +272,18 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   sim.ground = scene.has_ground;
   sim.ground_height_m = scene.ground_height_m;
   const ContactProperties ground_contact = builtinMaterials().contactProperties(scene.ground_material.name);
-  sim.ground_restitution = ground_contact.restitution;
-  sim.ground_friction = ground_contact.friction;
+  sim.ground_restitution = std::isnan(scene.ground_restitution) ? ground_contact.restitution : scene.ground_restitution;
+  sim.ground_friction = std::isnan(scene.ground_friction) ? ground_contact.friction : scene.ground_friction;
+  sim.ground_compliance_per_pa = compliance(scene.ground_material);
+  for (const ContactPairSpec& pair : scene.contact_pairs) {
+    // An object's name first; "ground" is the ground unless an object has that name.
+    auto indexOf = [&](const std::string& name) {
+      for (size_t i = 0; i < scene.objects.size(); ++i)
+        if (scene.objects[i].name == name) return uint32_t(i);
+      return kGroundBody;
+    };
+    sim.contact_pairs.push_back({indexOf(pair.object_a), indexOf(pair.object_b), pair.restitution, pair.friction});
+  }
   sim.progress = settings.progress;
   Result<SimResult> simulated = simulate(sim_bodies, sim);
   if (!simulated) return simulated.error();

@@ -145,6 +145,46 @@ Result<Material> material(const json& value, const Where& where) {
   return m;
 }
 
+/// Optional "restitution" (0 to 1) and "friction" (>= 0) of an object, the ground or a pair.
+Status contactCoefficients(const json& value, const Where& where, double& restitution, double& friction) {
+  if (value.contains("restitution")) {
+    Result<double> e = number(value["restitution"], where.at("restitution"));
+    if (!e) return e.error();
+    if (*e < 0 || *e > 1) return where.at("restitution").error("must be 0 to 1, got " + show(value["restitution"]));
+    restitution = *e;
+  }
+  if (value.contains("friction")) {
+    Result<double> mu = number(value["friction"], where.at("friction"));
+    if (!mu) return mu.error();
+    if (*mu < 0) return where.at("friction").error("must be >= 0, got " + show(value["friction"]));
+    friction = *mu;
+  }
+  return {};
+}
+
+/// One "contacts" entry: {"objects": [A, B], "restitution": e, "friction": mu}.
+Result<ContactPairSpec> contactPair(const json& value, const Where& where, const std::set<std::string>& names) {
+  Status keys = checkKeys(value, where, {"objects", "restitution", "friction"});
+  if (!keys) return keys.error();
+  ContactPairSpec pair;
+  if (!value.contains("objects") || !value["objects"].is_array() || value["objects"].size() != 2 ||
+      !value["objects"][0].is_string() || !value["objects"][1].is_string())
+    return where.at("objects").error("expected two object names (or \"ground\"), got " +
+                                     (value.contains("objects") ? show(value["objects"]) : std::string("nothing")));
+  for (size_t k = 0; k < 2; ++k) {
+    const std::string name = value["objects"][k].get<std::string>();
+    if (name != "ground" && names.count(name) == 0)
+      return where.at("objects").index(k).error("no object named \"" + name + "\"");
+    (k == 0 ? pair.object_a : pair.object_b) = name;
+  }
+  if (pair.object_a == pair.object_b) return where.at("objects").error("names one object twice: " + show(value["objects"]));
+  if (!value.contains("restitution") && !value.contains("friction"))
+    return where.error("needs \"restitution\" or \"friction\" (or both)");
+  Status coefficients = contactCoefficients(value, where, pair.restitution, pair.friction);
+  if (!coefficients) return coefficients.error();
+  return pair;
+}
+
 std::string resolvePath(const std::string& scene_path, const std::string& relative) {
   namespace fs = std::filesystem;
   if (relative.empty() || fs::path(relative).is_absolute()) return relative;
@@ -153,7 +193,8 @@ std::string resolvePath(const std::string& scene_path, const std::string& relati
 
 Result<SceneObject> object(const json& value, const Where& where, const std::string& scene_path) {
   Status keys = checkKeys(value, where, {"name", "mesh", "bank", "material", "order", "size", "static", "shape",
-                                         "position", "orientation", "velocity", "angular_velocity"});
+                                         "position", "orientation", "velocity", "angular_velocity", "restitution",
+                                         "friction"});
   if (!keys) return keys.error();
   SceneObject o;
   if (value.contains("name")) {
@@ -224,6 +265,8 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
                                            " (norm " + std::to_string(norm) + ")");
     for (int i = 0; i < 4; ++i) o.orientation_wxyz[i] = (*q)[i] / norm;
   }
+  Status coefficients = contactCoefficients(value, where, o.restitution, o.friction);
+  if (!coefficients) return coefficients.error();
   return o;
 }
 
@@ -252,7 +295,7 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
   scene.path = path;
   Status keys = checkKeys(doc, Where{path, "(top level)"},
                           {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes",
-                           "contact_damping"});
+                           "contact_damping", "contacts"});
   if (!keys) return keys.error();
   if (doc.contains("sample_rate")) {
     Result<double> rate = number(doc["sample_rate"], root.at("sample_rate"));
@@ -305,7 +348,7 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
     if (ground.is_null() || (ground.is_boolean() && !ground.get<bool>())) {
       scene.has_ground = false;
     } else {
-      Status ground_keys = checkKeys(ground, where, {"material", "height"});
+      Status ground_keys = checkKeys(ground, where, {"material", "height", "restitution", "friction"});
       if (!ground_keys) return ground_keys.error();
       if (ground.contains("material")) {
         Result<Material> m = material(ground["material"], where.at("material"));
@@ -317,6 +360,8 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
         if (!h) return h.error();
         scene.ground_height_m = *h;
       }
+      Status coefficients = contactCoefficients(ground, where, scene.ground_restitution, scene.ground_friction);
+      if (!coefficients) return coefficients.error();
     }
   }
   if (!doc.contains("objects")) return root.at("objects").error("missing: a scene needs a list of objects");
@@ -333,6 +378,15 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
     if (!names.insert(o->name).second)
       return root.at("objects").index(i).at("name").error("duplicate name \"" + o->name + "\"");
     scene.objects.push_back(std::move(*o));
+  }
+  if (doc.contains("contacts")) {
+    const json& contacts = doc["contacts"];
+    if (!contacts.is_array()) return root.at("contacts").error("expected a list, got " + show(contacts));
+    for (size_t i = 0; i < contacts.size(); ++i) {
+      Result<ContactPairSpec> pair = contactPair(contacts[i], root.at("contacts").index(i), names);
+      if (!pair) return pair.error();
+      scene.contact_pairs.push_back(*pair);
+    }
   }
   return scene;
 }

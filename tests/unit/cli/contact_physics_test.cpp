@@ -74,8 +74,8 @@ Levels levels(const std::string& wav, double from_s) {
 // just over Bullet's still threshold every few hundred ms: Bullet's still-clock kept restarting,
 // the glass never slept, and its resting force, varying ~3% per step, hummed 63 dB below the
 // impact peak to the end. Resting where it is, it must sleep sleep_after_still_s (0.5 s) after it
-// settles (by ~0.3 s) and from then on the render is silent: 90 dB below the peak (the synth's
-// modes ring down from the settling below the audibility floor within ~0.2 s).
+// settles (by ~0.7 s: it rocks on its rim a few times) and from then on the render is silent:
+// 90 dB below the peak (the synth's modes ring down below the audibility floor within ~0.2 s).
 // As exact mesh ("concave", GImpact) and as convex pieces (the default for a concave moving
 // body); the second render of the pieces reads them from the cache and gives the same bytes.
 TEST(CliContact, GlassRestingOnATableFallsAsleepAndGoesSilent) {
@@ -85,7 +85,7 @@ TEST(CliContact, GlassRestingOnATableFallsAsleepAndGoesSilent) {
     const std::string dir = temp("glass-rest-" + shape);
     std::filesystem::create_directories(dir);
     const std::string scene = dir + "/scene.json", wav = dir + "/out.wav", events = dir + "/events.csv";
-    std::ofstream(scene) << R"({"sample_rate": 48000, "duration": 1.5, "max_modes": 10,
+    std::ofstream(scene) << R"({"sample_rate": 48000, "duration": 2.5, "max_modes": 10,
       "listener": {"position": [0, -0.7, 1.0]},
       "objects": [
         {"name": "table", "mesh": "box:1.0,0.6,0.03", "material": "wood", "static": true, "position": [0, 0, 0.735]},
@@ -96,11 +96,11 @@ TEST(CliContact, GlassRestingOnATableFallsAsleepAndGoesSilent) {
     double last_contact_s = 0.0;
     for (const EventRow& row : readEvents(events)) last_contact_s = std::max(last_contact_s, row.time_s);
     std::printf("[ asleep   ] %s: last contact at %.3f s\n", shape.c_str(), last_contact_s);
-    EXPECT_LT(last_contact_s, 1.0) << shape << ": the glass never fell asleep";
-    const Levels level = levels(wav, 1.0);
+    EXPECT_LT(last_contact_s, 2.0) << shape << ": the glass never fell asleep";
+    const Levels level = levels(wav, 2.0);
     ASSERT_GT(level.peak, 0.0);
     const double below_db = level.tail > 0 ? 20 * std::log10(level.peak / level.tail) : 999.0;
-    std::printf("[ silence  ] %s: after 1 s the render is %.1f dB below its peak\n", shape.c_str(), below_db);
+    std::printf("[ silence  ] %s: after 2 s the render is %.1f dB below its peak\n", shape.c_str(), below_db);
     EXPECT_GE(below_db, 90.0) << shape << ": a resting glass hums";
     if (shape != "auto") continue;
     EXPECT_NE(r.err.find("convex pieces (computed in"), std::string::npos) << r.err;

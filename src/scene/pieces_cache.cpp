@@ -6,6 +6,7 @@
 
 #include "strike/atomic_file.hpp"
 #include "strike/bank.hpp"
+#include "strike/sim.hpp"
 
 namespace strike {
 namespace {
@@ -31,7 +32,11 @@ bool get(const std::string& in, size_t& at, size_t end, T& value) {
 }  // namespace
 
 uint64_t surfaceHash(const std::vector<double>& positions, const std::vector<uint32_t>& triangles) {
-  const uint64_t h = fnv1a64(positions.data(), positions.size() * sizeof(double));
+  // The recipe too: pieces made another way are not these.
+  const double recipe[4] = {double(ConvexPiecesRecipe::version), ConvexPiecesRecipe::concavity_of_size,
+                            ConvexPiecesRecipe::max_edge_of_size, double(ConvexPiecesRecipe::max_pieces)};
+  uint64_t h = fnv1a64(recipe, sizeof recipe);
+  h = fnv1a64(positions.data(), positions.size() * sizeof(double), h);
   return fnv1a64(triangles.data(), triangles.size() * sizeof(uint32_t), h);
 }
 

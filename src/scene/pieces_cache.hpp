@@ -14,7 +14,8 @@ namespace strike {
 
 using ConvexPiecePoints = std::vector<std::vector<double>>;  ///< per piece: x, y, z, ... (mesh frame, m)
 
-/// Content key of a surface (positions and triangles).
+/// Content key of a surface (positions and triangles) and of how pieces are made
+/// (ConvexPiecesRecipe).
 uint64_t surfaceHash(const std::vector<double>& positions, const std::vector<uint32_t>& triangles);
 
 /// "<cache_dir>/<16 hex digits>.pieces".

@@ -35,8 +35,6 @@ using Vec3 = std::array<double, 3>;
 
 /// Hulls up to this many vertices get SAT + clipping contacts (see buildBody).
 constexpr int kMaxPolyhedralVertices = 128;
-/// Convex pieces of a concave body stand at most this fraction of its size proud of its hollows.
-constexpr double kPieceConcavity = 0.02;
 /// BodyState::still_since_step of a body whose pose clock has not started.
 constexpr uint64_t kNotStill = ~uint64_t(0);
 
@@ -504,8 +502,9 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
       if (known == pieces_by_surface_.end()) {
         const auto start = std::chrono::steady_clock::now();
         ConvexPiecesSettings piece_settings;
-        piece_settings.max_concavity_m = kPieceConcavity * state->size_m;
-        piece_settings.max_edge_m = 0.125 * state->size_m;
+        piece_settings.max_concavity_m = ConvexPiecesRecipe::concavity_of_size * state->size_m;
+        piece_settings.max_edge_m = ConvexPiecesRecipe::max_edge_of_size * state->size_m;
+        piece_settings.max_pieces = ConvexPiecesRecipe::max_pieces;
         ConvexPieces pieces = convexPieces(desc.surface_positions, desc.surface_triangles, piece_settings);
         state->pieces_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         known = pieces_by_surface_.emplace(key, std::move(pieces.hull_points)).first;

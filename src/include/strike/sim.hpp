@@ -86,6 +86,16 @@ struct SimSettings {
 
 constexpr uint32_t kGroundBody = 0xffffffffu;
 
+/// How a ConvexPieces shape is made (src/sim/convex_pieces.hpp): no surface point deeper inside
+/// its piece's hull than concavity_of_size x the body's size, triangle edges refined to at most
+/// max_edge_of_size x the size, at most max_pieces. Cached pieces are keyed by these too.
+struct ConvexPiecesRecipe {
+  static constexpr int version = 1;
+  static constexpr double concavity_of_size = 0.02;
+  static constexpr double max_edge_of_size = 0.125;
+  static constexpr int max_pieces = 64;
+};
+
 /// One body's side of a contact: its own coefficients and compliance (SimBodyDesc's).
 struct ContactSide {
   double restitution = 0.5, friction = 0.5, compliance_per_pa = 0.0;

@@ -588,6 +588,10 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
     if (!settings_.allow_sleep) state->rigid->setActivationState(DISABLE_DEACTIVATION);
   }
   world_->addRigidBody(state->rigid.get());
+  // A static body is asleep for good: Bullet skips a pair only when both bodies are inactive, so
+  // an awake table kept the narrow phase running for a glass asleep on it (6 s of GImpact
+  // triangle tests for 1.3 s of sleep). Moving bodies still collide with it.
+  if (desc.is_static) state->rigid->forceActivationState(ISLAND_SLEEPING);
   bodies_.push_back(std::move(state));
   return {};
 }
@@ -636,6 +640,7 @@ Status Simulation::build(const std::vector<btQuaternion>& orientations) {
     ground_ = std::make_unique<btRigidBody>(info_ground);
     ground_->setUserIndex(-1);
     world_->addRigidBody(ground_.get());
+    ground_->forceActivationState(ISLAND_SLEEPING);  // as a static body (buildBody)
   }
   world_->before_solve = [this] { timeImpacts(); };
   world_->setInternalTickCallback(&Simulation::preTickThunk, this, true);

@@ -23,6 +23,7 @@
 #include "strike/precompute.hpp"
 #include "strike/scene_checks.hpp"
 #include "strike/synth.hpp"
+#include "pieces_cache.hpp"
 
 namespace strike {
 namespace {
@@ -68,6 +69,7 @@ struct Body {
   double sustained_time_s = -1.0;           ///< substep whose sustained contacts are being summed
   double last_sustained_time_s = -1.0;      ///< the last substep with sustained contact
   std::vector<double> sustained_modal;      ///< their summed modal impulses
+  std::vector<uint32_t> sustained_partners; ///< the bodies it touched in that substep
   double box_start_s = 0.0;                 ///< the open run of steady sustained force: start,
   int box_steps = 0;                        ///< length in substeps,
   std::vector<double> box_force;            ///< and modal impulse per substep
@@ -184,6 +186,9 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   return {};
 }
 
+/// (1 - nu^2) / E: how a material's restitution weighs against another's (combineContact).
+double compliance(const Material& m) { return (1.0 - m.poisson * m.poisson) / m.youngs_pa; }
+
 SimBodyDesc simBody(const Body& body) {
   const SceneObject& object = *body.object;
   const MaterialTable& table = builtinMaterials();
@@ -200,10 +205,12 @@ SimBodyDesc simBody(const Body& body) {
   desc.velocity_m_s = object.velocity_m_s;
   desc.angular_velocity_rad_s = object.angular_velocity_rad_s;
   const ContactProperties contact = table.contactProperties(body.bank.material.name);
-  desc.restitution = contact.restitution;
-  desc.friction = contact.friction;
+  desc.restitution = std::isnan(object.restitution) ? contact.restitution : object.restitution;
+  desc.friction = std::isnan(object.friction) ? contact.friction : object.friction;
+  desc.compliance_per_pa = compliance(body.bank.material);
   desc.shape = object.shape == "convex"    ? SimBodyDesc::Shape::ConvexHull
                : object.shape == "concave" ? SimBodyDesc::Shape::Concave
+               : object.shape == "pieces"  ? SimBodyDesc::Shape::ConvexPieces
                                            : SimBodyDesc::Shape::Auto;
   return desc;
 }
@@ -277,6 +284,14 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     report.warnings.push_back(std::move(text));
   };
   for (std::string& text : checkStartingPlacement(scene, sim_bodies)) warn(std::move(text));
+  // Convex pieces of concave moving bodies from the cache (computed ones are written after).
+  std::vector<uint64_t> surface_hashes(bodies.size(), 0);
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    if (settings.cache_dir.empty() || bodies[i].object->is_static) continue;
+    surface_hashes[i] = surfaceHash(sim_bodies[i].surface_positions, sim_bodies[i].surface_triangles);
+    Result<ConvexPiecePoints> cached = readPieces(piecesPath(settings.cache_dir, surface_hashes[i]), surface_hashes[i]);
+    if (cached) sim_bodies[i].convex_pieces_m = std::move(*cached);
+  }
   SimSettings sim;
   sim.duration_s = duration;
   sim.gravity_m_s2 = scene.gravity_m_s2;
@@ -286,12 +301,42 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   sim.ground = scene.has_ground;
   sim.ground_height_m = scene.ground_height_m;
   const ContactProperties ground_contact = builtinMaterials().contactProperties(scene.ground_material.name);
-  sim.ground_restitution = ground_contact.restitution;
-  sim.ground_friction = ground_contact.friction;
+  sim.ground_restitution = std::isnan(scene.ground_restitution) ? ground_contact.restitution : scene.ground_restitution;
+  sim.ground_friction = std::isnan(scene.ground_friction) ? ground_contact.friction : scene.ground_friction;
+  sim.ground_compliance_per_pa = compliance(scene.ground_material);
+  for (const ContactPairSpec& pair : scene.contact_pairs) {
+    // An object's name first; "ground" is the ground unless an object has that name.
+    auto indexOf = [&](const std::string& name) {
+      for (size_t i = 0; i < scene.objects.size(); ++i)
+        if (scene.objects[i].name == name) return uint32_t(i);
+      return kGroundBody;
+    };
+    sim.contact_pairs.push_back({indexOf(pair.object_a), indexOf(pair.object_b), pair.restitution, pair.friction});
+  }
   sim.progress = settings.progress;
   Result<SimResult> simulated = simulate(sim_bodies, sim);
   if (!simulated) return simulated.error();
   report.simulate_seconds = secondsSince(simulate_start);
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    const std::string& name = scene.objects[i].name;
+    const SimBodyDesc::Shape used = simulated->shape_used[i];
+    if (used == SimBodyDesc::Shape::ConvexPieces) {
+      char note[160];
+      if (simulated->pieces_computed[i]) {
+        report.pieces_seconds += simulated->pieces_seconds[i];
+        const bool cached = surface_hashes[i] != 0 &&
+            writePieces(piecesPath(settings.cache_dir, surface_hashes[i]), surface_hashes[i], simulated->convex_pieces_m[i]);
+        std::snprintf(note, sizeof note, "%s: %zu convex pieces (computed in %.2f s%s)", name.c_str(),
+                      simulated->collision_pieces[i], simulated->pieces_seconds[i], cached ? ", cached" : "");
+      } else {
+        std::snprintf(note, sizeof note, "%s: %zu convex pieces (from the cache)", name.c_str(), simulated->collision_pieces[i]);
+      }
+      report.collision_notes.push_back(note);
+    } else if (used == SimBodyDesc::Shape::Concave && !scene.objects[i].is_static) {
+      report.collision_notes.push_back(name + ": exact mesh (GImpact, " + std::to_string(sim_bodies[i].surface_triangles.size() / 3) +
+                                       " triangles): slow to simulate; \"shape\": \"pieces\" (the default) is ~5-20x faster");
+    }
+  }
   result.events = std::move(simulated->events);
   report.events = result.events.size();
   for (const ContactEvent& event : result.events)
@@ -506,7 +551,9 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
           flushSustained(body);
           body.sustained_time_s = event.time_s;
           body.sustained_modal.assign(modal.size(), 0.0);
+          body.sustained_partners.clear();
         }
+        body.sustained_partners.push_back(other);
         for (size_t i = 0; i < modal.size(); ++i) body.sustained_modal[i] += modal[i];
         if (!body.silent) ++report.sustained_contacts;
       }
@@ -519,11 +566,24 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
 
   // A body Bullet puts to sleep reports no more contacts, but it still rests on its support: its
   // last resting force is held to the end, or its disappearance would ring the modes like a lift.
+  // The same for a static body (a table) whose last sustained contacts were all with bodies that
+  // fell asleep on it: the weight it carries stays.
+  const std::vector<double>& asleep_since = simulated->sleep_start_s;
+  auto asleepAtEnd = [&](uint32_t index) {
+    return index != kGroundBody && index < asleep_since.size() && std::isfinite(asleep_since[index]);
+  };
   for (size_t index = 0; index < bodies.size(); ++index) {
     Body& body = bodies[index];
-    if (!body.sounded || body.last_sustained_time_s < 0 || body.object->is_static) continue;
+    if (!body.sounded || body.last_sustained_time_s < 0) continue;
     const double hold_start = body.last_sustained_time_s + substep;
-    if (hold_start >= duration || norm(simulated->final_velocity_m_s[index]) > kImpactSpeed_m_s) continue;
+    if (hold_start >= duration) continue;
+    if (body.object->is_static) {
+      bool all_asleep = !body.sustained_partners.empty();
+      for (uint32_t other : body.sustained_partners) all_asleep = all_asleep && asleepAtEnd(other);
+      if (!all_asleep) continue;
+    } else if (norm(simulated->final_velocity_m_s[index]) > kImpactSpeed_m_s) {
+      continue;
+    }
     bool later_impact = false;
     for (const ContactEvent& event : result.events)
       if ((event.body_a == index || event.body_b == index) && event.step_time_s > body.last_sustained_time_s) later_impact = true;

@@ -151,6 +151,46 @@ Result<Material> material(const json& value, const Where& where) {
   return m;
 }
 
+/// Optional "restitution" (0 to 1) and "friction" (>= 0) of an object, the ground or a pair.
+Status contactCoefficients(const json& value, const Where& where, double& restitution, double& friction) {
+  if (value.contains("restitution")) {
+    Result<double> e = number(value["restitution"], where.at("restitution"));
+    if (!e) return e.error();
+    if (*e < 0 || *e > 1) return where.at("restitution").error("must be 0 to 1, got " + show(value["restitution"]));
+    restitution = *e;
+  }
+  if (value.contains("friction")) {
+    Result<double> mu = number(value["friction"], where.at("friction"));
+    if (!mu) return mu.error();
+    if (*mu < 0) return where.at("friction").error("must be >= 0, got " + show(value["friction"]));
+    friction = *mu;
+  }
+  return {};
+}
+
+/// One "contacts" entry: {"objects": [A, B], "restitution": e, "friction": mu}.
+Result<ContactPairSpec> contactPair(const json& value, const Where& where, const std::set<std::string>& names) {
+  Status keys = checkKeys(value, where, keysOf("contacts[]"));
+  if (!keys) return keys.error();
+  ContactPairSpec pair;
+  if (!value.contains("objects") || !value["objects"].is_array() || value["objects"].size() != 2 ||
+      !value["objects"][0].is_string() || !value["objects"][1].is_string())
+    return where.at("objects").error("expected two object names (or \"ground\"), got " +
+                                     (value.contains("objects") ? show(value["objects"]) : std::string("nothing")));
+  for (size_t k = 0; k < 2; ++k) {
+    const std::string name = value["objects"][k].get<std::string>();
+    if (name != "ground" && names.count(name) == 0)
+      return where.at("objects").index(k).error("no object named \"" + name + "\"");
+    (k == 0 ? pair.object_a : pair.object_b) = name;
+  }
+  if (pair.object_a == pair.object_b) return where.at("objects").error("names one object twice: " + show(value["objects"]));
+  if (!value.contains("restitution") && !value.contains("friction"))
+    return where.error("needs \"restitution\" or \"friction\" (or both)");
+  Status coefficients = contactCoefficients(value, where, pair.restitution, pair.friction);
+  if (!coefficients) return coefficients.error();
+  return pair;
+}
+
 std::string resolvePath(const std::string& scene_path, const std::string& relative) {
   namespace fs = std::filesystem;
   if (relative.empty() || fs::path(relative).is_absolute()) return relative;
@@ -220,8 +260,8 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
   if (value.contains("shape")) {
     Result<std::string> shape = text(value["shape"], where.at("shape"));
     if (!shape) return shape.error();
-    if (*shape != "auto" && *shape != "convex" && *shape != "concave")
-      return where.at("shape").error("expected \"auto\", \"convex\" or \"concave\", got " + show(value["shape"]));
+    if (*shape != "auto" && *shape != "convex" && *shape != "concave" && *shape != "pieces")
+      return where.at("shape").error("expected \"auto\", \"convex\", \"pieces\" or \"concave\", got " + show(value["shape"]));
     o.shape = *shape;
   }
   struct Vec3Field {
@@ -243,6 +283,8 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
                                            " (norm " + std::to_string(norm) + ")");
     for (int i = 0; i < 4; ++i) o.orientation_wxyz[i] = (*q)[i] / norm;
   }
+  Status coefficients = contactCoefficients(value, where, o.restitution, o.friction);
+  if (!coefficients) return coefficients.error();
   return o;
 }
 
@@ -251,12 +293,14 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
 const std::vector<SceneKeyTable>& sceneKeyTables() {
   static const std::vector<SceneKeyTable> tables = {
       {"top level",
-       {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes", "contact_damping"}},
+       {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes", "contact_damping",
+        "contacts"}},
       {"listener", {"position"}},
-      {"ground", {"material", "height"}},
+      {"contacts[]", {"objects", "restitution", "friction"}},
+      {"ground", {"material", "height", "restitution", "friction"}},
       {"objects[]",
        {"name", "mesh", "units", "bank", "material", "order", "size", "static", "shape", "position", "orientation",
-        "velocity", "angular_velocity"}},
+        "velocity", "angular_velocity", "restitution", "friction"}},
       {"material",
        {"name", "youngs_pa", "poisson", "density_kg_m3", "loss_factor", "rayleigh_stiffness", "rayleigh_mass"}},
   };
@@ -349,6 +393,8 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
         if (!h) return h.error();
         scene.ground_height_m = *h;
       }
+      Status coefficients = contactCoefficients(ground, where, scene.ground_restitution, scene.ground_friction);
+      if (!coefficients) return coefficients.error();
     }
   }
   if (!doc.contains("objects")) return root.at("objects").error("missing: a scene needs a list of objects");
@@ -365,6 +411,15 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
     if (!names.insert(o->name).second)
       return root.at("objects").index(i).at("name").error("duplicate name \"" + o->name + "\"");
     scene.objects.push_back(std::move(*o));
+  }
+  if (doc.contains("contacts")) {
+    const json& contacts = doc["contacts"];
+    if (!contacts.is_array()) return root.at("contacts").error("expected a list, got " + show(contacts));
+    for (size_t i = 0; i < contacts.size(); ++i) {
+      Result<ContactPairSpec> pair = contactPair(contacts[i], root.at("contacts").index(i), names);
+      if (!pair) return pair.error();
+      scene.contact_pairs.push_back(*pair);
+    }
   }
   return scene;
 }

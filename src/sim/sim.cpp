@@ -21,6 +21,8 @@
 #include <new>
 #include <utility>
 
+#include "convex_pieces.hpp"
+
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <LinearMath/btConvexHullComputer.h>
@@ -33,6 +35,8 @@ using Vec3 = std::array<double, 3>;
 
 /// Hulls up to this many vertices get SAT + clipping contacts (see buildBody).
 constexpr int kMaxPolyhedralVertices = 128;
+/// BodyState::still_since_step of a body whose pose clock has not started.
+constexpr uint64_t kNotStill = ~uint64_t(0);
 
 btVector3 toBt(const Vec3& v) { return btVector3(v[0], v[1], v[2]); }
 Vec3 fromBt(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
@@ -41,6 +45,13 @@ std::string fmt(double value) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.9g", value);
   return buf;
+}
+
+/// FNV-1a, 64 bit [Fowler, Noll & Vo]: a content key for identical surfaces.
+uint64_t fnv1a(const void* data, size_t size, uint64_t hash = 0xcbf29ce484222325ull) {
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < size; ++i) hash = (hash ^ bytes[i]) * 0x100000001b3ull;
+  return hash;
 }
 
 std::string bodyLabel(const SimBodyDesc& body, size_t index) {
@@ -95,6 +106,17 @@ Status checkSettings(const SimSettings& settings) {
     return badInput("sim settings: sleep_after_still_s = " + fmt(settings.sleep_after_still_s) +
                     " (must be in [0, 2] s)");
   }
+  for (size_t k = 0; k < settings.contact_pairs.size(); ++k) {
+    const SimSettings::ContactPair& pair = settings.contact_pairs[k];
+    const std::string where = "sim settings: contact_pairs[" + std::to_string(k) + "]";
+    if (!std::isnan(pair.restitution) && !(pair.restitution >= 0.0 && pair.restitution <= 1.0))
+      return badInput(where + ".restitution = " + fmt(pair.restitution) + " (must be in [0, 1])");
+    if (!std::isnan(pair.friction) && !(pair.friction >= 0.0 && std::isfinite(pair.friction)))
+      return badInput(where + ".friction = " + fmt(pair.friction) + " (must be finite and >= 0)");
+  }
+  if (!(settings.ground_compliance_per_pa >= 0.0 && std::isfinite(settings.ground_compliance_per_pa)))
+    return badInput("sim settings: ground_compliance_per_pa = " + fmt(settings.ground_compliance_per_pa) +
+                    " (must be finite and >= 0)");
   if (settings.solver_iterations < 1 || settings.solver_iterations > 10000) {
     return badInput("sim settings: solver_iterations = " + std::to_string(settings.solver_iterations) +
                     " (must be in [1, 10000])");
@@ -142,7 +164,8 @@ Status checkBody(const SimBodyDesc& body, size_t index, btQuaternion& orientatio
   }
   orientation = btQuaternion(q[1] / norm, q[2] / norm, q[3] / norm, q[0] / norm);  // Bullet is (x, y, z, w)
   for (const auto& [name, value] : {std::pair<const char*, double>{"restitution", body.restitution},
-                                    std::pair<const char*, double>{"friction", body.friction}}) {
+                                    std::pair<const char*, double>{"friction", body.friction},
+                                    std::pair<const char*, double>{"compliance_per_pa", body.compliance_per_pa}}) {
     if (!std::isfinite(value) || value < 0.0) {
       return badInput(label + ": " + name + " = " + fmt(value) + " (must be finite and >= 0)");
     }
@@ -218,11 +241,19 @@ struct BodyState {
   std::vector<btScalar> body_xyz;
   std::vector<int> indices;
   std::unique_ptr<btTriangleIndexVertexArray> mesh_interface;
+  std::vector<std::unique_ptr<btConvexHullShape>> pieces;  // children of a compound shape
+  std::vector<std::vector<double>> pieces_mesh;             // their points, mesh frame
+  bool pieces_computed = false;
+  double pieces_seconds = 0.0;
   std::unique_ptr<btCollisionShape> shape;
   std::unique_ptr<btRigidBody> rigid;
   // Saved at the start of each substep (pre-tick callback).
   btTransform pre_transform;
   btVector3 pre_linear{0, 0, 0}, pre_angular{0, 0, 0};
+  // The pose still-clock (Simulation::hastenSleep): the pose when it started, and the substep.
+  btTransform still_anchor = btTransform::getIdentity();
+  uint64_t still_since_step = kNotStill;
+  double sleep_start_s = NAN;  // when it fell asleep; NaN while awake
 };
 
 /// btDiscreteDynamicsWorld keeps its CCD predictive manifolds protected; their points sit at the
@@ -291,6 +322,7 @@ class Simulation {
   void postTick();
   double energy(std::vector<double>* kinetic) const;
   void hastenSleep();
+  ContactCoefficients coefficients(int index_a, int index_b) const;
   static void preTickThunk(btDynamicsWorld* world, btScalar) {
     static_cast<Simulation*>(world->getWorldUserInfo())->preTick();
   }
@@ -309,6 +341,7 @@ class Simulation {
   std::unique_ptr<btCollisionShape> ground_shape_;
   std::unique_ptr<btRigidBody> ground_;
   bool gimpact_registered_ = false;
+  std::map<uint64_t, std::vector<std::vector<double>>> pieces_by_surface_;  // by content hash
 
   uint64_t step_ = 0;
   std::vector<ContactEvent> events_;
@@ -388,8 +421,12 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   SimBodyDesc::Shape shape = desc.shape;
   if (shape == SimBodyDesc::Shape::Auto) {
     const double volume = std::abs(meshVolume(state->body_xyz, desc.surface_triangles));
+    // A static concave body keeps its exact mesh (a BVH, cheap when it never moves); a moving one
+    // becomes convex pieces: GImpact meshes cost ~100x more per substep (a mug on a table: 6.3 s
+    // of simulation for 2.5 s, 0.05 s as a hull) and never rest still (see hastenSleep).
     shape = (hull_volume > 0.0 && volume >= 0.9 * hull_volume) ? SimBodyDesc::Shape::ConvexHull
-                                                                : SimBodyDesc::Shape::Concave;
+            : desc.is_static                                   ? SimBodyDesc::Shape::Concave
+                                                               : SimBodyDesc::Shape::ConvexPieces;
   }
   state->shape_used = shape;
 
@@ -450,6 +487,48 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
     }
     state->shape = std::move(convex);
     }
+  } else if (shape == SimBodyDesc::Shape::ConvexPieces) {
+    // Convex pieces of the surface, each a polyhedral hull as above (SAT + clipping contacts,
+    // persistent manifolds per piece), within 1% of the body's size of its hollows.
+    if (!desc.convex_pieces_m.empty()) {
+      state->pieces_mesh = desc.convex_pieces_m;
+    } else {
+      // Computed once per surface in a run (identical objects share it), in the mesh frame,
+      // whose axes are usually the shape's (a turned glass's floor lies in an axis plane there,
+      // and the cuts are axis-aligned); then moved to the body frame.
+      uint64_t key = fnv1a(desc.surface_positions.data(), desc.surface_positions.size() * sizeof(double));
+      key = fnv1a(desc.surface_triangles.data(), desc.surface_triangles.size() * sizeof(uint32_t), key);
+      auto known = pieces_by_surface_.find(key);
+      if (known == pieces_by_surface_.end()) {
+        const auto start = std::chrono::steady_clock::now();
+        ConvexPiecesSettings piece_settings;
+        piece_settings.max_concavity_m = ConvexPiecesRecipe::concavity_of_size * state->size_m;
+        piece_settings.max_edge_m = ConvexPiecesRecipe::max_edge_of_size * state->size_m;
+        piece_settings.max_pieces = ConvexPiecesRecipe::max_pieces;
+        ConvexPieces pieces = convexPieces(desc.surface_positions, desc.surface_triangles, piece_settings);
+        state->pieces_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        known = pieces_by_surface_.emplace(key, std::move(pieces.hull_points)).first;
+      }
+      state->pieces_mesh = known->second;
+      state->pieces_computed = true;
+    }
+    if (state->pieces_mesh.empty()) {
+      return badInput(bodyLabel(desc, index) + ": cannot split " + std::to_string(vertex_count) +
+                      " vertices into convex pieces");
+    }
+    state->margin_m = std::clamp(0.001 * state->min_extent_m, 1e-6, 1e-3);
+    auto compound = std::make_unique<btCompoundShape>(true, int(state->pieces_mesh.size()));
+    for (const std::vector<double>& points : state->pieces_mesh) {
+      auto piece = std::make_unique<btConvexHullShape>();
+      for (size_t k = 0; k + 2 < points.size(); k += 3)
+        piece->addPoint(state->body_from_mesh(btVector3(points[k], points[k + 1], points[k + 2])), false);
+      piece->recalcLocalAabb();
+      piece->setMargin(state->margin_m);
+      if (piece->getNumPoints() <= kMaxPolyhedralVertices) piece->initializePolyhedralFeatures();
+      compound->addChildShape(btTransform::getIdentity(), piece.get());
+      state->pieces.push_back(std::move(piece));
+    }
+    state->shape = std::move(compound);
   } else {
     state->indices.assign(desc.surface_triangles.begin(), desc.surface_triangles.end());
     state->mesh_interface = std::make_unique<btTriangleIndexVertexArray>(
@@ -509,6 +588,10 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
     if (!settings_.allow_sleep) state->rigid->setActivationState(DISABLE_DEACTIVATION);
   }
   world_->addRigidBody(state->rigid.get());
+  // A static body is asleep for good: Bullet skips a pair only when both bodies are inactive, so
+  // an awake table kept the narrow phase running for a glass asleep on it (6 s of GImpact
+  // triangle tests for 1.3 s of sleep). Moving bodies still collide with it.
+  if (desc.is_static) state->rigid->forceActivationState(ISLAND_SLEEPING);
   bodies_.push_back(std::move(state));
   return {};
 }
@@ -557,6 +640,7 @@ Status Simulation::build(const std::vector<btQuaternion>& orientations) {
     ground_ = std::make_unique<btRigidBody>(info_ground);
     ground_->setUserIndex(-1);
     world_->addRigidBody(ground_.get());
+    ground_->forceActivationState(ISLAND_SLEEPING);  // as a static body (buildBody)
   }
   world_->before_solve = [this] { timeImpacts(); };
   world_->setInternalTickCallback(&Simulation::preTickThunk, this, true);
@@ -564,17 +648,68 @@ Status Simulation::build(const std::vector<btQuaternion>& orientations) {
   return {};
 }
 
+ContactCoefficients Simulation::coefficients(int index_a, int index_b) const {
+  // Bullet's user index: the body, or -1 for the ground.
+  auto side = [&](int index) {
+    if (index < 0) return ContactSide{settings_.ground_restitution, settings_.ground_friction, settings_.ground_compliance_per_pa};
+    const SimBodyDesc& d = descs_[size_t(index)];
+    return ContactSide{d.restitution, d.friction, d.compliance_per_pa};
+  };
+  ContactCoefficients c = combineContact(side(index_a), side(index_b));
+  const uint32_t a = index_a < 0 ? kGroundBody : uint32_t(index_a), b = index_b < 0 ? kGroundBody : uint32_t(index_b);
+  for (const SimSettings::ContactPair& pair : settings_.contact_pairs) {  // the last one given wins
+    if (!((pair.body_a == a && pair.body_b == b) || (pair.body_a == b && pair.body_b == a))) continue;
+    if (!std::isnan(pair.restitution)) c.restitution = pair.restitution;
+    if (!std::isnan(pair.friction)) c.friction = pair.friction;
+  }
+  return c;
+}
+
 void Simulation::hastenSleep() {
   // Bullet sleeps a body still for longer than gDeactivationTime (2 s), a process global that a
   // library must not change; each body's still-time is its own, so a body still for
   // sleep_after_still_s has its clock moved past the global's limit instead. Bullet resets the
   // clock whenever the body moves, and sleeps an island only when all its bodies are still.
+  //
+  // Bullet's clock reads the velocity of one substep, and a body resting on a mesh (GImpact)
+  // never keeps it still for long: its contact manifold is rebuilt every substep with 2 to 4 of
+  // the touching triangles' points, so the solver rocks it at up to 0.05 rad/s (the angular
+  // threshold) every few hundred ms while it stays where it is, and Bullet's clock restarts each
+  // time (a resting glass stayed awake to the end, humming). So a second clock measures where the
+  // body is, not how fast it moves: it runs while every point of the body stays within
+  // kStillExcursion of the body's size from where it was when the clock started, and restarts
+  // from the present pose when it does not. A body resting there for sleep_after_still_s sleeps.
+  constexpr double kStillExcursion = 1e-3;  // of the body's size; solver rocking moves ~1e-4
+  const double dt = settings_.substep_s;
   for (auto& b : bodies_) {
     btRigidBody& rigid = *b->rigid;
-    if (b->is_static || !rigid.isActive()) continue;
+    if (b->is_static || !rigid.isActive()) {
+      if (!b->is_static && rigid.getActivationState() == ISLAND_SLEEPING && std::isnan(b->sleep_start_s))
+        b->sleep_start_s = double(step_ + 1) * dt;
+      b->still_since_step = kNotStill;  // woken, it starts afresh
+      continue;
+    }
+    b->sleep_start_s = NAN;
     const btScalar still_s = rigid.getDeactivationTime();
     if (still_s >= settings_.sleep_after_still_s && still_s <= gDeactivationTime)
-      rigid.setDeactivationTime(gDeactivationTime + settings_.substep_s);
+      rigid.setDeactivationTime(gDeactivationTime + dt);
+    // The pose clock. The farthest a body point moves: the origin's shift plus the rotation angle
+    // times the half-size (a bound for points within size / 2 of the centre of mass).
+    const btTransform& now = rigid.getWorldTransform();
+    const btQuaternion turn = b->still_anchor.getRotation().inverse() * now.getRotation();
+    const double excursion_m = (now.getOrigin() - b->still_anchor.getOrigin()).length() +
+                               0.5 * b->size_m * std::abs(turn.getAngleShortestPath());
+    if (b->still_since_step == kNotStill || excursion_m > kStillExcursion * b->size_m) {
+      b->still_anchor = now;
+      b->still_since_step = step_;
+      continue;
+    }
+    if (double(step_ - b->still_since_step) * dt >= settings_.sleep_after_still_s) {
+      // Asks to sleep as Bullet's own clock would (btRigidBody::wantsSleeping): the island sleeps
+      // in the next substep if all its bodies agree, and Bullet zeroes the velocities then.
+      rigid.setActivationState(WANTS_DEACTIVATION);
+      rigid.setDeactivationTime(gDeactivationTime + dt);
+    }
   }
 }
 
@@ -673,16 +808,22 @@ void Simulation::timeImpacts() {
   const int manifold_count = dispatcher_->getNumManifolds();
   for (int m = 0; m < manifold_count; ++m) {
     btPersistentManifold* manifold = dispatcher_->getManifoldByIndexInternal(m);
+    const btCollisionObject* a = manifold->getBody0();
+    const btCollisionObject* b = manifold->getBody1();
+    // The pair's coefficients (combineContact or the scene's override), not Bullet's products;
+    // set on every point each substep (this also undoes a previous substep's change below).
+    const ContactCoefficients pair = coefficients(a->getUserIndex(), b->getUserIndex());
+    const double restitution = pair.restitution;
+    for (int p = 0; p < manifold->getNumContacts(); ++p) {
+      manifold->getContactPoint(p).m_combinedRestitution = restitution;
+      manifold->getContactPoint(p).m_combinedFriction = pair.friction;
+    }
     // A CCD predictive point is left to Bullet: its distance is a swept sphere's, whose time of
     // impact Bullet finds only to about half a millimetre (a 2 mm plate landing at 1.5 m/s).
     if (world_->isPredictive(manifold)) continue;
-    const btCollisionObject* a = manifold->getBody0();
-    const btCollisionObject* b = manifold->getBody1();
-    const double restitution = a->getRestitution() * b->getRestitution();  // Bullet's combination
     const btVector3 relative_accel = freeAcceleration(a) - freeAcceleration(b);
     for (int p = 0; p < manifold->getNumContacts(); ++p) {
       btManifoldPoint& pt = manifold->getContactPoint(p);
-      pt.m_combinedRestitution = restitution;  // undo a previous substep's change
       const btVector3& normal = pt.m_normalWorldOnB;  // from b to a
       const double closing =
           -(velocityAt(a, pt.getPositionWorldOnA()) - velocityAt(b, pt.getPositionWorldOnB())).dot(normal);
@@ -967,6 +1108,11 @@ Result<SimResult> Simulation::run() {
     result.final_angular_velocity_rad_s.push_back(fromBt(rb.getAngularVelocity()));
     result.shape_used.push_back(b->shape_used);
     result.collision_margin_m.push_back(b->margin_m);
+    result.sleep_start_s.push_back(b->sleep_start_s);
+    result.collision_pieces.push_back(b->pieces.size());
+    result.convex_pieces_m.push_back(b->pieces_mesh);
+    result.pieces_computed.push_back(b->pieces_computed);
+    result.pieces_seconds.push_back(b->pieces_seconds);
   }
   result.events = std::move(events_);
   result.substeps = substeps;
@@ -975,6 +1121,16 @@ Result<SimResult> Simulation::run() {
 }
 
 }  // namespace
+
+ContactCoefficients combineContact(const ContactSide& a, const ContactSide& b) {
+  const double ka = a.compliance_per_pa, kb = b.compliance_per_pa;
+  const double wa = ka + kb > 0.0 ? ka / (ka + kb) : 0.5;
+  const double loss = wa * (1.0 - a.restitution * a.restitution) + (1.0 - wa) * (1.0 - b.restitution * b.restitution);
+  ContactCoefficients c;
+  c.restitution = std::sqrt(std::clamp(1.0 - loss, 0.0, 1.0));
+  c.friction = std::sqrt(a.friction * b.friction);
+  return c;
+}
 
 Result<SimResult> simulate(const std::vector<SimBodyDesc>& bodies, const SimSettings& settings) {
   try {

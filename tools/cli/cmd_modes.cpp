@@ -46,7 +46,7 @@ CommandSpec modesSpec() {
       {"--compact", "", "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
                         "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
       {"--quiet", "", "no progress or summary on stderr"},
-      {"--list-materials", "", "print the material table with sources and exit"},
+      {"--list-materials", "", "print the material table (elastic constants, damping, restitution, friction) with sources and exit"},
   };
   spec.examples =
       "  strike modes box:0.3,0.02,0.02 --material steel --order 2 -o bar.modes\n"
@@ -59,12 +59,21 @@ CommandSpec modesSpec() {
 
 int listMaterials() {
   const MaterialTable& table = builtinMaterials();
-  std::printf("%-14s %11s %7s %9s %11s %11s  %s\n", "material", "E (Pa)", "nu", "rho", "a1 (s)", "a2 (1/s)", "source");
+  std::printf("%-14s %11s %7s %9s %11s %11s %6s %6s  %s\n", "material", "E (Pa)", "nu", "rho", "a1 (s)", "a2 (1/s)",
+              "e", "mu", "source");
   for (const auto& [name, m] : table.materials) {
     auto source = table.sources.find(name);
-    std::printf("%-14s %11.3g %7.3f %9.0f %11.3g %11.3g  %s\n", name.c_str(), m.youngs_pa, m.poisson, m.density_kg_m3,
-                m.rayleigh_stiffness, m.rayleigh_mass, source == table.sources.end() ? "" : source->second.c_str());
+    const ContactProperties contact = table.contactProperties(name);
+    std::printf("%-14s %11.3g %7.3f %9.0f %11.3g %11.3g %6.2f %6.2f  %s\n", name.c_str(), m.youngs_pa, m.poisson,
+                m.density_kg_m3, m.rayleigh_stiffness, m.rayleigh_mass, contact.restitution, contact.friction,
+                source == table.sources.end() ? "" : source->second.c_str());
   }
+  std::printf(
+      "\ne, mu: restitution and friction of the material on itself (rigid-body simulation only; rough typical\n"
+      "values). Two bodies combine theirs: restitution by compliance-weighted energy loss, 1 - e^2 =\n"
+      "(k1 (1 - e1^2) + k2 (1 - e2^2)) / (k1 + k2), k = (1 - nu^2) / E (the softer body decides; Hertz, Johnson\n"
+      "1985); friction by the geometric mean sqrt(mu1 mu2) (Box2D). A scene overrides them per object\n"
+      "(\"restitution\", \"friction\"), for the ground, and per pair (\"contacts\"): see docs/contact.md.\n");
   return 0;
 }
 

@@ -98,6 +98,7 @@ void printSummary(const RenderResult& result, const std::string& output, double 
   if (r.cache_pruned > 0)
     std::fprintf(stderr, "  cache       removed %zu least recently used banks (%.1f MB) to keep the cache under its cap (--cache-max-size)\n",
                  r.cache_pruned, double(r.cache_pruned_bytes) / 1e6);
+  for (const std::string& note : r.collision_notes) std::fprintf(stderr, "  collision   %s\n", note.c_str());
   if (r.precompute_saved_seconds > 0)
     std::fprintf(stderr, "  saved       %.2f s of eigen-solves answered by the cache\n", r.precompute_saved_seconds);
 }

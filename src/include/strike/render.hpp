@@ -77,6 +77,10 @@ struct RenderReport {
   double precompute_saved_seconds = 0;  ///< eigen-solve time the cache answered (as recorded in the banks)
   size_t cache_pruned = 0;              ///< banks removed from the cache by its size cap after this render
   uint64_t cache_pruned_bytes = 0;
+  double pieces_seconds = 0;  ///< of simulate_seconds: computing convex pieces (cached for the next render)
+  /// One line per concave moving body: its collision shape and what it cost (the summary's
+  /// "collision" lines; exact meshes are named as the slow choice).
+  std::vector<std::string> collision_notes;
 };
 
 struct RenderResult {

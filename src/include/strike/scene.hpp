@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,11 +25,21 @@ struct SceneObject {
   int order = 1;             ///< element order when the bank is computed
   double size_m = 0.0;       ///< target tet edge when the bank is computed (0 = automatic)
   bool is_static = false;    ///< never moves (a table); still sounds when struck
-  std::string shape = "auto";  ///< collision shape: auto, convex, concave
+  std::string shape = "auto";  ///< collision shape: auto, convex, pieces, concave (docs/contact.md)
   std::array<double, 3> position_m{};
   std::array<double, 4> orientation_wxyz{1, 0, 0, 0};
   std::array<double, 3> velocity_m_s{};
   std::array<double, 3> angular_velocity_rad_s{};
+  /// Own contact coefficients, overriding the material's ("restitution", "friction"); NaN: the
+  /// material's. Two bodies combine theirs (docs/contact.md).
+  double restitution = NAN, friction = NAN;
+};
+
+/// A scene's "contacts" entry: coefficients for one pair of objects ("ground" names the ground),
+/// used as they are (no combination). NaN: not overridden.
+struct ContactPairSpec {
+  std::string object_a, object_b;
+  double restitution = NAN, friction = NAN;
 };
 
 struct Scene {
@@ -40,6 +51,8 @@ struct Scene {
   bool has_ground = true;
   Material ground_material;  ///< concrete unless given
   double ground_height_m = 0.0;
+  double ground_restitution = NAN, ground_friction = NAN;  ///< NaN: the ground material's
+  std::vector<ContactPairSpec> contact_pairs;
   /// Extra amplitude decay (1/s) of a body's modes while it rests on or slides along something:
   /// the vibration it loses into its support. A phenomenological model (the support's impedance
   /// is not computed); 0 turns it off. 8/s gives a ringing body at rest a T60 under 0.9 s.

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -28,11 +29,19 @@ struct SimBodyDesc {
   std::array<double, 4> orientation_wxyz{1, 0, 0, 0};  ///< unit quaternion, mesh frame -> world
   std::array<double, 3> velocity_m_s{};    ///< of the centre of mass, world
   std::array<double, 3> angular_velocity_rad_s{};     ///< world
-  double restitution = 0.5;                ///< Bullet combines the two bodies' values by product
+  double restitution = 0.5;                ///< the body's own (its material on itself); see combineContact
   double friction = 0.5;
-  /// Collision shape: "auto" picks a convex hull when the mesh fills >= 90% of its hull's volume,
-  /// else a concave shape (GImpact) so things can fall inside (a bowl, a mug).
-  enum class Shape { Auto, ConvexHull, Concave } shape = Shape::Auto;
+  /// (1 - nu^2) / E of its material, 1/Pa: weights its restitution when two bodies meet
+  /// (combineContact). 0: unknown (both bodies weigh the same).
+  double compliance_per_pa = 0.0;
+  /// Collision shape: "auto" picks a convex hull when the mesh fills >= 90% of its hull's volume;
+  /// else, so things can fall inside (a bowl, a mug), convex pieces for a moving body (a
+  /// decomposition within 1% of its size, see convex_pieces.hpp) and the exact triangle mesh for
+  /// a static one. Concave: the exact mesh, moving or not (GImpact: ~100x slower than pieces).
+  enum class Shape { Auto, ConvexHull, Concave, ConvexPieces } shape = Shape::Auto;
+  /// A ConvexPieces shape's pieces, if known (from a previous run, SimResult::convex_pieces_m):
+  /// per piece its hull points (x, y, z, ...), mesh frame. Empty: computed (~0.1-1 s a body).
+  std::vector<std::vector<double>> convex_pieces_m;
 };
 
 struct SimSettings {
@@ -42,6 +51,14 @@ struct SimSettings {
   bool ground = true;                      ///< a static plane z = ground_height_m (silent)
   double ground_height_m = 0.0;
   double ground_restitution = 0.5, ground_friction = 0.6;
+  double ground_compliance_per_pa = 0.0;   ///< as SimBodyDesc::compliance_per_pa
+  /// Contact coefficients for particular pairs of bodies (body_b may be kGroundBody), overriding
+  /// combineContact; a NaN coefficient is not overridden.
+  struct ContactPair {
+    uint32_t body_a = 0, body_b = 0;
+    double restitution = NAN, friction = NAN;
+  };
+  std::vector<ContactPair> contact_pairs;
   /// Contacts whose normal impulse is below this are not recorded, N s.
   double min_impulse_n_s = 1e-9;
   /// A contact point closing faster than this is an impact: it is solved at the moment its
@@ -53,8 +70,8 @@ struct SimSettings {
   /// early once the largest squared impulse change per iteration is below the threshold, (N s)^2.
   int solver_iterations = 1000;
   double solver_residual_threshold = 1e-12;
-  /// Let Bullet put bodies to sleep once they have been still (below 1 cm/s and 0.05 rad/s) for
-  /// sleep_after_still_s. A sleeping body reports no contacts (no impulse is applied to it), which
+  /// Let Bullet put bodies to sleep once they have been still (below 1 cm/s and 0.05 rad/s, or
+  /// every point within 0.1% of the body's size of where it was) for sleep_after_still_s. A sleeping body reports no contacts (no impulse is applied to it), which
   /// is what makes resting objects quiet and cheap; it wakes when something strikes it.
   bool allow_sleep = true;
   /// Seconds of stillness before sleep, at most Bullet's own 2 s. A still body's contacts are a
@@ -68,6 +85,38 @@ struct SimSettings {
 };
 
 constexpr uint32_t kGroundBody = 0xffffffffu;
+
+/// How a ConvexPieces shape is made (src/sim/convex_pieces.hpp): no surface point deeper inside
+/// its piece's hull than concavity_of_size x the body's size, triangle edges refined to at most
+/// max_edge_of_size x the size, at most max_pieces. Cached pieces are keyed by these too.
+struct ConvexPiecesRecipe {
+  static constexpr int version = 1;
+  static constexpr double concavity_of_size = 0.02;
+  static constexpr double max_edge_of_size = 0.125;
+  static constexpr int max_pieces = 64;
+};
+
+/// One body's side of a contact: its own coefficients and compliance (SimBodyDesc's).
+struct ContactSide {
+  double restitution = 0.5, friction = 0.5, compliance_per_pa = 0.0;
+};
+struct ContactCoefficients {
+  double restitution = 0.0, friction = 0.0;
+};
+
+/// The coefficients of two bodies in contact. A material's own restitution and friction are
+/// those of the material on itself, and a pair of one material gets exactly those (Bullet's
+/// product gave glass on glass 0.49 for 0.7).
+///  - Restitution: in a Hertz contact each body takes a share of the approach, and so of the
+///    stored elastic energy, proportional to its compliance k = (1 - nu^2) / E [Johnson 1985,
+///    Contact Mechanics, sec. 4.2, eqs. 4.22-4.23]; each is taken to lose the fraction 1 - e^2 of
+///    its share that it loses against itself, so 1 - e^2 = (k1 (1 - e1^2) + k2 (1 - e2^2)) / (k1 + k2).
+///    The softer body decides: rubber (0.8) on concrete gives 0.80, steel (0.6) on glass (0.7)
+///    0.68 (the product: 0.32 and 0.42). Unknown compliances (0) weigh the same.
+///  - Friction: the geometric mean sqrt(mu1 mu2), Box2D's mixing law [Catto, Box2D
+///    b2MixFriction]: a slippery surface makes the pair slippery (the product: steel 0.4 on
+///    steel 0.4 gave 0.16).
+ContactCoefficients combineContact(const ContactSide& a, const ContactSide& b);
 
 /// One contact point during one substep.
 struct ContactEvent {
@@ -107,6 +156,15 @@ struct SimResult {
   /// Per body: the collision shape actually used (Auto resolved) and its collision margin, m.
   std::vector<SimBodyDesc::Shape> shape_used;
   std::vector<double> collision_margin_m;
+  std::vector<size_t> collision_pieces;  ///< per body: convex pieces of a ConvexPieces shape, else 0
+  /// Per body: a ConvexPieces shape's pieces (as SimBodyDesc::convex_pieces_m), to reuse; and
+  /// whether they were computed in this run (not given), and the seconds that took (identical
+  /// bodies share one decomposition: the first has the time, the rest 0).
+  std::vector<std::vector<std::vector<double>>> convex_pieces_m;
+  std::vector<bool> pieces_computed;
+  std::vector<double> pieces_seconds;
+  /// Per body: when it fell asleep and stayed so to the end, s; NaN if awake at the end (or static).
+  std::vector<double> sleep_start_s;
   double simulate_seconds = 0.0;       ///< wall time
   uint64_t substeps = 0;
 };

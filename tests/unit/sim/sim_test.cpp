@@ -293,6 +293,9 @@ TEST(SimResting, SleepingBodyIsQuiet) {
   // Still from ~0.1 s on, asleep sleep_after_still_s (0.5 s) later, not after Bullet's 2 s.
   EXPECT_LT(r.events.back().time_s, 1.0);
   EXPECT_GT(r.events.back().time_s, SimSettings{}.sleep_after_still_s);
+  // It reports when it fell asleep: the substep after its last contact.
+  ASSERT_EQ(r.sleep_start_s.size(), 1u);
+  EXPECT_NEAR(r.sleep_start_s[0], r.events.back().step_time_s + 2e-3, 1.5e-3);
 }
 
 TEST(SimMeshFrame, PointsLieOnTheBoxSurfaceInMeshCoordinates) {
@@ -465,14 +468,18 @@ TEST_P(SimTunnelling, FastBoxHitsTheGround) {
 
 INSTANTIATE_TEST_SUITE_P(Speeds, SimTunnelling, ::testing::Values(50.0, 100.0));
 
-void expectBallInTray(bool tray_static) {
+void expectBallInTray(bool tray_static, SimBodyDesc::Shape shape, SimBodyDesc::Shape expected_shape) {
   SimBodyDesc tray = makeTray("tray", 0.2, 0.06, 0.01, 1000.0);
   tray.is_static = tray_static;
+  tray.shape = shape;
   SimBodyDesc ball = makeBall("ball", 0.02, 0.05);
   ball.position_m = {0.02, -0.01, 0.3};
   ball.restitution = 0.3;
-  const SimResult r = run({tray, ball}, settingsFor(1.5), tray_static ? "ball into static tray" : "ball into GImpact tray");
-  EXPECT_EQ(r.shape_used[0], SimBodyDesc::Shape::Concave);
+  const char* label = tray_static                                    ? "ball into static tray"
+                      : expected_shape == SimBodyDesc::Shape::Concave ? "ball into GImpact tray"
+                                                                      : "ball into tray of convex pieces";
+  const SimResult r = run({tray, ball}, settingsFor(1.5), label);
+  EXPECT_EQ(r.shape_used[0], expected_shape);
   EXPECT_EQ(r.shape_used[1], SimBodyDesc::Shape::ConvexHull);
   const Vec3 t = r.final_position_m[0], b = r.final_position_m[1];
   EXPECT_NEAR(t[2], 0.0, 2e-3) << "tray left the ground";
@@ -493,17 +500,24 @@ void expectBallInTray(bool tray_static) {
   if (!tray_static) expectNoEnergyGain(r, "tray");
 }
 
-TEST(SimConcave, BallLandsInsideDynamicTray) { expectBallInTray(false); }
-TEST(SimConcave, BallLandsInsideStaticTray) { expectBallInTray(true); }
+using Shape = SimBodyDesc::Shape;
+TEST(SimConcave, BallLandsInsideDynamicTray) { expectBallInTray(false, Shape::Concave, Shape::Concave); }
+TEST(SimConcave, BallLandsInsideDynamicTrayOfConvexPieces) { expectBallInTray(false, Shape::Auto, Shape::ConvexPieces); }
+TEST(SimConcave, BallLandsInsideStaticTray) { expectBallInTray(true, Shape::Auto, Shape::Concave); }
 
 TEST(SimShape, AutoPicksHullForConvexAndConcaveForTray) {
   SimBodyDesc box = makeBox("box", {0.1, 0.05, 0.02}, 0.5);
   box.position_m = {0, 0, 0.5};
   SimBodyDesc tray = makeTray("tray", 0.2, 0.06, 0.01, 1000.0);
   tray.position_m = {1, 0, 0};
-  const SimResult r = run({box, tray}, settingsFor(0.01), "shape choice");
+  SimBodyDesc fixed_tray = tray;
+  fixed_tray.is_static = true;
+  fixed_tray.position_m = {-1, 0, 0};
+  const SimResult r = run({box, tray, fixed_tray}, settingsFor(0.01), "shape choice");
   EXPECT_EQ(r.shape_used[0], SimBodyDesc::Shape::ConvexHull);
-  EXPECT_EQ(r.shape_used[1], SimBodyDesc::Shape::Concave);
+  EXPECT_EQ(r.shape_used[1], SimBodyDesc::Shape::ConvexPieces);  // a moving concave body
+  EXPECT_GE(r.collision_pieces[1], 5u);  // a floor and four walls at least
+  EXPECT_EQ(r.shape_used[2], SimBodyDesc::Shape::Concave);       // a static one: its exact mesh
   EXPECT_GT(r.collision_margin_m[0], 0.0);
   // A small hull (polyhedral contacts on its bare points): 0.1% of the thinnest extent.
   EXPECT_LE(r.collision_margin_m[0], 0.001 * 0.02 + 1e-12);
@@ -707,13 +721,11 @@ TEST(SimImpactTime, DropFromRestMeetsTheGroundAtTheClosedFormTime) {
 
 // Two balls of equal mass meet head-on without gravity: they touch when the gap between their
 // surfaces has closed at the relative speed, and part with the momentum-conserving velocities
-// of restitution e (1.0 x 0.5), v_a,b = v_mean -/+ e (v_a - v_b) / 2. Both bodies carry the
+// of restitution e (the pair's, set for the two), v_a,b = v_mean -/+ e (v_a - v_b) / 2. Both bodies carry the
 // bounce from that moment, so their positions at the end are the closed form's too.
 TEST(SimImpactTime, HeadOnBallsMeetAndPartAtTheClosedFormTime) {
   SimBodyDesc a = makeSphere("a", 0.02, 0.26), b = makeSphere("b", 0.02, 0.26);
   const double radius = volumeRadius(a), e = 0.5, va = 1.3, vb = -1.1, end = 0.2;
-  a.restitution = 1.0;
-  b.restitution = e;
   a.position_m = {-0.1, 0, 0.5};
   b.position_m = {0.1, 0, 0.5};
   a.velocity_m_s = {va, 0, 0};
@@ -721,6 +733,7 @@ TEST(SimImpactTime, HeadOnBallsMeetAndPartAtTheClosedFormTime) {
   SimSettings settings = settingsFor(end);
   settings.gravity_m_s2 = {0, 0, 0};
   settings.ground = false;
+  settings.contact_pairs.push_back({0, 1, e, NAN});
   const SimResult r = run({a, b}, settings, "balls head-on");
   ASSERT_EQ(r.events.size(), 1u);
   const double t_meet = (0.2 - 2 * radius) / (va - vb);
@@ -733,35 +746,91 @@ TEST(SimImpactTime, HeadOnBallsMeetAndPartAtTheClosedFormTime) {
   EXPECT_NEAR(r.final_position_m[1][0], 0.1 + vb * t_meet + after_b * (end - t_meet), 1e-8);
 }
 
-// A ball with restitution e (ball 0.8 x ground 1.0, Bullet multiplies them) dropped from h meets
-// the ground at t1 = sqrt(2 h / g) and then after each flight of 2 v_k / g, v_k = e^k sqrt(2 g h):
-// the intervals shrink by e. Bullet alone bounces a ball found 0.6 mm above the ground 0.6 m/s
-// slower and from there (see Simulation::timeImpacts); each interval must match to 0.05 ms.
-TEST(SimImpactTime, BounceIntervalsShrinkByTheRestitution) {
-  const double e = 0.8, h = 0.1;
-  SimBodyDesc ball = makeSphere("ball", 0.02, 0.26);
+/// Times of a ball's impacts on the ground, for `settings` (restitution e of the ball-ground pair,
+/// however set): the first at t1 = sqrt(2 h / g), then after each flight of 2 v_k / g,
+/// v_k = e^k sqrt(2 g h): the intervals shrink by e. Each interval must match to 0.05 ms.
+void expectBounceIntervals(SimBodyDesc ball, SimSettings settings, double e, const char* label) {
+  const double h = 0.1;
   ball.position_m = {0, 0, h + volumeRadius(ball)};
-  ball.restitution = e;
-  SimSettings settings = settingsFor(1.0);
-  settings.ground_restitution = 1.0;
-  const SimResult r = run({ball}, settings, "bouncing ball, e = 0.8");
+  const SimResult r = run({ball}, settings, label);
   const std::vector<ContactEvent> hits = impacts(r, settings);
-  ASSERT_GE(hits.size(), 4u);
+  ASSERT_GE(hits.size(), 4u) << label;
   double t = std::sqrt(2 * h / kG), v = std::sqrt(2 * kG * h);
-  EXPECT_NEAR(hits[0].time_s, t, 0.05e-3);
+  EXPECT_NEAR(hits[0].time_s, t, 0.05e-3) << label;
   for (size_t k = 1; k < 4; ++k) {
     const double interval = 2 * e * v / kG;
     v *= e;
     t += interval;
-    std::printf("[ bounce   ] interval %zu: closed form %.6f s, stamped %.6f s, substeps %.6f s\n", k, interval,
-                hits[k].time_s - hits[k - 1].time_s, hits[k].step_time_s - hits[k - 1].step_time_s);
-    EXPECT_NEAR(hits[k].time_s - hits[k - 1].time_s, interval, 0.05e-3) << "interval " << k;
-    EXPECT_NEAR(hits[k].time_s, t, 0.1e-3) << "impact " << k;
+    std::printf("[ bounce   ] %s: interval %zu: closed form %.6f s, stamped %.6f s, substeps %.6f s\n", label, k,
+                interval, hits[k].time_s - hits[k - 1].time_s, hits[k].step_time_s - hits[k - 1].step_time_s);
+    EXPECT_NEAR(hits[k].time_s - hits[k - 1].time_s, interval, 0.05e-3) << label << ": interval " << k;
+    EXPECT_NEAR(hits[k].time_s, t, 0.1e-3) << label << ": impact " << k;
     // Its speed at the start of the substep is within a step of gravity of the closed form.
-    EXPECT_NEAR(hits[k].normal_speed_m_s, v, 2 * kG * settings.substep_s) << "impact " << k;
+    EXPECT_NEAR(hits[k].normal_speed_m_s, v, 2 * kG * settings.substep_s) << label << ": impact " << k;
   }
 }
 
+// Bullet alone bounces a ball found 0.6 mm above the ground 0.6 m/s slower and from there (see
+// Simulation::timeImpacts). The pair's restitution set for ball and ground wins over the bodies' own.
+TEST(SimImpactTime, BounceIntervalsShrinkByTheRestitution) {
+  SimBodyDesc ball = makeSphere("ball", 0.02, 0.26);
+  ball.restitution = 0.3;
+  SimSettings settings = settingsFor(1.0);
+  settings.ground_restitution = 0.2;
+  settings.contact_pairs.push_back({0, kGroundBody, 0.8, NAN});
+  expectBounceIntervals(ball, settings, 0.8, "pair e = 0.8");
+}
+
+// A material's restitution is that of the material on itself: two bodies of equal restitution
+// bounce with it, whatever their compliances (Bullet's product gave 0.7 x 0.7 = 0.49: a steel
+// ball on a glass plate stopped after 4 bounces in 0.46 s).
+TEST(SimContact, EqualRestitutionsBounceWithThatRestitution) {
+  SimBodyDesc ball = makeSphere("ball", 0.02, 0.26);
+  ball.restitution = 0.7;
+  ball.compliance_per_pa = (1 - 0.29 * 0.29) / 2e11;  // steel
+  SimSettings settings = settingsFor(1.2);
+  settings.ground_restitution = 0.7;
+  settings.ground_compliance_per_pa = (1 - 0.22 * 0.22) / 7e10;  // glass
+  expectBounceIntervals(ball, settings, 0.7, "0.7 on 0.7");
+}
+
+// The combination rules' limits and fixed points (sim.hpp, combineContact).
+TEST(SimContact, CombinationRules) {
+  const ContactSide steel{0.6, 0.4, (1 - 0.29 * 0.29) / 2e11}, glass{0.7, 0.4, (1 - 0.22 * 0.22) / 7e10};
+  // Same coefficients: the pair has them (any compliances).
+  EXPECT_NEAR(combineContact({0.7, 0.4, 1e-11}, {0.7, 0.4, 5e-10}).restitution, 0.7, 1e-12);
+  EXPECT_NEAR(combineContact(steel, {0.6, 0.4, 1e-9}).friction, 0.4, 1e-12);
+  // A body far more compliant than the other decides: rubber (E 5 MPa) on concrete (30 GPa).
+  const ContactSide rubber{0.8, 0.9, (1 - 0.49 * 0.49) / 5e6}, concrete{0.4, 0.6, (1 - 0.2 * 0.2) / 3e10};
+  EXPECT_NEAR(combineContact(rubber, concrete).restitution, 0.8, 1e-3);
+  // Equal compliances: the mean energy loss, e^2 = (e1^2 + e2^2) / 2.
+  EXPECT_NEAR(combineContact({0.6, 0.4, 1e-11}, {0.8, 0.4, 1e-11}).restitution, std::sqrt(0.5), 1e-12);
+  // Symmetric; the pair's restitution lies between the two.
+  const ContactCoefficients sg = combineContact(steel, glass), gs = combineContact(glass, steel);
+  EXPECT_EQ(sg.restitution, gs.restitution);
+  EXPECT_GT(sg.restitution, 0.6);
+  EXPECT_LT(sg.restitution, 0.7);
+  // Friction: the geometric mean; zero on either side makes the pair frictionless.
+  EXPECT_NEAR(combineContact({0.5, 0.9, 0}, {0.5, 0.4, 0}).friction, 0.6, 1e-12);
+  EXPECT_EQ(combineContact({0.5, 0.0, 0}, {0.5, 0.4, 0}).friction, 0.0);
+}
+
+// Friction of a pair: a box sliding on the ground at v0 stops after v0^2 / (2 mu g) (Coulomb).
+// The pair's friction set for box and ground wins over the bodies' own (0.1 and 0.9 here).
+TEST(SimContact, SlidingBoxStopsAtTheCoulombDistance) {
+  SimBodyDesc box = makeBox("block", {0.1, 0.1, 0.05}, 1.0);
+  box.position_m = {0, 0, 0.025};
+  const double v0 = 1.0, mu = 0.3;
+  box.velocity_m_s = {v0, 0, 0};
+  box.friction = 0.1;
+  SimSettings settings = settingsFor(1.0);
+  settings.ground_friction = 0.9;
+  settings.contact_pairs.push_back({0, kGroundBody, NAN, mu});
+  const SimResult r = run({box}, settings, "sliding box");
+  const double distance = v0 * v0 / (2 * mu * kG);
+  std::printf("[ slide    ] stopped after %.4f m, Coulomb %.4f m\n", r.final_position_m[0][0], distance);
+  EXPECT_NEAR(r.final_position_m[0][0], distance, 0.01 * distance);
+}
 
 }  // namespace
 }  // namespace strike

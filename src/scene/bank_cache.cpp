@@ -21,14 +21,21 @@ namespace fs = std::filesystem;
 // A crash can leave a write temporary behind; one older than this belongs to no live write.
 constexpr double kStaleTemporarySeconds = 86400.0;
 
+/// A cache entry: 16 hex digits and .modes (a bank) or .pieces (a body's convex pieces, written
+/// beside its bank by the render; pruned like banks, and recomputed when missing).
 bool isEntryName(const std::string& name) {
-  if (name.size() != 16 + 6 || name.compare(16, 6, ".modes") != 0) return false;
+  if (name.size() < 17) return false;
+  const std::string suffix = name.substr(16);
+  if (suffix != ".modes" && suffix != ".pieces") return false;
   for (size_t i = 0; i < 16; ++i)
     if (!std::isxdigit(static_cast<unsigned char>(name[i]))) return false;
   return true;
 }
 
-bool isTemporaryName(const std::string& name) { return name.size() > 22 && isEntryName(name.substr(0, 22)) && name.compare(22, 5, ".tmp-") == 0; }
+bool isTemporaryName(const std::string& name) {
+  const size_t tmp = name.find(".tmp-");
+  return tmp != std::string::npos && isEntryName(name.substr(0, tmp));
+}
 
 }  // namespace
 

@@ -77,6 +77,12 @@ int runCache(const std::vector<std::string>& raw_args) {
     if (action == "list") {
       std::printf("%-24s %10s  %-14s  %s\n", "bank", "size", "last used", "mesh, material, modes");
       for (const CacheEntry& e : *entries) {
+        const std::string name = e.path.substr(e.path.find_last_of('/') + 1);
+        if (name.size() > 7 && name.compare(name.size() - 7, 7, ".pieces") == 0) {
+          std::printf("%-24s %10s  %-14s  %s\n", name.c_str(), megabytes(e.bytes).c_str(), age(e.last_used, now).c_str(),
+                      "convex pieces of a concave moving body (docs/contact.md)");
+          continue;
+        }
         Result<BankFile> bank = BankFile::open(e.path);  // the header only: shapes are not read
         std::string what = "(unreadable: " + (bank ? std::string() : bank.error().message) + ")";
         if (bank) {
@@ -85,11 +91,10 @@ int runCache(const std::vector<std::string>& raw_args) {
                         bank->bank().material.name.c_str(), bank->bank().element_order == 2 ? 10 : 4, bank->bank().modeCount());
           what = text;
         }
-        const std::string name = e.path.substr(e.path.find_last_of('/') + 1);
         std::printf("%-24s %10s  %-14s  %s\n", name.c_str(), megabytes(e.bytes).c_str(), age(e.last_used, now).c_str(), what.c_str());
       }
     }
-    std::printf("%s: %zu banks, %s (%llu bytes)\n", dir.c_str(), entries->size(), megabytes(total).c_str(),
+    std::printf("%s: %zu files, %s (%llu bytes)\n", dir.c_str(), entries->size(), megabytes(total).c_str(),
                 static_cast<unsigned long long>(total));
     return 0;
   }

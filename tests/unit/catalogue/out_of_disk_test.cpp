@@ -153,9 +153,10 @@ TEST_F(OutOfDisk, RenderLeavesNoWavNoEventsAndNoCorruptCacheEntry) {
 TEST_F(OutOfDisk, RenderWhoseEventsDoNotFitLeavesNoWavEither) {
   std::ofstream(dir_ + "/scene.json") << kDropScene;
   const std::string out = dir_ + "/drop.wav", events = dir_ + "/events.csv";
-  const std::vector<std::string> args{"render", dir_ + "/scene.json", "--no-cache", "--quiet", "--events", events, "-o", out};
-  // The case holds only if the WAV (0.6 s of float at 48 kHz, 115 kB) fits and the events
-  // (every contact point of every step, about 250 kB at 1 ms steps) do not: the limit goes
+  const std::vector<std::string> args{"render", dir_ + "/scene.json", "--no-cache", "--quiet", "--rate", "8000",
+                                      "--events", events, "-o", out};
+  // The case holds only if the WAV (0.6 s of float at 8 kHz, 19 kB) fits and the events (every
+  // contact point of every step until the bodies sleep, about 90 kB at 1 ms steps) do not: the limit goes
   // half-way between the two sizes of a run with space (renders are deterministic), so the
   // case does not hang on how many contacts the simulation happens to record.
   ASSERT_EQ(runWithFileSizeLimit(args, RLIM_INFINITY).exit_code, 0);

@@ -262,7 +262,7 @@ TEST(NewcomerCache, ListSizeAndPruneByAgeAndSize) {
   makeEntry(cache + "/notes.txt", 500, 9 * 86400.0);  // not an entry: never touched
   CliResult size = runCli("cache size --cache '" + cache + "'");
   ASSERT_EQ(size.exit_code, 0) << size.err;
-  EXPECT_NE(size.out.find("3 banks, 0.0 MB (6000 bytes)"), std::string::npos) << size.out;
+  EXPECT_NE(size.out.find("3 files, 0.0 MB (6000 bytes)"), std::string::npos) << size.out;
   CliResult list = runCli("cache list --cache '" + cache + "'");
   ASSERT_EQ(list.exit_code, 0) << list.err;
   EXPECT_LT(list.out.find("0000000000000001"), list.out.find("0000000000000003")) << list.out;  // least recently used first

@@ -181,8 +181,14 @@ struct strike_context_s {
 };
 
 struct strike_bank_s {
+  /// The context it was loaded in: compared (objects take banks of their own context only),
+  /// never dereferenced, since a bank may outlive its context (strike.h).
   strike_context context;
   std::shared_ptr<const LoadedBank> data;
+  /// The context's free function, copied: strike_bank_destroy after strike_context_destroy
+  /// must not read the freed context.
+  strike_free_fn free_fn;
+  void* user;
 };
 
 namespace {
@@ -260,7 +266,7 @@ strike_status loadBank(strike_context ctx, const uint8_t* bytes, size_t size, co
   // The output convention: pressure / output_full_scale_pa (1.0 = 20 Pa by default, as the tools).
   for (double& w : loaded->pressure_weights) w /= ctx->config.output_full_scale_pa;
   void* mem = ctx->allocArray<strike_bank_s>(1);
-  *out = new (mem) strike_bank_s{ctx, std::move(loaded)};
+  *out = new (mem) strike_bank_s{ctx, std::move(loaded), ctx->config.free, ctx->config.user};
   ctx->last_error[0] = '\0';
   return STRIKE_OK;
 }
@@ -591,9 +597,10 @@ STRIKE_API strike_status STRIKE_CALL strike_bank_load_memory(strike_context ctx,
 
 STRIKE_API void STRIKE_CALL strike_bank_destroy(strike_bank bank) {
   if (!bank) return;
-  strike_context ctx = bank->context;
+  const strike_free_fn free_fn = bank->free_fn;
+  void* user = bank->user;
   bank->~strike_bank_s();
-  ctx->release(bank);
+  free_fn(user, bank);
 }
 
 STRIKE_API strike_status STRIKE_CALL strike_bank_get_info(strike_bank bank, strike_bank_info* out) {

@@ -19,6 +19,7 @@
 // (the Tet4 error dominates) but pessimistic by one to two orders of magnitude.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -59,26 +60,46 @@ Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, co
 /// and 1.72 at nu 0.4999.
 std::string lockingWarning(int order, const Material& material);
 
-/// One candidate tried by computeModeBankToTolerance.
+/// One step of computeModeBankToTolerance.
 struct ToleranceTrial {
-  int order = 1;
-  double target_edge_m = 0.0;
+  int order = 2;
+  double target_edge_m = 0.0;  ///< the requested edge, or the automatic mesh's mean edge
   size_t dofs = 0;
-  double seconds = 0.0;       ///< its precompute + error estimate
-  double max_estimate = 0.0;  ///< largest estimated relative error over kept modes
+  double seconds = 0.0;         ///< its precompute + error estimate
+  double max_estimate = 0.0;    ///< largest estimated relative error over kept modes
   bool met = false;
+  std::string method;           ///< of its error estimate
+  double forecast_seconds = 0;  ///< forecast before the step (0: none yet)
+  double forecast_bytes = 0;
+  double peak_bytes = 0;        ///< the process's peak resident memory after it
 };
 
 struct ToleranceResult {
-  PrecomputeResult chosen;
-  std::vector<ToleranceTrial> trials;  ///< in the order tried (cheapest first)
+  PrecomputeResult chosen;             ///< the last (finest) step's bank
+  std::vector<ToleranceTrial> trials;  ///< in the order tried (coarsest first)
   double total_seconds = 0.0;
-  bool met = false;                    ///< false: the finest candidate is returned, tolerance missed
+  bool met = false;                    ///< false: the finest step is returned, tolerance missed
+  bool stopped_by_budget = false;      ///< the next step's forecast exceeded max_bytes or max_seconds
+  std::string stop_reason;             ///< why it stopped unmet (budget, no finer mesh), empty when met
 };
 
-/// Tries element orders and resolutions from the cheapest (fewest unknowns) up, and returns the
-/// first whose estimated error meets `tolerance` (relative, e.g. 0.005) for every kept mode.
+/// The DOF of one refinement step are at most this many times the last step's.
+constexpr double kMaxDofGrowthPerStep = 3.0;
+constexpr int kMaxToleranceSteps = 8;
+
+struct ToleranceOptions {
+  double tolerance = 0.005;  ///< relative, e.g. 0.005 for 0.5%
+  double max_bytes = 0.0;    ///< memory budget; a step whose forecast exceeds it is not run (0: none)
+  double max_seconds = 0.0;  ///< time budget for all steps (0: none)
+  std::function<void(const std::string&)> log;  ///< one line before (forecast) and after each step
+};
+
+/// Refines a Tet10 mesh from the automatic one until every kept mode's estimated error meets
+/// `tolerance`: each step's DOF grow by what the last estimate asks for, 1.5x to 3x; before each
+/// step its time and memory are forecast from the last one, and a step that would exceed the
+/// budget is not run (the finest result so far is returned, stopped_by_budget says so).
 /// Needs a remeshable spec (primitive or surface file).
+Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& settings, const ToleranceOptions& options);
 Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& settings, double tolerance);
 
 }  // namespace strike

@@ -245,7 +245,13 @@ Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, co
     const double fine_edge = settings.target_edge_m > 0 ? settings.target_edge_m : meanEdge(fine);
     Result<SizedMesh> finer = meshWithTetRatio(settings.mesh_spec, fine.order, settings.max_tets,
                                                static_cast<double>(fine.tets.rows()), 1.2 * fine_edge, 1.7, 4.0, 2.5);
-    if (finer) {
+    // A finer solve past kMaxFinerEstimateDofs would cost more memory than the bank is worth
+    // estimating (~10 KB per DOF: 500k DOF ~ 5 GB); then the pessimistic bound below.
+    const bool affordable = finer && 3 * finer->loaded.mesh.nodes.rows() <= static_cast<Eigen::Index>(kMaxFinerEstimateDofs);
+    if (finer && !affordable)
+      report.note = "a finer mesh for the estimate would have " + std::to_string(3 * finer->loaded.mesh.nodes.rows()) +
+                    " DOF, more than " + std::to_string(kMaxFinerEstimateDofs);
+    if (affordable) {
       Result<CoarseSolve> solved = solveCoarse(finer->loaded.mesh, settings, modes, fine_max_hz);
       if (!solved) return solved.error();
       const double r = std::cbrt(static_cast<double>(finer->loaded.mesh.tets.rows()) / static_cast<double>(fine.tets.rows()));

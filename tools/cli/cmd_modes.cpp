@@ -36,8 +36,8 @@ CommandSpec modesSpec() {
       {"--rayleigh-stiffness", "A1", "Rayleigh damping a1 (s) in C = a1 K + a2 M; default 0 or the material's"},
       {"--rayleigh-mass", "A2", "Rayleigh damping a2 (1/s); default 0 or the material's"},
       {"--order", "1|2", "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default: from the\n"
-                         "shape: 2 when the wall (2 x volume / area) is under 10% of the largest extent (plates,\n"
-                         "shells, bars: Tet4 locks in bending, 108% off on a mug), else 1; the summary says why"},
+                         "                              shape: 2 when the wall (2 x volume / area) is under 10% of the largest extent (plates,\n"
+                         "                              shells, bars: Tet4 locks in bending, 108% off on a mug), else 1; the summary says why"},
       {"--size", "METRES", "target tet edge length; default: chosen from the object's size"},
       {"--max-freq", "HZ", "keep every mode up to this frequency; default 20000"},
       {"--max-modes", "N", "but at most N modes (lowest first); default 200, cap 100000"},
@@ -45,12 +45,12 @@ CommandSpec modesSpec() {
       {"--error-estimate", "", "estimate each mode's frequency error (default: on for primitives and surfaces)"},
       {"--no-error-estimate", "", "skip the error estimate"},
       {"--tolerance", "PCT", "refine a Tet10 mesh until every mode's estimated error is below PCT: 0.5% or 0.005\n"
-                             "(a bare number >= 0.1 is refused as ambiguous). Each step at most triples the DOF\n"
-                             "and is announced with its forecast time and memory"},
+                             "                              (a bare number >= 0.1 is refused as ambiguous). Each step at most triples the DOF\n"
+                             "                              and is announced with its forecast time and memory"},
       {"--max-memory", "BYTES", "with --tolerance: do not start a step forecast to need more (e.g. 4G, 500M);\n"
-                                "default: the memory available now (MemAvailable)"},
+                                "                              default: the memory available now (MemAvailable)"},
       {"--max-seconds", "S", "with --tolerance: do not start a step forecast to end later than S seconds\n"
-                             "after the start; default: no limit. A budget stop keeps the finest result and says so"},
+                             "                              after the start; default: no limit. A budget stop keeps the finest result and says so"},
       {"--quiet", "", "no progress or summary on stderr"},
       {"--list-materials", "", "print the material table with sources and exit"},
   };

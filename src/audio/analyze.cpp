@@ -691,8 +691,6 @@ AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& optio
       for (const double v : part.x) part.peak = std::max(part.peak, std::fabs(v));
       if (!(part.peak > 0.0)) continue;
       const std::vector<Line> found = findLines(part, audio.sample_rate_hz, options);
-      if (getenv("DBG")) { fprintf(stderr, "seg %zu-%zu (%.3f s)\n", s.begin, s.end, (s.end-s.begin)/audio.sample_rate_hz);
-        for (auto& l : found) fprintf(stderr, "   %10.2f %8.2f dBFS d %8.2f merge %.1f\n", l.peak.freq_hz, l.peak.level_dbfs, l.peak.decay_per_s, l.merge_hz); }
       lines.insert(lines.end(), found.begin(), found.end());
     }
     analysis.peaks = mergeSegmentLines(std::move(lines), options);

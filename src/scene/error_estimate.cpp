@@ -380,10 +380,10 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     trial_settings.target_edge_m = edge;
     const size_t dofs = 3 * static_cast<size_t>(loaded.mesh.nodes.rows());
     // Forecast: the last step's time and peak memory scaled by the DOF ratio, as t ~ n^1.5 and
-    // memory ~ n^1.2 (measured on the mug, Tet10 with its error estimate: 47k -> 118k DOF took
-    // 2.9x the time and 2.4x the memory). Before any step: 16 KB per DOF (11.6 measured), time
-    // unknown.
-    double forecast_s = 0.0, forecast_bytes = 16e3 * static_cast<double>(dofs);
+    // memory ~ n^1.2 (measured on the mug, Tet10: 47k -> 118k DOF took 2.9x the time and 2.4x
+    // the memory). Before any step: 30 KB per DOF (the mug's first step with its finer-mesh
+    // estimate peaked at 1.42 GB for 47k DOF; without it 11.6 KB per DOF), time unknown.
+    double forecast_s = 0.0, forecast_bytes = 30e3 * static_cast<double>(dofs);
     if (!out.trials.empty()) {
       const ToleranceTrial& last = out.trials.back();
       const double growth = static_cast<double>(dofs) / static_cast<double>(last.dofs);

@@ -404,8 +404,8 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     std::string over;
     if (options.max_bytes > 0 && forecast_bytes > options.max_bytes)
       over = "its forecast memory " + gigabytes(forecast_bytes) + " exceeds --max-memory " + gigabytes(options.max_bytes);
-    else if (options.max_seconds > 0 && elapsed + forecast_s > options.max_seconds) {
-      std::snprintf(line, sizeof line, "%.0f s spent + %.0f s forecast exceeds --max-seconds %.0f", elapsed, forecast_s,
+    else if (options.max_seconds > 0 && forecast_s > 0 && elapsed + forecast_s > options.max_seconds) {
+      std::snprintf(line, sizeof line, "%.1f s spent + %.1f s forecast exceeds --max-seconds %g", elapsed, forecast_s,
                     options.max_seconds);
       over = line;
     }
@@ -432,6 +432,11 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     const std::vector<double>& e = trial->bank.frequency_error_estimate;
     t.max_estimate = e.empty() ? INFINITY : *std::max_element(e.begin(), e.end());
     t.met = !e.empty() && t.max_estimate <= tolerance;
+    if (trial->bank.modeCount() == 0) {  // nothing in the band to be wrong: refining cannot help
+      t.met = true;
+      t.max_estimate = 0.0;
+      say("step " + std::to_string(step + 1) + ": no modes in the band, nothing to refine");
+    }
     std::snprintf(line, sizeof line, "step %d: %.1f s, peak %s, max est. error %.3g%% (%s)%s", step + 1, t.seconds,
                   gigabytes(t.peak_bytes).c_str(), 100.0 * t.max_estimate, t.method.c_str(), t.met ? ": met" : "");
     say(line);

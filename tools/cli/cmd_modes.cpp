@@ -231,11 +231,12 @@ Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSe
     return badInput("--max-seconds = " + args.text("--max-seconds") + " (must be > 0)");
   options.max_seconds = *seconds;
   if (!quiet) {
+    char seconds_text[32];
+    std::snprintf(seconds_text, sizeof seconds_text, "%g", options.max_seconds);
     std::fprintf(stderr, "strike modes: tolerance %.3g%%, budget %s memory%s, %s\n", 100.0 * *tolerance,
                  options.max_bytes > 0 ? (std::to_string(options.max_bytes / 1e9).substr(0, 5) + " GB").c_str() : "no",
                  args.has("--max-memory") ? "" : (options.max_bytes > 0 ? " (available now)" : ""),
-                 options.max_seconds > 0 ? (std::to_string(static_cast<long long>(options.max_seconds)) + " s").c_str()
-                                         : "no time limit");
+                 options.max_seconds > 0 ? (std::string(seconds_text) + " s").c_str() : "no time limit");
     options.log = [](const std::string& line) { std::fprintf(stderr, "strike modes: %s\n", line.c_str()); };
   }
   Result<ToleranceResult> chosen = computeModeBankToTolerance(settings, options);

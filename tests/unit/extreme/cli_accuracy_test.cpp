@@ -124,7 +124,7 @@ TEST(CliAccuracy, DefaultOrderIsTet10ForAThinWalledCup) {
 
 // Issue 15 item 3: "--tolerance 0.5" meant 50% silently; a bare number >= 0.1 is refused,
 // naming it. A budget stops the refinement before a step that would not fit: with
-// --max-seconds 1 the first step runs (nothing to forecast from yet) and the second is not
+// --max-seconds 0.01 the first step runs (nothing to forecast from yet) and the second is not
 // started; the finest result is written and the summary says the tolerance was not met and why.
 // A memory budget below the first step's forecast is an error, and nothing is written.
 TEST(CliAccuracy, ToleranceRefusesAmbiguousValuesAndStopsAtTheBudget) {
@@ -134,11 +134,11 @@ TEST(CliAccuracy, ToleranceRefusesAmbiguousValuesAndStopsAtTheBudget) {
   EXPECT_FALSE(std::ifstream(::testing::TempDir() + "/a.modes").good());
 
   const test::CliResult stopped =
-      runCli("modes box:0.05,0.04,0.03 --material porcelain --max-modes 2 --tolerance 0.01% --max-seconds 1 -o " + temp("b.modes"));
+      runCli("modes box:0.1,0.015,0.01 --material porcelain --max-modes 2 --tolerance 0.0001% --max-seconds 0.01 -o " + temp("b.modes"));
   ASSERT_EQ(stopped.exit_code, 0) << stopped.err;
   EXPECT_NE(stopped.err.find("step 1: Tet10"), std::string::npos) << stopped.err;
   EXPECT_NE(stopped.err.find("stopped before step 2"), std::string::npos) << stopped.err;
-  EXPECT_NE(stopped.err.find("exceeds --max-seconds 1"), std::string::npos) << stopped.err;
+  EXPECT_NE(stopped.err.find("exceeds --max-seconds 0.01"), std::string::npos) << stopped.err;
   EXPECT_NE(stopped.err.find("tolerance NOT met"), std::string::npos) << stopped.err;
   EXPECT_TRUE(std::ifstream(::testing::TempDir() + "/b.modes").good());
 

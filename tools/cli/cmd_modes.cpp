@@ -7,7 +7,10 @@
 #include "commands.hpp"
 #include "output_check.hpp"
 #include "progress_reporter.hpp"
+#include "strike/bank_cache.hpp"
+#include "strike/element_order.hpp"
 #include "strike/error_estimate.hpp"
+#include "strike/mesh.hpp"
 #include "strike/materials.hpp"
 #include "strike/precompute.hpp"
 
@@ -34,7 +37,9 @@ CommandSpec modesSpec() {
       {"--density", "KG_M3", "density, kg/m^3"},
       {"--rayleigh-stiffness", "A1", "Rayleigh damping a1 (s) in C = a1 K + a2 M; default 0 or the material's"},
       {"--rayleigh-mass", "A2", "Rayleigh damping a2 (1/s); default 0 or the material's"},
-      {"--order", "1|2", "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default 1"},
+      {"--order", "1|2", "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default: from the\n"
+                         "                              shape: 2 when the wall (2 x volume / area) is under 10% of the largest extent (plates,\n"
+                         "                              shells, bars: Tet4 locks in bending, 108% off on a mug), else 1; the summary says why"},
       {"--size", "METRES", "target tet edge length; default: chosen from the object's size"},
       {"--units", "m|cm|mm", "unit of a mesh file's coordinates (not of primitives); default m"},
       {"--max-freq", "HZ", "keep every mode up to this frequency; default 20000"},
@@ -42,7 +47,13 @@ CommandSpec modesSpec() {
       {"--max-tets", "N", "refuse meshes with more tets than this (memory and time cap); default 2000000"},
       {"--error-estimate", "", "estimate each mode's frequency error (default: on for primitives and surfaces)"},
       {"--no-error-estimate", "", "skip the error estimate"},
-      {"--tolerance", "PCT", "pick the cheapest order and --size whose estimated error is below PCT (e.g. 0.5%)"},
+      {"--tolerance", "PCT", "refine a Tet10 mesh until every mode's estimated error is below PCT: 0.5% or 0.005\n"
+                             "(a bare number >= 0.1 is refused as ambiguous). Each step at most triples the DOF\n"
+                             "and is announced with its forecast time and memory"},
+      {"--max-memory", "BYTES", "with --tolerance: do not start a step forecast to need more (e.g. 4G, 500M);\n"
+                                "default: the memory available now (MemAvailable)"},
+      {"--max-seconds", "S", "with --tolerance: do not start a step forecast to end later than S seconds\n"
+                             "after the start; default: no limit. A budget stop keeps the finest result and says so"},
       {"--compact", "", "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
                         "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
       {"--quiet", "", "no progress or summary on stderr"},
@@ -51,6 +62,7 @@ CommandSpec modesSpec() {
   spec.examples =
       "  strike modes box:0.3,0.02,0.02 --material steel --order 2 -o bar.modes\n"
       "  strike modes assets/meshes/bowl.obj --material ceramic -o bowl.modes\n"
+      "  strike modes assets/meshes/mug.obj --material porcelain --tolerance 0.5% --max-memory 4G -o mug.modes\n"
       "  strike modes part.msh --youngs 7e10 --poisson 0.33 --density 2700 -o part.modes\n";
   spec.min_positional = 0;
   spec.max_positional = 1;
@@ -155,28 +167,87 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
   std::fprintf(stderr, "  wrote       %s\n", output.c_str());
 }
 
-/// `--tolerance PCT`: the cheapest order and size whose estimated error meets PCT for every
-/// kept mode (src/scene/error_estimate.cpp); prints what it tried, chose and what it cost.
-Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSettings& settings, bool quiet) {
-  std::string text = args.text("--tolerance");
+/// --tolerance: "0.5%" or "0.005". A bare number >= 0.1 is refused: "0.5" is 50% to the
+/// parser and half a percent to whoever typed it (issue 15).
+Result<double> parseTolerance(const std::string& raw) {
+  std::string text = raw;
   const bool percent = !text.empty() && text.back() == '%';
   if (percent) text.pop_back();
   Result<double> value = parseNumber(text, "--tolerance");
   if (!value) return value.error();
+  if (!percent && *value >= 0.1)
+    return badInput("--tolerance = " + raw + " is ambiguous: write " + raw + "% for " + raw +
+                    " percent, or a fraction below 0.1 (0.005 = 0.5%)");
   const double tolerance = percent ? *value / 100.0 : *value;
+  if (!(tolerance > 0 && tolerance < 1)) return badInput("--tolerance = " + raw + " (must be between 0 and 100%)");
+  return tolerance;
+}
+
+/// MemAvailable from /proc/meminfo, bytes; 0 when it cannot be read (then no memory budget).
+double availableMemoryBytes() {
+  std::FILE* file = std::fopen("/proc/meminfo", "r");
+  if (!file) return 0.0;
+  char line[256];
+  double bytes = 0.0;
+  while (std::fgets(line, sizeof line, file)) {
+    unsigned long long kib = 0;
+    if (std::sscanf(line, "MemAvailable: %llu kB", &kib) == 1) {
+      bytes = 1024.0 * static_cast<double>(kib);
+      break;
+    }
+  }
+  std::fclose(file);
+  return bytes;
+}
+
+/// `--tolerance PCT`: refine until the estimated error meets PCT for every kept mode, within
+/// the memory and time budgets (src/scene/error_estimate.cpp); prints each step's forecast
+/// before it runs, what it cost, and how it ended.
+Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSettings& settings, bool quiet) {
+  Result<double> tolerance = parseTolerance(args.text("--tolerance"));
+  if (!tolerance) return tolerance.error();
   if (args.has("--order") || args.has("--size"))
     return badInput("--tolerance chooses --order and --size itself; give one or the other");
   if (args.has("--no-error-estimate")) return badInput("--tolerance needs the error estimate; drop --no-error-estimate");
-  Result<ToleranceResult> chosen = computeModeBankToTolerance(settings, tolerance);
+  ToleranceOptions options;
+  options.tolerance = *tolerance;
+  if (args.has("--max-memory")) {
+    // The same sizes as `strike cache` and `render --cache-max-size` (K, M, G, T: powers of 1024).
+    Result<uint64_t> bytes = parseByteSize(args.text("--max-memory"), "--max-memory");
+    if (!bytes) return bytes.error();
+    if (*bytes == 0) return badInput("--max-memory = " + args.text("--max-memory") + " (must be > 0, e.g. 4G or 500M)");
+    options.max_bytes = static_cast<double>(*bytes);
+  } else {
+    options.max_bytes = availableMemoryBytes();
+  }
+  Result<double> seconds = args.number("--max-seconds", 0.0);
+  if (!seconds) return seconds.error();
+  if (args.has("--max-seconds") && !(*seconds > 0))
+    return badInput("--max-seconds = " + args.text("--max-seconds") + " (must be > 0)");
+  options.max_seconds = *seconds;
+  if (!quiet) {
+    char seconds_text[32];
+    std::snprintf(seconds_text, sizeof seconds_text, "%g", options.max_seconds);
+    std::fprintf(stderr, "strike modes: tolerance %.3g%%, budget %s memory%s, %s\n", 100.0 * *tolerance,
+                 options.max_bytes > 0 ? (std::to_string(options.max_bytes / 1e9).substr(0, 5) + " GB").c_str() : "no",
+                 args.has("--max-memory") ? "" : (options.max_bytes > 0 ? " (available now)" : ""),
+                 options.max_seconds > 0 ? (std::string(seconds_text) + " s").c_str() : "no time limit");
+    options.log = [](const std::string& line) { std::fprintf(stderr, "strike modes: %s\n", line.c_str()); };
+  }
+  Result<ToleranceResult> chosen = computeModeBankToTolerance(settings, options);
   if (!chosen) return chosen.error();
   if (!quiet) {
     for (const ToleranceTrial& t : chosen->trials)
       std::fprintf(stderr, "strike modes: tolerance %.3g%%: Tet%d, size %.4g m, %zu DOF, %.2f s, max est. error %.3g%%%s\n",
-                   100.0 * tolerance, t.order == 2 ? 10 : 4, t.target_edge_m, t.dofs, t.seconds, 100.0 * t.max_estimate,
+                   100.0 * *tolerance, t.order == 2 ? 10 : 4, t.target_edge_m, t.dofs, t.seconds, 100.0 * t.max_estimate,
                    t.met ? "  <- chosen" : "");
-    std::fprintf(stderr, "strike modes: tolerance %s after %zu tries, %.2f s in all\n",
-                 chosen->met ? "met" : "NOT met by the finest candidate (kept it)", chosen->trials.size(),
-                 chosen->total_seconds);
+    if (chosen->met)
+      std::fprintf(stderr, "strike modes: tolerance met after %zu steps, %.2f s in all\n", chosen->trials.size(),
+                   chosen->total_seconds);
+    else
+      std::fprintf(stderr, "strike modes: tolerance NOT met: %s; kept the finest result (max est. error %.3g%%), %.2f s in all\n",
+                   chosen->stop_reason.empty() ? "no step met it" : chosen->stop_reason.c_str(),
+                   100.0 * chosen->trials.back().max_estimate, chosen->total_seconds);
   }
   settings.order = chosen->trials.back().order;
   settings.target_edge_m = chosen->trials.back().target_edge_m;
@@ -234,6 +305,22 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (*max_tets < 1) return reportError("modes", badInput("--max-tets = " + args.text("--max-tets") + " (must be >= 1)"));
   settings.max_tets = *max_tets;
 
+  for (const char* option : {"--max-memory", "--max-seconds"})
+    if (args.has(option) && !args.has("--tolerance"))
+      return reportError("modes", badInput(std::string(option) + " is a budget for --tolerance; give --tolerance too"));
+  // No --order: Tet10 for thin shapes, Tet4 for solids (src/scene/element_order.cpp), judged on
+  // the automatic Tet4 mesh (one extra meshing). Tet files keep their own order.
+  std::string order_reason;
+  if (!args.has("--order") && !args.has("--tolerance") && canRemesh(settings.mesh_spec)) {
+    MeshOptions probe_options;
+    probe_options.max_tets = settings.max_tets;
+    Result<LoadedMesh> probe = loadTetMesh(settings.mesh_spec, probe_options);
+    if (!probe) return reportError("modes", probe.error());
+    const OrderChoice choice = chooseElementOrder(probe->mesh);
+    settings.order = choice.order;
+    order_reason = "Tet" + std::string(choice.order == 2 ? "10" : "4") + " chosen: " + choice.reason + " (--order to override)";
+  }
+
   if (args.has("--error-estimate") && args.has("--no-error-estimate"))
     return reportError("modes", badInput("--error-estimate and --no-error-estimate contradict each other"));
   // Default: on when the mesh can be coarsened (Richardson, ~10-25% extra; see
@@ -253,7 +340,10 @@ int runModes(const std::vector<std::string>& raw_args) {
   const std::string output = args.text("-o");
   Status written = writeBank(output, result->bank, args.has("--compact") ? ShapeEncoding::Int16 : ShapeEncoding::Float32);
   if (!written) return reportError("modes", written.error());
-  if (!quiet) printSummary(settings, *result, output);
+  if (!quiet) {
+    printSummary(settings, *result, output);
+    if (!order_reason.empty()) std::fprintf(stderr, "  order       %s\n", order_reason.c_str());
+  }
   return 0;
 }
 

@@ -284,7 +284,29 @@ def glass_obj(segments=40):
     return revolve_obj(prof, segments, "drinking glass, 6.4 cm diameter, 9 cm tall, 2.5 mm walls")
 
 
+def mug_obj(segments=48, outer_r=0.04, height=0.11, wall=0.004, base=0.006, name="mug", n_wall=11):
+    """A mug without handle (an open cylinder shell on a flat bottom): 8 cm across, 11 cm tall,
+    4 mm wall, 6 mm base -- the thin-walled shape of issue 15 (wall / size = 0.036)."""
+    prof = [(0.0, 0.0), (outer_r * 0.5, 0.0), (outer_r, 0.0)]
+    for i in range(1, n_wall + 1):  # outer wall, straight
+        prof.append((outer_r, height * i / n_wall))
+    prof.append((outer_r - wall, height))  # flat rim
+    for i in range(n_wall - 1, -1, -1):  # inner wall down to the base
+        prof.append((outer_r - wall, base + (height - base) * i / n_wall))
+    prof += [((outer_r - wall) * 0.5, base), (0.0, base)]
+    return revolve_obj(prof, segments, "%s: %.0f cm across, %.0f cm tall, %.1f mm wall, %.0f mm base" %
+                       (name, 200 * outer_r, 100 * height, 1000 * wall, 1000 * base))
+
+
 def main():
+    mug, ntris = mug_obj()
+    write(os.path.join(ASSETS, "mug.obj"), mug)
+    print("mug.obj: %d triangles" % ntris)
+    # Small thin-walled cup for fast tests (3.5k tets): 4 cm across and tall, 3 mm wall (2 V / A =
+    # 3 mm, 7.5% of the extent), coarsely faceted.
+    cup, ntris = mug_obj(segments=12, outer_r=0.02, height=0.04, wall=0.003, base=0.004, name="small cup", n_wall=2)
+    write(os.path.join(DATA, "thin_cup.obj"), cup)
+    print("thin_cup.obj: %d triangles" % ntris)
     bowl, ntris = bowl_obj()
     write(os.path.join(ASSETS, "bowl.obj"), bowl)
     print("bowl.obj: %d triangles" % ntris)

@@ -34,7 +34,7 @@ struct PrecomputeReport {
   bool capped_by_max_modes = false;
   int operator_applications = 0;
   // The frequency error estimate (settings.error_estimate): method, extra time, caveats.
-  std::string error_estimate_method;  ///< "richardson", "tet4-corner" or empty (none)
+  std::string error_estimate_method;  ///< "richardson", "richardson-finer", "tet4-corner" or empty (none)
   std::string error_estimate_note;
   double error_estimate_seconds = 0.0;
   double error_estimate_ratio = 0.0;  ///< h_coarse / h_fine of the Richardson pair

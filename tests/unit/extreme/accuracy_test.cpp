@@ -11,6 +11,8 @@
 
 #include "common/beam_theory.hpp"
 #include "extreme/lamb_sphere.hpp"
+#include "strike/element_order.hpp"
+#include "strike/mesh.hpp"
 #include "strike/precompute.hpp"
 
 namespace strike {
@@ -162,6 +164,64 @@ TEST(ErrorEstimate, ThickPlateTet4WithOneCoarseLayerIsUnknown) {
   const PrecomputeResult r = plate(1, 0.005);
   ASSERT_EQ(r.bank.frequency_error_estimate.size(), r.bank.modeCount()) << r.report.error_estimate_note;
   for (double e : r.bank.frequency_error_estimate) EXPECT_EQ(e, 1.0);
+}
+
+Material porcelain() {
+  Material m;
+  m.name = "porcelain";
+  m.youngs_pa = 7.0e10;
+  m.poisson = 0.22;
+  m.density_kg_m3 = 2400;
+  return m;
+}
+
+const std::string kThinCup = std::string(STRIKE_SOURCE_DIR) + "/tests/data/mesh/thin_cup.obj";
+
+// Issue 15: a thin-walled cup (4 cm, 3 mm wall; tools/dev/make_mesh_assets.py). Its automatic
+// mesh is as coarse as its walls allow, so no coarser mesh exists, and the estimate fell back to
+// Tet4 on the Tet10 corners: 88% for a true 2.3% (the mug of the issue: 105% for 0.55%).
+// Now a finer mesh is solved instead. Reference: Tet10 at --size 0.0018, 71.5k tets (20x the
+// tested mesh's 3.5k), 359k DOF: `strike modes tests/data/mesh/thin_cup.obj --material porcelain
+// --order 2 --size 0.0018 --max-modes 4 --no-error-estimate`. Expectation: the estimate covers
+// the true error and is within 5x of it (measured: 3.77% for 1.46%, 2.6x).
+TEST(ErrorEstimate, ThinWalledCupTet10WithinASmallFactor) {
+  const double reference_hz[] = {6730.172, 6730.548};
+  const PrecomputeResult r = compute(kThinCup, 2, porcelain(), 20000.0, 2);
+  ASSERT_EQ(r.bank.frequency_error_estimate.size(), 2u) << r.report.error_estimate_note;
+  EXPECT_EQ(r.report.error_estimate_method, "richardson-finer") << r.report.error_estimate_note;
+  for (size_t i = 0; i < 2; ++i) {
+    const double truth = std::abs(r.bank.frequencyHz(i) - reference_hz[i]) / reference_hz[i];
+    const double estimate = r.bank.frequency_error_estimate[i];
+    std::printf("    mode %zu: %.3f Hz, true error %.3f%%, estimate %.3f%% (%.2fx)\n", i, r.bank.frequencyHz(i), 100 * truth,
+                100 * estimate, estimate / truth);
+    EXPECT_GE(estimate, truth) << "mode " << i;
+    EXPECT_LE(estimate, 5.0 * truth) << "mode " << i;
+  }
+}
+
+// Issue 15 item 13: the default order follows the wall. 2 V / A is the thickness of a flat wall
+// (a plate 4 mm thick: 3.85 mm, its edges add area) and L / 3 for a cube.
+TEST(ElementOrder, ThinShapesGetTet10AndSolidsTet4) {
+  struct Case {
+    std::string spec;
+    int order;
+    double wall_m;
+  };
+  const Case cases[] = {{kThinCup, 2, 0.0},
+                        {"box:0.2,0.2,0.004", 2, 2.0 * 0.2 * 0.2 * 0.004 / (2 * 0.2 * 0.2 + 4 * 0.2 * 0.004)},
+                        {"box:0.3,0.02,0.02", 2, 0.0},
+                        {"box:0.1,0.1,0.1", 1, 0.1 / 3.0},
+                        {"sphere:0.05", 1, 0.0}};
+  for (const Case& c : cases) {
+    Result<LoadedMesh> mesh = loadTetMesh(c.spec, MeshOptions{});
+    ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+    const OrderChoice choice = chooseElementOrder(mesh->mesh);
+    std::printf("    %s: %s\n", c.spec.c_str(), choice.reason.c_str());
+    EXPECT_EQ(choice.order, c.order) << c.spec << ": " << choice.reason;
+    if (c.wall_m > 0) {
+      EXPECT_NEAR(choice.wall_m, c.wall_m, 1e-6 * c.wall_m) << c.spec;
+    }
+  }
 }
 
 }  // namespace

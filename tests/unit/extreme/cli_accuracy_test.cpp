@@ -110,5 +110,44 @@ TEST(CliAccuracy, BenchLeftOutCostsNothingAudible) {
   EXPECT_LT(level_db, 0.1) << comment;
 }
 
+const std::string kThinCup = "'" + std::string(STRIKE_SOURCE_DIR) + "/tests/data/mesh/thin_cup.obj'";
+
+// Issue 15 item 13: without --order a thin-walled cup gets Tet10, and the summary says why
+// (the old default, Tet4, was 108% off on a mug).
+TEST(CliAccuracy, DefaultOrderIsTet10ForAThinWalledCup) {
+  const test::CliResult r =
+      runCli("modes " + kThinCup + " --material porcelain --max-modes 2 --no-error-estimate -o " + temp("cup.modes"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("tets (Tet10)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("Tet10 chosen: wall"), std::string::npos) << r.err;
+}
+
+// Issue 15 item 3: "--tolerance 0.5" meant 50% silently; a bare number >= 0.1 is refused,
+// naming it. A budget stops the refinement before a step that would not fit: with
+// --max-seconds 0.01 the first step runs (nothing to forecast from yet) and the second is not
+// started; the finest result is written and the summary says the tolerance was not met and why.
+// A memory budget below the first step's forecast is an error, and nothing is written.
+TEST(CliAccuracy, ToleranceRefusesAmbiguousValuesAndStopsAtTheBudget) {
+  const test::CliResult ambiguous = runCli("modes " + kThinCup + " --material porcelain --tolerance 0.5 -o " + temp("a.modes"));
+  EXPECT_EQ(ambiguous.exit_code, 1);
+  EXPECT_NE(ambiguous.err.find("--tolerance = 0.5 is ambiguous"), std::string::npos) << ambiguous.err;
+  EXPECT_FALSE(std::ifstream(::testing::TempDir() + "/a.modes").good());
+
+  const test::CliResult stopped =
+      runCli("modes box:0.1,0.015,0.01 --material porcelain --max-modes 2 --tolerance 0.0001% --max-seconds 0.01 -o " + temp("b.modes"));
+  ASSERT_EQ(stopped.exit_code, 0) << stopped.err;
+  EXPECT_NE(stopped.err.find("step 1: Tet10"), std::string::npos) << stopped.err;
+  EXPECT_NE(stopped.err.find("stopped before step 2"), std::string::npos) << stopped.err;
+  EXPECT_NE(stopped.err.find("exceeds --max-seconds 0.01"), std::string::npos) << stopped.err;
+  EXPECT_NE(stopped.err.find("tolerance NOT met"), std::string::npos) << stopped.err;
+  EXPECT_TRUE(std::ifstream(::testing::TempDir() + "/b.modes").good());
+
+  const test::CliResult no_room =
+      runCli("modes " + kThinCup + " --material porcelain --tolerance 0.5% --max-memory 1M -o " + temp("c.modes"));
+  EXPECT_EQ(no_room.exit_code, 1);
+  EXPECT_NE(no_room.err.find("exceeds --max-memory"), std::string::npos) << no_room.err;
+  EXPECT_FALSE(std::ifstream(::testing::TempDir() + "/c.modes").good());
+}
+
 }  // namespace
 }  // namespace strike

@@ -64,6 +64,12 @@ SampleEncoding encodingNamed(const std::string& format) {
   raise(badInput("format = '" + format + "' (expected pcm16, pcm24 or float)"));
 }
 
+std::string hex64(uint64_t value) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
+  return text;
+}
+
 py::dict materialDict(const Material& m) {
   py::dict d;
   d["name"] = m.name;
@@ -73,12 +79,6 @@ py::dict materialDict(const Material& m) {
   d["rayleigh_stiffness"] = m.rayleigh_stiffness;
   d["rayleigh_mass"] = m.rayleigh_mass;
   return d;
-}
-
-std::string hex64(uint64_t value) {
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
-  return text;
 }
 
 /// A str or os.PathLike argument as a path string.
@@ -127,6 +127,17 @@ py::dict reportDict(const PyRenderResult& r) {
   d["frames"] = r.result.audio.frames();
   d["channels"] = r.result.audio.channels;
   d["bodies"] = r.result.body_names;
+  py::list banks;
+  for (size_t i = 0; i < r.result.banks.size(); ++i) {
+    const BodyBank& b = r.result.banks[i];
+    py::dict entry;
+    entry["body"] = r.result.body_names[i];
+    entry["cache_key"] = b.cache_key ? py::object(py::str(hex64(b.cache_key))) : py::object(py::none());
+    entry["given"] = b.given_path.empty() ? py::object(py::none()) : py::object(py::str(b.given_path));
+    entry["sounded"] = b.sounded;
+    banks.append(entry);
+  }
+  d["banks"] = banks;
   d["objects"] = s.objects;
   d["objects_struck"] = s.objects_struck;
   d["objects_sounded"] = s.objects_sounded;

@@ -539,6 +539,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   report.mode_samples = stats.mode_samples;
   report.max_active_modes = stats.max_active_modes;
   report.synthesize_seconds = secondsSince(synth_start);
+  for (const Body& body : bodies)
+    result.banks.push_back({body.object->bank.empty() ? body.cache_key : 0, body.object->bank, body.sounded});
   report.total_seconds = secondsSince(start);
   return result;
 }

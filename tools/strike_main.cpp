@@ -23,6 +23,7 @@ const char kUsage[] =
     "  info BANK.modes [--json]       show a mode bank: frequencies, decay, T60, mass\n"
     "  hit BANK.modes -o OUT.wav      strike an object once and render the sound\n"
     "  analyze AUDIO.wav [--json]     spectral peaks, levels and decay rates of a sound\n"
+    "  batch MANIFEST.jsonl -o DIR    render a manifest of scenes on Dask (--workers N, --scheduler, --shard K/N)\n"
     "  bench accuracy -o DIR          accuracy study: FEM and synthesis error against run time (CSV, SVG)\n"
     "  bench leftout SCENE.json -o DIR what leaving out saves: time and audio against rendering everything\n"
     "  bench render SCENE.json -o DIR render speed per phase against a baseline run (CSV)\n"
@@ -52,6 +53,7 @@ int main(int argc, char** argv) {
     if (command == "info") return strike::cli::runInfo(args);
     if (command == "hit") return strike::cli::runHit(args);
     if (command == "analyze") return strike::cli::runAnalyze(args);
+    if (command == "batch") return strike::cli::runBatch(args);
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "strike %s: error: out of memory\n", command.c_str());
     return 2;

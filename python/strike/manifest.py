@@ -6,7 +6,9 @@ Each line is a JSON object with exactly one of:
     "scene":    a scene file path or a scene dict;
     "template": a scene file path or dict in which every string "${NAME}" (the whole string) is
                 replaced by the value of "parameters": {"NAME": value, ...} (any JSON value);
-    "random":   a random spec file path or dict (strike.random_scenes) with "seed" and "index";
+    "random":   a random spec file path or dict (strike.random_scenes) with "seed" and either
+                "index" (one scene) or "count" (scenes "first" (default 0) to first+count-1, ids
+                ID-000000, ID-000001, ... after the index: a dataset of 10^5 scenes is one line);
 
 and optionally "id" (the output name, [A-Za-z0-9._-], default the line number as 000001),
 "rate", "duration", "gain" (override the scene's), "seed" (recorded; required with "random").
@@ -25,7 +27,7 @@ from typing import Any, Optional
 from .random_scenes import SpecError, draw_scene
 
 _ID = re.compile(r"^[A-Za-z0-9._-]{1,200}$")
-_KEYS = {"id", "scene", "template", "parameters", "random", "seed", "index", "rate", "duration", "gain"}
+_KEYS = {"id", "scene", "template", "parameters", "random", "seed", "index", "count", "first", "rate", "duration", "gain"}
 _PLACEHOLDER = re.compile(r"^\$\{([A-Za-z_][A-Za-z0-9_]*)\}$")
 
 
@@ -104,8 +106,26 @@ def _number(line: dict, key: str, low: float, high: float) -> Optional[float]:
     return float(v)
 
 
-def parse_line(text: str, number: int, files: _Files) -> Job:
+def parse_line(text: str, number: int, files: _Files) -> list:
+    """The jobs of one manifest line (several for a random line with "count")."""
     line = json.loads(text)
+    if isinstance(line, dict) and "random" in line and "count" in line:
+        count, first = line["count"], line.get("first", 0)
+        for key, value, low in (("count", count, 1), ("first", first, 0)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                raise ValueError(f"{key} = {json.dumps(value)} (must be an integer >= {low})")
+        if "index" in line:
+            raise ValueError("give index (one scene) or count (many), not both")
+        base = {k: v for k, v in line.items() if k not in ("count", "first", "id")}
+        prefix = line.get("id", f"{number:06d}")
+        return [_parse_one(dict(base, index=i, id=f"{prefix}-{i:06d}"), number, files) for i in range(first, first + count)]
+    for key in ("count", "first"):
+        if isinstance(line, dict) and key in line:
+            raise ValueError(f"{key} goes with a random spec")
+    return [_parse_one(line, number, files)]
+
+
+def _parse_one(line: Any, number: int, files: _Files) -> Job:
     if not isinstance(line, dict):
         raise ValueError(f"the line is {type(line).__name__}, not a JSON object")
     unknown = sorted(set(line) - _KEYS)
@@ -169,15 +189,16 @@ def read_manifest(path: str) -> list:
         if not text.strip() or text.lstrip().startswith("#"):
             continue
         try:
-            job = parse_line(text, number, files)
+            line_jobs = parse_line(text, number, files)
         except json.JSONDecodeError as e:
             raise ManifestError(f"{path}:{number}:{e.colno}: error: invalid JSON: {e.msg}") from None
         except ValueError as e:
             raise ManifestError(f"{path}:{number}: error: {e}") from None
-        if job.id in seen:
-            raise ManifestError(f"{path}:{number}: error: id = \"{job.id}\" repeats line {seen[job.id]} (outputs would collide)")
-        seen[job.id] = number
-        jobs.append(job)
+        for job in line_jobs:
+            if job.id in seen:
+                raise ManifestError(f"{path}:{number}: error: id = \"{job.id}\" repeats line {seen[job.id]} (outputs would collide)")
+            seen[job.id] = number
+            jobs.append(job)
     if not jobs:
         raise ManifestError(f"{path}: error: no renders (every line is blank or a comment)")
     return jobs

@@ -100,7 +100,8 @@ def _scaled_mesh(mesh: Any, scale: float, where: str) -> str:
         values = [float(x) * scale for x in numbers.split(",")]
     except ValueError:
         raise SpecError(f"{where}.mesh = {mesh!r} (not numbers after '{kind}:')") from None
-    return kind + ":" + ",".join(repr(v) for v in values)
+    # 12 significant digits: "sphere:0.021", not "sphere:0.020999999999999998" (still exact per draw).
+    return kind + ":" + ",".join(format(v, ".12g") for v in values)
 
 
 def _object(rng: random.Random, template: Any, where: str) -> dict:

@@ -44,7 +44,7 @@ def test_draws_follow_their_distributions(spec):
         assert math.isclose(w * w + x * x + y * y + z * z, 1.0, rel_tol=1e-12)
     # Scale multiplies the primitive's numbers: a 0.7-scaled sphere:0.03 has radius 0.021.
     radii = {float(o["mesh"].split(":")[1]) for o in objects if o["mesh"].startswith("sphere:")}
-    assert radii == {0.03 * 0.7, 0.03, 0.03 * 1.4}
+    assert radii == {0.021, 0.03, 0.042}
     assert {o["material"] for o in objects} == {"steel", "aluminium", "glass", "wood", "ceramic"}
     assert [o["name"] for o in scenes[0]["objects"]][:2] == ["object-0", "object-1"]
 

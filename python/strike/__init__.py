@@ -202,10 +202,17 @@ class RenderResult:
         self._native = native
         self.audio: np.ndarray = native.audio
         self.rate: float = native.rate
-        self.events: np.ndarray = native.events
+        self._events: Optional[np.ndarray] = None
         self.metadata: dict = dict(native.report, strike_version=__version__)
         if isinstance(scene, dict):
             self.metadata["scene"] = scene
+
+    @property
+    def events(self) -> np.ndarray:
+        """The contact events (built on first use: a render may have millions)."""
+        if self._events is None:
+            self._events = self._native.events
+        return self._events
 
     def save(self, path: Union[str, os.PathLike], format: Optional[str] = None) -> None:
         """Writes the sound atomically, as ``strike render -o`` does: .wav (default float) or

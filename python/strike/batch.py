@@ -240,6 +240,7 @@ def main(argv: Optional[list] = None) -> int:
     progress = Progress(len(jobs), len(jobs) - len(todo), args.quiet)
     failures = []
     start = time.perf_counter()
+    startup_s = 0.0
 
     def record(summary: dict) -> None:
         if summary["status"] == "failed":
@@ -260,6 +261,8 @@ def main(argv: Optional[list] = None) -> int:
             # separate processes keep a crashed render from taking the others with it.
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
             client = Client(cluster)
+        startup_s = time.perf_counter() - start
+        progress.start = time.perf_counter()  # the rate counts renders, not the cluster's start
         try:
             futures = client.map(render_job, todo, out_dir=out_dir, cache_dir=cache_dir, manifest=args.manifest,
                                  pure=False)
@@ -284,8 +287,10 @@ def main(argv: Optional[list] = None) -> int:
     if not args.quiet:
         rendered = len(todo) - len(failures)
         elapsed = time.perf_counter() - start
+        rendering = elapsed - startup_s
         sys.stderr.write(f"strike batch: {rendered} rendered, {len(jobs) - len(todo)} already done, {len(failures)} failed, "
-                         f"{elapsed:.1f} s ({rendered / elapsed if elapsed > 0 else 0:.2f} renders/s) -> {out_dir}\n")
+                         f"{elapsed:.1f} s ({rendered / rendering if rendering > 0 else 0:.2f} renders/s"
+                         + (f" after {startup_s:.1f} s of cluster start" if startup_s else "") + f") -> {out_dir}\n")
     return 1 if failures else 0
 
 

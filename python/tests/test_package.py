@@ -37,7 +37,8 @@ def test_imports_from_a_fresh_install(build_dir, tmp_path):
 def test_render_equals_the_cli_byte_for_byte(repo, cli, cache_dir, tmp_path):
     scene = repo / "examples" / "scenes" / "bar-drop.json"
     wav = tmp_path / "cli.wav"
-    r = run([cli, "render", scene, "-o", wav, "--duration", "0.5", "--cache", cache_dir, "--quiet"])
+    csv = tmp_path / "cli-events.csv"
+    r = run([cli, "render", scene, "-o", wav, "--duration", "0.5", "--cache", cache_dir, "--events", csv, "--quiet"])
     assert r.returncode == 0, r.stderr
     result = strike.render(scene, duration=0.5, cache=cache_dir)
     assert result.rate == 48000 and result.audio.dtype == np.float32 and result.audio.shape == (24000,)
@@ -56,6 +57,13 @@ def test_render_equals_the_cli_byte_for_byte(repo, cli, cache_dir, tmp_path):
     impacts = result.events[result.events["new_contact"]]
     assert impacts[0]["time_s"] == pytest.approx(np.sqrt(2 * 0.14 / 9.81), abs=2e-3)
     assert result.metadata["events"] == len(result.events) and result.metadata["bodies"] == ["bar"]
+    result.save_events_csv(tmp_path / "py-events.csv")
+    assert (tmp_path / "py-events.csv").read_bytes() == csv.read_bytes()
+    rows = [line.split(",") for line in csv.read_text().splitlines()[1:]]
+    assert len(rows) == len(result.events) > 100
+    np.testing.assert_allclose(result.events["time_s"], [float(row[0]) for row in rows], rtol=1e-8)
+    np.testing.assert_allclose(result.events["point_world"][:, 2], [float(row[9]) for row in rows], rtol=1e-8, atol=1e-12)
+    assert all((e["body_b"] == -1) == (row[2] == "ground") for e, row in zip(result.events, rows))
 
 
 def test_modes_and_hit_equal_the_cli(cli, tmp_path):

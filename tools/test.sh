@@ -42,7 +42,7 @@ if [ "${STRIKE_SANITIZERS:-1}" = 1 ]; then
 fi
 # The Python package (python/tests) against the ci build's module and CLI, with Debian's python3
 # (python3-numpy, python3-distributed). Exit 5 (no tests collected) fails too.
-PYTHONPATH=build/ci/python /usr/bin/python3 -m pytest -q python/tests
+PYTHONPATH=build/ci/python /usr/bin/python3 -m pytest -q -p no:cacheprovider python/tests
 end_stage "python tests"
 printf '\nTime per stage:\n%s\n' "$stage_times"
 # The test suite last, so its summary closes the output.

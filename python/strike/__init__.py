@@ -124,7 +124,8 @@ def modes(mesh: Union[str, os.PathLike], material: Union[str, Mapping[str, Any]]
         and surfaces, as in the CLI.
 
     Returns a :class:`Bank`: ``frequencies_hz``, ``decay_per_s`` (numpy), ``save(path)``,
-    ``Bank.load(path)``. The GIL is released during the solve.
+    ``Bank.load(path)``. The GIL is released during the solve; solves in several threads of one
+    process take turns (ARPACK is not re-entrant), processes solve in parallel.
     """
     mesh = os.fspath(mesh)
     mat = _material(material)

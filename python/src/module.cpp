@@ -20,6 +20,7 @@
 #include "strike/precompute.hpp"
 #include "strike/render.hpp"
 #include "strike/scene.hpp"
+#include "strike/similar_bank.hpp"
 
 namespace py = pybind11;
 
@@ -254,6 +255,21 @@ PYBIND11_MODULE(_strike, m) {
       .def_property_readonly("frequency_error_estimate", [](const ModeBank& b) { return doubles(b.frequency_error_estimate); })
       .def_property_readonly("surface_positions_m", [](const ModeBank& b) {
         return py::array_t<double>({static_cast<py::ssize_t>(b.surfaceVertexCount()), py::ssize_t(3)}, b.surface_positions.data());
+      })
+      .def_property_readonly("shapes", [](const ModeBank& b) {
+        return py::array_t<float>({static_cast<py::ssize_t>(b.modeCount()), static_cast<py::ssize_t>(b.surfaceVertexCount()),
+                                   py::ssize_t(3)}, b.shapes.data());
+      })
+      .def_property_readonly("max_freq_hz", [](const ModeBank& b) { return b.max_freq_hz; })
+      .def("similar", [](const ModeBank& b, double scale, const py::dict& material, double max_freq_hz, const std::string& mesh) {
+        Material mat;
+        mat.name = material["name"].cast<std::string>();
+        mat.youngs_pa = material["youngs_pa"].cast<double>();
+        mat.poisson = material["poisson"].cast<double>();
+        mat.density_kg_m3 = material["density_kg_m3"].cast<double>();
+        mat.rayleigh_stiffness = material["rayleigh_stiffness"].cast<double>();
+        mat.rayleigh_mass = material["rayleigh_mass"].cast<double>();
+        return std::make_shared<ModeBank>(take(similarBank(b, scale, mat, max_freq_hz, mesh)));
       })
       .def_property_readonly("mode_count", &ModeBank::modeCount)
       .def_property_readonly("surface_vertex_count", &ModeBank::surfaceVertexCount)

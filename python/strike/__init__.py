@@ -31,7 +31,7 @@ from ._version import __version__
 Bank = _strike.Bank
 InputError = _strike.InputError
 
-__all__ = ["Bank", "InputError", "RenderResult", "modes", "hit", "render", "material", "material_names",
+__all__ = ["Bank", "InputError", "RenderResult", "modes", "hit", "render", "similar", "material", "material_names",
            "write_audio", "default_cache_dir", "__version__"]
 
 _MATERIAL_KEYS = ("youngs_pa", "poisson", "density_kg_m3", "rayleigh_stiffness", "rayleigh_mass")
@@ -231,6 +231,21 @@ class RenderResult:
 def default_cache_dir() -> str:
     """$STRIKE_CACHE_DIR, else $XDG_CACHE_HOME/strike, else ~/.cache/strike (as the CLI)."""
     return _strike.default_cache_dir()
+
+
+def similar(bank: Bank, scale: float = 1.0, material: Union[str, Mapping[str, Any], None] = None,
+            max_freq: Optional[float] = None, mesh: Optional[str] = None) -> Bank:
+    """The bank of ``bank``'s object scaled uniformly by ``scale`` and made of ``material`` (same
+    Poisson ratio), without a solve: exact similarity of linear elasticity. Eigenvalues scale by
+    (E'/E) / ((rho'/rho) scale^2), mass-normalized shapes by 1 / sqrt((rho'/rho) scale^3); the
+    new material's Rayleigh damping applies. ``max_freq`` (default the bank's) is the new
+    cut-off; it may not reach past the band that was solved. ``mesh`` names the new object
+    (e.g. the scaled primitive spec). Equals a direct solve of the scaled mesh to solver
+    precision when the mesh is the scaled mesh (``size`` scaled too)."""
+    mat = bank.material if material is None else _material(material)
+    scale = _number("scale", scale, 1e-300, float("inf"), "must be > 0")
+    max_freq = bank.max_freq_hz if max_freq is None else _number("max_freq", max_freq, 1e-300, float("inf"), "must be > 0 Hz")
+    return bank.similar(scale, mat, max_freq, mesh if mesh is not None else f"{bank.mesh_source} scaled {scale!r}")
 
 
 def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[float] = None,

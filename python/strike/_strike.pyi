@@ -25,6 +25,11 @@ class Bank:
     @property
     def surface_positions_m(self) -> npt.NDArray[np.float64]: """Surface vertices, shape (V, 3), mesh frame."""
     @property
+    def shapes(self) -> npt.NDArray[np.float32]: """Mass-normalized shapes on the surface, (modes, V, 3)."""
+    @property
+    def max_freq_hz(self) -> float: """Cut-off the modes were computed up to."""
+    def similar(self, scale: float, material: dict, max_freq_hz: float, mesh: str) -> "Bank": ...
+    @property
     def mode_count(self) -> int: ...
     @property
     def surface_vertex_count(self) -> int: ...

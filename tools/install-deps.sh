@@ -18,6 +18,10 @@ packages=(
   lv2-dev                # examples/lv2 plugin headers (ISC)
   liblilv-dev lilv-utils # examples/lv2 host test, lv2ls/lv2info (ISC)
   clang libclang-rt-14-dev # libFuzzer + ASan/UBSan for the fuzz smoke run (tools/fuzz.sh)
+  python3-dev pybind11-dev # the strike Python package (python/)
+  python3-numpy python3-pytest # its arrays and tests
+  python3-distributed    # strike batch: Dask local or remote clusters (BSD)
+  python3-matplotlib     # examples/python spectrogram plots
 )
 [ "${STRIKE_BENCHMARKS:-0}" = 1 ] && packages+=(libbenchmark-dev)
 

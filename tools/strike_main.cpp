@@ -24,6 +24,7 @@ const char kUsage[] =
     "  hit BANK.modes -o OUT.wav      strike an object once and render the sound\n"
     "  analyze AUDIO.wav [--json]     spectral peaks, levels and decay rates of a sound\n"
     "  cache list|size|prune          the mode bank cache: list, measure, remove old or least used banks\n"
+    "  batch MANIFEST.jsonl -o DIR    render a manifest of scenes on Dask (--workers N, --scheduler, --shard K/N)\n"
     "  bench accuracy -o DIR          accuracy study: FEM and synthesis error against run time (CSV, SVG)\n"
     "  bench leftout SCENE.json -o DIR what leaving out saves: time and audio against rendering everything\n"
     "  bench render SCENE.json -o DIR render speed per phase against a baseline run (CSV)\n"
@@ -55,6 +56,7 @@ int main(int argc, char** argv) {
     if (command == "hit") return strike::cli::runHit(args);
     if (command == "analyze") return strike::cli::runAnalyze(args);
     if (command == "cache") return strike::cli::runCache(args);
+    if (command == "batch") return strike::cli::runBatch(args);
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "strike %s: error: out of memory\n", command.c_str());
     return 2;

@@ -39,5 +39,8 @@ if [ "${STRIKE_SANITIZERS:-1}" = 1 ]; then
   stage "asan + ubsan tests" ctest --preset asan -j2
   stage "tsan build + tests" tsan_build_and_tests
 fi
+# The Python package (python/tests) against the ci build's module and CLI, with Debian's python3
+# (python3-numpy, python3-distributed). Exit 5 (no tests collected) fails too.
+stage "python tests" env PYTHONPATH=build/ci/python /usr/bin/python3 -m pytest -q -p no:cacheprovider python/tests
 # The test suite last; its summary is followed by the stage table.
 stage "test suite (ci)" ctest --preset ci -j2

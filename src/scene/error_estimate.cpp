@@ -14,6 +14,7 @@
 #include <sys/resource.h>
 
 #include "strike/fem.hpp"
+#include "exclusive_solve.hpp"
 
 namespace strike {
 namespace {
@@ -99,7 +100,7 @@ Result<CoarseSolve> solveCoarse(const TetMesh& mesh, const PrecomputeSettings& s
   // up to twice the highest fine frequency (and never fewer than one mode).
   modal.max_freq_hz = std::max(2.0 * fine_max_hz, 1e-3);
   modal.max_modes = static_cast<int>(std::max<size_t>(1, wanted));
-  Result<ModalResult> modes = solveModes(K, M, modal);
+  Result<ModalResult> modes = solveModesExclusive(K, M, modal);
   if (!modes) return modes.error();
   CoarseSolve out;
   out.eigenvalues.assign(modes->eigenvalues.data(), modes->eigenvalues.data() + modes->eigenvalues.size());

@@ -9,6 +9,7 @@
 #include "strike/fem.hpp"
 #include "strike/materials.hpp"
 #include "strike/synth.hpp"
+#include "exclusive_solve.hpp"
 
 namespace strike {
 namespace {
@@ -160,7 +161,7 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
   modal.max_freq_hz = settings.max_freq_hz;
   modal.max_modes = settings.max_modes;
   modal.progress = settings.progress;
-  Result<ModalResult> modes = solveModes(K, M, modal);
+  Result<ModalResult> modes = solveModesExclusive(K, M, modal);
   if (!modes) return modes.error();
 
   fillProvenance(loaded, settings, mass, bank);

@@ -23,6 +23,7 @@
 #include "strike/precompute.hpp"
 #include "strike/scene_checks.hpp"
 #include "strike/synth.hpp"
+#include "cache_lock.hpp"
 #include "pieces_cache.hpp"
 
 namespace strike {
@@ -55,6 +56,7 @@ struct Body {
   const SceneObject* object = nullptr;
   PrecomputeSettings precompute;
   uint64_t cache_key = 0;
+  uint64_t mesh_hash = 0;
   ModeBank bank;                     ///< full bank, or mass and surface only until phase 2
   bool has_modes = false;
   std::optional<BankFile> file;      ///< a cached or given bank: its shapes are read in phase 2
@@ -89,6 +91,26 @@ Result<uint64_t> meshHash(const std::string& spec) {
   return fnv1a64(bytes->data(), bytes->size());
 }
 
+std::string cachePath(const std::string& cache_dir, uint64_t key, const char* extension) {
+  return cache_dir + "/" + hex(key) + extension;
+}
+
+/// The body's bank from the cache, if there and of the same mesh; counted in the report.
+bool openCached(const std::string& cache_dir, Body& body, RenderReport& report) {
+  const std::string path = cachePath(cache_dir, body.cache_key, ".modes");
+  if (!std::filesystem::is_regular_file(path)) return false;
+  Result<BankFile> cached = BankFile::open(path);
+  // A damaged cache entry is recomputed, not trusted (damaged shapes are found in phase 2).
+  if (!cached || cached->bank().mesh_hash != body.mesh_hash) return false;
+  body.bank = cached->bank();
+  body.file = std::move(*cached);
+  body.has_modes = true;
+  body.from_cache = true;
+  ++report.banks_cached;
+  report.precompute_saved_seconds += body.bank.factorize_seconds + body.bank.lanczos_seconds;
+  return true;
+}
+
 /// Phase 1 for one object: a bank with at least mass properties and surface.
 Status prepareBody(const Scene& scene, const RenderSettings& settings, double max_freq_hz, Body& body,
                    std::map<uint64_t, const Body*>& loaded_by_key, RenderReport& report) {
@@ -114,6 +136,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   Result<uint64_t> hash = meshHash(object.mesh);
   if (!hash) return hash.error();
   body.cache_key = bankCacheKey(*hash, body.precompute);
+  body.mesh_hash = *hash;
   if (auto same = loaded_by_key.find(body.cache_key); same != loaded_by_key.end()) {
     body.bank = same->second->bank;  // an identical object was read or meshed already
     body.file = same->second->file;
@@ -121,23 +144,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
     if (!body.has_modes) body.mesh = same->second->mesh;
     return {};
   }
-  if (!settings.cache_dir.empty()) {
-    const std::string path = settings.cache_dir + "/" + hex(body.cache_key) + ".modes";
-    if (std::filesystem::is_regular_file(path)) {
-      Result<BankFile> cached = BankFile::open(path);
-      // A damaged cache entry is recomputed, not trusted (damaged shapes are found in phase 2).
-      if (cached && cached->bank().mesh_hash == *hash) {
-        touchCacheEntry(path);  // recently used: the size cap removes it last
-        body.bank = cached->bank();
-        body.file = std::move(*cached);
-        body.has_modes = true;
-        body.from_cache = true;
-        ++report.banks_cached;
-        report.precompute_saved_seconds += body.bank.factorize_seconds + body.bank.lanczos_seconds;
-        return {};
-      }
-    }
-  }
+  if (!settings.cache_dir.empty() && openCached(settings.cache_dir, body, report)) return {};
   Result<LoadedMesh> loaded = loadTetMesh(object.mesh, meshOptionsFor(body.precompute));
   if (!loaded) return badInput("objects \"" + object.name + "\": " + loaded.error().message);
   body.bank = massAndSurfaceBank(*loaded, body.precompute);
@@ -389,6 +396,24 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       ++report.banks_shared;
       continue;
     }
+    // Held until the bank is in the cache: a render elsewhere that needs it waits, then reads it.
+    CacheEntryLock lock;
+    if (!settings.cache_dir.empty()) {
+      lock = CacheEntryLock(cachePath(settings.cache_dir, body.cache_key, ".lock"));
+      if (lock.held() && !body.from_cache && openCached(settings.cache_dir, body, report)) {
+        // Solved by whoever held the lock while this render simulated or waited.
+        if (readStruckShapes(body, static_cast<uint32_t>(i), result.events, report)) {
+          body.mesh.reset();
+          continue;
+        }
+        --report.banks_cached;
+        report.precompute_saved_seconds -= body.bank.factorize_seconds + body.bank.lanczos_seconds;
+        body.file.reset();
+        body.projector.reset();
+        body.has_modes = false;
+        body.from_cache = false;
+      }
+    }
     if (settings.progress) settings.progress("modes " + body.object->name, -1.0);
     Result<PrecomputeResult> computed = computeModeBankForMesh(*body.mesh, body.precompute);
     if (!computed) return badInput("objects \"" + body.object->name + "\": " + computed.error().message);
@@ -399,7 +424,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     ++report.banks_computed;
     if (!settings.cache_dir.empty()) {
       // A failed cache write costs the next render time, never this one its result.
-      (void)writeBank(settings.cache_dir + "/" + hex(body.cache_key) + ".modes", body.bank);
+      (void)writeBank(cachePath(settings.cache_dir, body.cache_key, ".modes"), body.bank);
     }
   }
   report.precompute_seconds = secondsSince(precompute_start);
@@ -619,6 +644,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   report.mode_samples = stats.mode_samples;
   report.max_active_modes = stats.max_active_modes;
   report.synthesize_seconds = secondsSince(synth_start);
+  for (const Body& body : bodies)
+    result.banks.push_back({body.object->bank.empty() ? body.cache_key : 0, body.object->bank, body.sounded});
   report.total_seconds = secondsSince(start);
   return result;
 }

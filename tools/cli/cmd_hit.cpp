@@ -1,23 +1,19 @@
 // SPDX-License-Identifier: MIT
 // `strike hit BANK.modes -o OUT.wav`: one impact on one object, rendered to a sound file.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <algorithm>
-#include <limits>
 
 #include "args.hpp"
 #include "commands.hpp"
 #include "output_check.hpp"
 #include "strike/audio.hpp"
 #include "strike/bank.hpp"
-#include "strike/materials.hpp"
+#include "strike/hit.hpp"
 #include "strike/render.hpp"
-#include "strike/synth.hpp"
 
 namespace strike::cli {
 namespace {
-
-constexpr double kSpeedOfSoundAir_m_s = 343.0;  // dry air at 20 C
 
 CommandSpec hitSpec() {
   CommandSpec spec;
@@ -51,35 +47,6 @@ CommandSpec hitSpec() {
   spec.min_positional = 1;
   spec.max_positional = 1;
   return spec;
-}
-
-/// The surface vertex whose in-band modes an impulse along the inward normal excites most
-/// (sum over modes of (phi_i . n)^2 / lambda_i, i.e. the modal displacement energy it injects).
-size_t loudestVertex(const ModeBank& bank) {
-  size_t best = 0;
-  double best_score = -1.0;
-  for (size_t v = 0; v < bank.surfaceVertexCount(); ++v) {
-    const float* n = &bank.surface_normals[v * 3];
-    double score = 0.0;
-    for (size_t i = 0; i < bank.modeCount(); ++i) {
-      const float* phi = bank.shapeAt(i, v);
-      const double along = phi[0] * n[0] + phi[1] * n[1] + phi[2] * n[2];
-      if (bank.eigenvalues[i] > 0) score += along * along / bank.eigenvalues[i];
-    }
-    if (score > best_score) best_score = score, best = v;
-  }
-  return best;
-}
-
-/// The largest side of the bank's surface bounding box, m.
-double objectSizeM(const ModeBank& bank) {
-  double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (size_t v = 0; v < bank.surfaceVertexCount(); ++v)
-    for (int a = 0; a < 3; ++a) {
-      low[a] = std::min(low[a], double(bank.surface_positions[v * 3 + a]));
-      high[a] = std::max(high[a], double(bank.surface_positions[v * 3 + a]));
-    }
-  return std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2], 0.0});
 }
 
 }  // namespace
@@ -120,98 +87,46 @@ int runHit(const std::vector<std::string>& raw_args) {
   if (!(*striker_radius > 0))
     return reportError("hit", badInput("--striker-radius = " + args.text("--striker-radius") + " (must be > 0 m)"));
 
-  // Where: a vertex, or the nearest surface point to --at.
-  size_t vertex = 0;
-  double point[3];
-  double requested[3] = {0, 0, 0};
-  double off_surface_m = 0.0;  // --at: distance from the requested point to the surface point struck
+  HitSettings settings;
+  settings.duration_s = *duration;
+  settings.sample_rate_hz = *rate;
+  settings.distance_m = *distance;
+  settings.gain = *gain;
+  settings.striker = args.text("--striker", "steel");
+  settings.striker_radius_m = *striker_radius;
+  settings.simd = *simd;
   if (args.has("--at")) {
     Result<std::array<double, 3>> at = args.vector3("--at", {});
     if (!at) return reportError("hit", at.error());
-    for (int a = 0; a < 3; ++a) requested[a] = point[a] = (*at)[a];
-    // The point struck is the nearest point on the surface (what projectImpulse uses): report
-    // it, not the point asked for, and how far apart they are.
-    const SurfaceLocator locator(bank);
-    uint32_t corners[3] = {0, 0, 0};
-    double weights[3] = {1, 0, 0};
-    locator.nearest(requested, corners, weights);
-    double best_weight = -1.0;
-    point[0] = point[1] = point[2] = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      if (weights[k] > best_weight) best_weight = weights[k], vertex = corners[k];  // the impulse's default normal
-      for (int a = 0; a < 3; ++a) point[a] += weights[k] * bank.surface_positions[corners[k] * 3 + a];
-    }
-    off_surface_m = std::sqrt(std::pow(point[0] - requested[0], 2) + std::pow(point[1] - requested[1], 2) +
-                              std::pow(point[2] - requested[2], 2));
-  } else {
-    Result<long long> chosen = args.integer("--vertex", static_cast<long long>(loudestVertex(bank)));
+    settings.at_m = *at;
+  } else if (args.has("--vertex")) {
+    Result<long long> chosen = args.integer("--vertex", 0);
     if (!chosen) return reportError("hit", chosen.error());
     if (*chosen < 0 || static_cast<size_t>(*chosen) >= bank.surfaceVertexCount())
       return reportError("hit", badInput("--vertex = " + args.text("--vertex") + " (the bank has surface vertices 0 to " +
                                          std::to_string(bank.surfaceVertexCount() - 1) + ")"));
-    vertex = static_cast<size_t>(*chosen);
-    for (int a = 0; a < 3; ++a) point[a] = bank.surface_positions[vertex * 3 + a];
+    settings.vertex = static_cast<size_t>(*chosen);
   }
-  const float* normal = &bank.surface_normals[vertex * 3];
-  Result<std::array<double, 3>> impulse_arg =
-      args.vector3("--impulse", {-0.01 * normal[0], -0.01 * normal[1], -0.01 * normal[2]});
-  if (!impulse_arg) return reportError("hit", impulse_arg.error());
-  const double impulse[3] = {(*impulse_arg)[0], (*impulse_arg)[1], (*impulse_arg)[2]};
-  const std::vector<double> modal_impulse =
-      args.has("--at") ? projectImpulse(bank, requested, impulse) : projectImpulseAtVertex(bank, vertex, impulse);
-
-  // How long the contact lasts: Hertz theory for a sphere striking a locally flat surface, at the
-  // speed that gives this impulse in an elastic rebound (J = 2 m* v).
-  double contact_time_s = 0.0;
+  if (args.has("--impulse")) {
+    Result<std::array<double, 3>> impulse = args.vector3("--impulse", {});
+    if (!impulse) return reportError("hit", impulse.error());
+    settings.impulse_n_s = *impulse;
+  }
   if (args.has("--contact-time")) {
     Result<double> t = args.number("--contact-time", 0.0);
     if (!t) return reportError("hit", t.error());
     if (!(*t >= 0 && *t < 1)) return reportError("hit", badInput("--contact-time = " + args.text("--contact-time") + " (must be in [0, 1) s)"));
-    contact_time_s = *t;
-  } else {
-    Result<Material> striker = builtinMaterials().find(args.text("--striker", "steel"));
-    if (!striker) return reportError("hit", striker.error());
-    const double striker_mass = striker->density_kg_m3 * 4.0 / 3.0 * M_PI * std::pow(*striker_radius, 3);
-    const double reduced_mass = striker_mass * bank.mass_kg / (striker_mass + bank.mass_kg);
-    const double j_normal = std::fabs(impulse[0] * normal[0] + impulse[1] * normal[1] + impulse[2] * normal[2]);
-    const double speed = j_normal / (2.0 * reduced_mass);
-    if (speed > 0)
-      contact_time_s = hertzContactDuration(striker->youngs_pa, striker->poisson, *striker_radius, striker_mass,
-                                            bank.material.youngs_pa, bank.material.poisson,
-                                            std::numeric_limits<double>::infinity(), bank.mass_kg, speed);
+    settings.contact_time_s = *t;
   }
-
-  SynthSettings settings;
-  settings.sample_rate_hz = *rate;
-  settings.simd = *simd;
-  OscillatorBank synth(settings);
-  ModalObjectDesc object;
-  object.eigenvalues = bank.eigenvalues;
-  object.rayleigh_stiffness = bank.material.rayleigh_stiffness;
-  object.rayleigh_mass = bank.material.rayleigh_mass;
-  object.radiation_weight = radiationWeights(bank, *distance);
-  for (double& w : object.radiation_weight) w *= *gain / kFullScalePascal;
-  object.delay_s = *distance / kSpeedOfSoundAir_m_s;
-  const uint32_t id = synth.addObject(object);
-  ImpactDesc impact;
-  impact.object = id;
-  impact.time_s = 0.0;
-  impact.duration_s = contact_time_s;
-  impact.modal_impulse = modal_impulse.data();
-  synth.addImpact(impact);
-
-  AudioBuffer audio;
-  audio.sample_rate_hz = *rate;
-  audio.channels = 1;
-  audio.samples.resize(static_cast<size_t>(std::llround(*duration * *rate)));
-  synth.render(audio.samples.data(), audio.samples.size());
-
-  double peak = 0.0;
-  size_t clipped = 0;
-  for (float s : audio.samples) {
-    peak = std::max(peak, static_cast<double>(std::fabs(s)));
-    if (std::fabs(s) >= 1.0f) ++clipped;
-  }
+  Result<HitResult> hit = renderHit(bank, settings);
+  if (!hit) return reportError("hit", hit.error());
+  const AudioBuffer& audio = hit->audio;
+  const double peak = hit->peak;
+  const size_t clipped = hit->clipped_samples;
+  const size_t vertex = hit->vertex;
+  const std::array<double, 3>& point = hit->point_m;
+  const std::array<double, 3>& impulse = hit->impulse_n_s;
+  const double contact_time_s = hit->contact_time_s;
   const std::string output = args.text("-o");
   Result<SampleEncoding> encoding_result = sampleEncodingFor(args, output);
   if (!encoding_result) return reportError("hit", encoding_result.error());
@@ -222,12 +137,13 @@ int runHit(const std::vector<std::string>& raw_args) {
   // A point asked for far from the surface is probably a mistake (a unit, a sign, another
   // object's frame): warn past 2% of the object's size (1 mm at least), even with --quiet.
   const double size_m = objectSizeM(bank);
+  const double off_surface_m = hit->off_surface_m;
   if (args.has("--at") && off_surface_m > std::max(1e-3, 0.02 * size_m))
     std::fprintf(stderr,
                  "strike hit: warning: --at %s is %.4g m from the object's surface (the object is %.4g m across); "
                  "struck the nearest surface point (%.4g, %.4g, %.4g) m instead\n",
                  args.text("--at").c_str(), off_surface_m, size_m, point[0], point[1], point[2]);
-  const SynthStats stats = synth.stats();
+  const SynthStats& stats = hit->stats;
   if (stats.modes_total == stats.modes_out_of_band)
     std::fprintf(stderr, "strike hit: warning: silent: no mode in the audible band (%s)\n",
                  bank.modeCount() == 0 ? "the bank has no elastic mode below its cut-off: too small or too stiff to ring"

@@ -83,10 +83,20 @@ struct RenderReport {
   std::vector<std::string> collision_notes;
 };
 
+/// Which bank a body's sound came from: its content address in the cache (the file name
+/// KEY.modes: a hash of the mesh bytes and of every setting that changes the modes), or the
+/// bank file the scene gave.
+struct BodyBank {
+  uint64_t cache_key = 0;    ///< 0 when the scene gave the bank file
+  std::string given_path;    ///< the scene's "bank", or empty
+  bool sounded = false;      ///< struck hard enough to be heard (its bank was used)
+};
+
 struct RenderResult {
   AudioBuffer audio;
   std::vector<ContactEvent> events;
   std::vector<std::string> body_names;
+  std::vector<BodyBank> banks;  ///< per body, in scene order
   RenderReport report;
 };
 

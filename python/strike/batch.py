@@ -1,0 +1,298 @@
+# SPDX-License-Identifier: MIT
+"""strike batch: a manifest of renders on a Dask cluster, a local one, or one shard with no Dask.
+
+    python3 -m strike.batch MANIFEST.jsonl -o DIR [--workers N | --scheduler ADDRESS | --shard K/N]
+                            [--cache DIR] [--quiet]
+
+(also `strike batch ...` and `strike-batch ...`). The manifest format is in strike/manifest.py and
+docs/datasets.md. For each line, DIR gets ID.wav (32-bit float) and, beside it, ID.json: every
+parameter, the scene as rendered, the bank cache keys, the Strike version, the seed and timings.
+
+- Atomic: both files are written under DIR/.partial/HOST-PID-ID/ and renamed into DIR, the WAV
+  first; ID.json is the mark of a finished render. A killed worker leaves only its .partial
+  folder, which the next run on that host removes once its process is gone.
+- Re-runs skip every render whose ID.json is there with the same inputs (job_key); an edited
+  line is rendered again.
+- One bank cache (--cache, default $STRIKE_CACHE_DIR or ~/.cache/strike), shared by every worker:
+  content-addressed, and a bank is solved once (a file lock per entry, src/scene/cache_lock.hpp).
+  On a cluster give a folder every worker sees.
+- Renders run with one BLAS/OpenMP thread (PINNED_ENVIRONMENT): the same bytes on every
+  machine, and the same as `OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 strike render`.
+- --workers N (default: this machine's cores) starts a local Dask cluster, one single-threaded
+  worker process per core. --scheduler ADDRESS uses a running cluster (workers need the strike
+  package installed). --shard K/N renders lines K, K+N, K+2N, ... (K in 1..N) in this process,
+  with no Dask: one Slurm array task (examples/python/slurm-batch.sbatch).
+Exit code 0 when every render is done, 1 when a line failed (each failure is printed), as the CLI.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import shutil
+import socket
+import sys
+import time
+from typing import Any, Optional
+
+_PARTIAL = ".partial"
+# Every render of a batch runs its linear algebra on one thread, wherever it runs: a bank solved
+# with multi-threaded OpenBLAS/OpenMP differs in its last bits from one solved single-threaded,
+# and so does the audio. Pinned, a render's bytes do not depend on the core count of the machine
+# (Dask's nanny pins workers the same way by default); it also keeps one render on one core.
+PINNED_ENVIRONMENT = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+def _paths(out_dir: str, job_id: str) -> tuple:
+    return os.path.join(out_dir, job_id + ".wav"), os.path.join(out_dir, job_id + ".json")
+
+
+def is_done(job, out_dir: str) -> bool:
+    """ID.json and ID.wav exist, and ID.json was written for these inputs."""
+    wav, meta = _paths(out_dir, job.id)
+    if not (os.path.isfile(wav) and os.path.isfile(meta)):
+        return False
+    try:
+        with open(meta, encoding="utf-8") as f:
+            return json.load(f).get("job_key") == job.key()
+    except (OSError, ValueError):
+        return False
+
+
+def _write_json(path: str, value: Any) -> None:
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(value, f, indent=1, sort_keys=True)
+        f.write("\n")
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def _sha256(path: str) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def render_job(job, out_dir: str, cache_dir: str, manifest: str = "") -> dict:
+    """Renders one job into out_dir (skipping it if done). Runs on a worker; returns a summary
+    dict: id, status (done, skipped, failed), error, seconds."""
+    import strike  # on the worker
+
+    start = time.perf_counter()
+    if is_done(job, out_dir):
+        return {"id": job.id, "status": "skipped", "seconds": 0.0}
+    host, pid = socket.gethostname(), os.getpid()
+    partial = os.path.join(out_dir, _PARTIAL, f"{host}-{pid}-{job.id}")
+    os.makedirs(partial, exist_ok=True)
+    try:
+        result = strike.render(job.scene, rate=job.rate, duration=job.duration, gain=job.gain, cache=cache_dir,
+                               base_dir=job.base_dir)
+        rendered = time.perf_counter()
+        wav, meta = _paths(out_dir, job.id)
+        partial_wav = os.path.join(partial, job.id + ".wav")
+        result.save(partial_wav, format="float")
+        report = result.metadata
+        metadata = {
+            "id": job.id,
+            "manifest": os.path.abspath(manifest) if manifest else None,
+            "line": job.line,
+            "source": job.source,
+            "parameters": job.parameters,
+            "seed": job.seed,
+            "scene": job.scene,
+            "base_dir": job.base_dir,
+            "job_key": job.key(),
+            "strike_version": strike.__version__,
+            "audio": {"file": job.id + ".wav", "format": "float", "rate": result.rate, "frames": int(result.audio.shape[0]),
+                      "sha256": _sha256(partial_wav)},
+            "banks": report["banks"],
+            "cache_dir": os.path.abspath(cache_dir) if cache_dir else None,
+            "report": {k: v for k, v in report.items() if k not in ("banks", "seconds", "scene")},
+            "timings_s": dict(report["seconds"], render_call=rendered - start),
+            "worker": {"host": host, "pid": pid},
+        }
+        os.replace(partial_wav, wav)
+        metadata["timings_s"]["job"] = time.perf_counter() - start
+        partial_meta = os.path.join(partial, job.id + ".json")
+        _write_json(partial_meta, metadata)
+        os.replace(partial_meta, meta)  # last: the mark of a finished render
+        return {"id": job.id, "status": "done", "seconds": time.perf_counter() - start}
+    except strike.InputError as e:
+        return {"id": job.id, "status": "failed", "error": f"line {job.line} (id {job.id}): {e}",
+                "seconds": time.perf_counter() - start}
+    finally:
+        shutil.rmtree(partial, ignore_errors=True)
+
+
+def remove_dead_partials(out_dir: str) -> int:
+    """Removes .partial folders left by processes of this host that are gone (killed workers)."""
+    root = os.path.join(out_dir, _PARTIAL)
+    host, removed = socket.gethostname(), 0
+    if not os.path.isdir(root):
+        return 0
+    for name in os.listdir(root):
+        if not name.startswith(host + "-"):
+            continue  # another machine's: only it can tell whether its process is gone
+        rest = name[len(host) + 1:]
+        pid_text = rest.split("-", 1)[0]
+        if not pid_text.isdigit():
+            continue
+        try:
+            os.kill(int(pid_text), 0)
+            continue  # alive: a render in progress
+        except ProcessLookupError:
+            pass
+        except PermissionError:
+            continue  # alive, another user's
+        shutil.rmtree(os.path.join(root, name), ignore_errors=True)
+        removed += 1
+    try:
+        os.rmdir(root)  # only when empty
+    except OSError:
+        pass
+    return removed
+
+
+class Progress:
+    """A progress bar on stderr: done/total, renders per second, time left."""
+
+    def __init__(self, total: int, skipped: int, quiet: bool):
+        self.total, self.done, self.failed, self.quiet = total, skipped, 0, quiet
+        self.counted_from = skipped
+        self.start = time.perf_counter()
+        self.tty = sys.stderr.isatty()
+        self.last_print = 0.0
+
+    def step(self, status: str) -> None:
+        self.done += 1
+        self.failed += status == "failed"
+        now = time.perf_counter()
+        if self.quiet or (now - self.last_print < (0.1 if self.tty else 2.0) and self.done < self.total):
+            return
+        self.last_print = now
+        elapsed = now - self.start
+        rate = (self.done - self.counted_from) / elapsed if elapsed > 0 else 0.0
+        left = (self.total - self.done) / rate if rate > 0 else float("inf")
+        width = 30
+        filled = int(width * self.done / max(self.total, 1))
+        bar = "#" * filled + "." * (width - filled)
+        text = (f"strike batch: [{bar}] {self.done}/{self.total} renders, {rate:.2f}/s, "
+                f"{'?' if left == float('inf') else f'{left:.0f} s'} left" + (f", {self.failed} failed" if self.failed else ""))
+        sys.stderr.write(("\r" + text) if self.tty else (text + "\n"))
+        sys.stderr.flush()
+
+    def finish(self) -> None:
+        if self.tty and not self.quiet:
+            sys.stderr.write("\n")
+
+
+def _shard(text: str) -> tuple:
+    k, _, n = text.partition("/")
+    if not (k.isdigit() and n.isdigit() and 1 <= int(k) <= int(n)):
+        raise ValueError(f"--shard = {text} (must be K/N with 1 <= K <= N)")
+    return int(k), int(n)
+
+
+def main(argv: Optional[list] = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if any(os.environ.get(k) != v for k, v in PINNED_ENVIRONMENT.items()):
+        # The BLAS reads these when it is loaded (import strike), so start again with them set.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.execve(sys.executable, [sys.executable, "-m", "strike.batch", *argv], {**os.environ, **PINNED_ENVIRONMENT})
+    parser = argparse.ArgumentParser(prog="strike batch", description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog="Manifest format, randomized scenes and clusters: docs/datasets.md")
+    parser.add_argument("manifest", metavar="MANIFEST.jsonl")
+    parser.add_argument("-o", dest="out_dir", metavar="DIR", required=True, help="output folder (made if missing)")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N", help="local Dask cluster of N worker processes (default: cores)")
+    where.add_argument("--scheduler", metavar="ADDRESS", help="use a running Dask cluster, e.g. tcp://head:8786")
+    where.add_argument("--shard", metavar="K/N", help="render lines K, K+N, ... here, with no Dask (Slurm arrays)")
+    parser.add_argument("--cache", metavar="DIR", help="bank cache folder shared by the workers; default $STRIKE_CACHE_DIR or ~/.cache/strike")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    args = parser.parse_args(argv)
+
+    import strike
+    from .manifest import ManifestError, read_manifest
+
+    def fail(message: str) -> int:
+        sys.stderr.write(f"strike batch: {'' if 'error:' in message else 'error: '}{message}\n")
+        return 1
+
+    if args.workers is not None and args.workers < 1:
+        return fail(f"--workers = {args.workers} (must be >= 1)")
+    try:
+        jobs = read_manifest(args.manifest)
+        shard = _shard(args.shard) if args.shard else None
+    except (ManifestError, ValueError) as e:
+        return fail(str(e))
+    if shard:
+        jobs = jobs[shard[0] - 1::shard[1]]
+    cache_dir = args.cache if args.cache is not None else strike.default_cache_dir()
+    out_dir = os.path.abspath(args.out_dir)
+    os.makedirs(out_dir, exist_ok=True)
+    remove_dead_partials(out_dir)
+    todo = [job for job in jobs if not is_done(job, out_dir)]
+    progress = Progress(len(jobs), len(jobs) - len(todo), args.quiet)
+    failures = []
+    start = time.perf_counter()
+    startup_s = 0.0
+
+    def record(summary: dict) -> None:
+        if summary["status"] == "failed":
+            failures.append(summary["error"])
+        progress.step(summary["status"])
+
+    if shard or not todo:
+        for job in todo:
+            record(render_job(job, out_dir, cache_dir, args.manifest))
+    else:
+        from distributed import Client, LocalCluster, as_completed
+        cluster = None
+        if args.scheduler:
+            client = Client(args.scheduler)
+        else:
+            workers = args.workers or os.cpu_count() or 1
+            # One single-threaded process per core: the engine runs one render per thread, and
+            # separate processes keep a crashed render from taking the others with it.
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+            client = Client(cluster)
+        startup_s = time.perf_counter() - start
+        progress.start = time.perf_counter()  # the rate counts renders, not the cluster's start
+        try:
+            futures = client.map(render_job, todo, out_dir=out_dir, cache_dir=cache_dir, manifest=args.manifest,
+                                 pure=False)
+            by_future = dict(zip(futures, todo))
+            for future in as_completed(futures):
+                job = by_future[future]
+                try:
+                    record(future.result())
+                except Exception as e:  # a worker died more often than Dask retries, or a bug
+                    record({"id": job.id, "status": "failed", "error": f"line {job.line} (id {job.id}): {type(e).__name__}: {e}"})
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    progress.finish()
+    try:
+        os.rmdir(os.path.join(out_dir, _PARTIAL))  # every render has ended: empty unless a worker died
+    except OSError:
+        pass
+    for failure in failures:
+        sys.stderr.write(f"strike batch: error: {failure}\n")
+    if not args.quiet:
+        rendered = len(todo) - len(failures)
+        elapsed = time.perf_counter() - start
+        rendering = elapsed - startup_s
+        sys.stderr.write(f"strike batch: {rendered} rendered, {len(jobs) - len(todo)} already done, {len(failures)} failed, "
+                         f"{elapsed:.1f} s ({rendered / rendering if rendering > 0 else 0:.2f} renders/s"
+                         + (f" after {startup_s:.1f} s of cluster start" if startup_s else "") + f") -> {out_dir}\n")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,28 @@
+// SPDX-License-Identifier: MIT
+// Exact similarity of linear-elastic modes (issue 19, item 4). An object that differs from a
+// solved one only by a uniform scale s of its geometry and by Young's modulus E and density rho
+// (the same Poisson ratio) has K' = (E'/E) s K and M' = (rho'/rho) s^3 M on the scaled mesh, so
+// the same mode shapes with
+//   lambda' = lambda (E'/E) / ((rho'/rho) s^2)      (frequencies scale as sqrt(E/rho) / L)
+//   phi'    = phi / sqrt((rho'/rho) s^3)            (mass normalization phi^T M phi = 1)
+// Rayleigh damping is the new material's (applied per mode from lambda', as always), and the
+// radiation strengths are recomputed from the scaled surface and shapes.
+#pragma once
+
+#include <string>
+
+#include "strike/bank.hpp"
+#include "strike/material.hpp"
+#include "strike/result.hpp"
+
+namespace strike {
+
+/// The bank of `solved`'s object scaled by `scale` and made of `material` (same Poisson ratio),
+/// keeping the modes up to `max_freq_hz` (at most the bank's own max_modes). `mesh_spec` names
+/// the new object in the bank's provenance (its hash becomes mesh_hash). Fails, naming the value,
+/// when the Poisson ratio differs, the scale is not positive, or the new object needs modes above
+/// the highest one solved (its cut-off would fall above the solved band).
+Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Material& material, double max_freq_hz,
+                             const std::string& mesh_spec);
+
+}  // namespace strike

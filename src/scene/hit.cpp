@@ -1,0 +1,136 @@
+// SPDX-License-Identifier: MIT
+// One impact on one object (strike/hit.hpp): moved out of tools/cli/cmd_hit.cpp unchanged so the
+// CLI and the Python package share it.
+#include "strike/hit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "strike/materials.hpp"
+#include "strike/render.hpp"
+
+namespace strike {
+namespace {
+
+constexpr double kSpeedOfSoundAir_m_s = 343.0;  // dry air at 20 C
+
+}  // namespace
+
+double objectSizeM(const ModeBank& bank) {
+  double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (size_t v = 0; v < bank.surfaceVertexCount(); ++v)
+    for (int a = 0; a < 3; ++a) {
+      low[a] = std::min(low[a], double(bank.surface_positions[v * 3 + a]));
+      high[a] = std::max(high[a], double(bank.surface_positions[v * 3 + a]));
+    }
+  return std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2], 0.0});
+}
+
+size_t loudestVertex(const ModeBank& bank) {
+  size_t best = 0;
+  double best_score = -1.0;
+  for (size_t v = 0; v < bank.surfaceVertexCount(); ++v) {
+    const float* n = &bank.surface_normals[v * 3];
+    double score = 0.0;
+    for (size_t i = 0; i < bank.modeCount(); ++i) {
+      const float* phi = bank.shapeAt(i, v);
+      const double along = phi[0] * n[0] + phi[1] * n[1] + phi[2] * n[2];
+      if (bank.eigenvalues[i] > 0) score += along * along / bank.eigenvalues[i];
+    }
+    if (score > best_score) best_score = score, best = v;
+  }
+  return best;
+}
+
+Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
+  if (bank.surfaceVertexCount() == 0) return badInput("the bank has no surface");
+  HitResult out;
+  // Where: a vertex, or the nearest surface point to `at`.
+  size_t vertex = 0;
+  double point[3];
+  double requested[3] = {0, 0, 0};
+  if (settings.at_m) {
+    for (int a = 0; a < 3; ++a) requested[a] = (*settings.at_m)[a];
+    // The point struck is the nearest point on the surface (what projectImpulse uses): report
+    // it, not the point asked for, and how far apart they are.
+    const SurfaceLocator locator(bank);
+    uint32_t corners[3] = {0, 0, 0};
+    double weights[3] = {1, 0, 0};
+    locator.nearest(requested, corners, weights);
+    double best_weight = -1.0;
+    point[0] = point[1] = point[2] = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      if (weights[k] > best_weight) best_weight = weights[k], vertex = corners[k];  // the impulse's default normal
+      for (int a = 0; a < 3; ++a) point[a] += weights[k] * bank.surface_positions[corners[k] * 3 + a];
+    }
+    out.off_surface_m = std::sqrt(std::pow(point[0] - requested[0], 2) + std::pow(point[1] - requested[1], 2) +
+                                  std::pow(point[2] - requested[2], 2));
+  } else {
+    vertex = settings.vertex ? *settings.vertex : loudestVertex(bank);
+    if (vertex >= bank.surfaceVertexCount())
+      return badInput("vertex = " + std::to_string(vertex) + " (the bank has surface vertices 0 to " +
+                      std::to_string(bank.surfaceVertexCount() - 1) + ")");
+    for (int a = 0; a < 3; ++a) point[a] = bank.surface_positions[vertex * 3 + a];
+  }
+  const float* normal = &bank.surface_normals[vertex * 3];
+  double impulse[3] = {-0.01 * normal[0], -0.01 * normal[1], -0.01 * normal[2]};
+  if (settings.impulse_n_s)
+    for (int a = 0; a < 3; ++a) impulse[a] = (*settings.impulse_n_s)[a];
+  const std::vector<double> modal_impulse =
+      settings.at_m ? projectImpulse(bank, requested, impulse) : projectImpulseAtVertex(bank, vertex, impulse);
+
+  // How long the contact lasts: Hertz theory for a sphere striking a locally flat surface, at the
+  // speed that gives this impulse in an elastic rebound (J = 2 m* v).
+  double contact_time_s = 0.0;
+  if (settings.contact_time_s) {
+    contact_time_s = *settings.contact_time_s;
+  } else {
+    Result<Material> striker = builtinMaterials().find(settings.striker);
+    if (!striker) return striker.error();
+    const double radius = settings.striker_radius_m;
+    const double striker_mass = striker->density_kg_m3 * 4.0 / 3.0 * M_PI * std::pow(radius, 3);
+    const double reduced_mass = striker_mass * bank.mass_kg / (striker_mass + bank.mass_kg);
+    const double j_normal = std::fabs(impulse[0] * normal[0] + impulse[1] * normal[1] + impulse[2] * normal[2]);
+    const double speed = j_normal / (2.0 * reduced_mass);
+    if (speed > 0)
+      contact_time_s = hertzContactDuration(striker->youngs_pa, striker->poisson, radius, striker_mass,
+                                            bank.material.youngs_pa, bank.material.poisson,
+                                            std::numeric_limits<double>::infinity(), bank.mass_kg, speed);
+  }
+
+  SynthSettings synth_settings;
+  synth_settings.sample_rate_hz = settings.sample_rate_hz;
+  synth_settings.simd = settings.simd;
+  OscillatorBank synth(synth_settings);
+  ModalObjectDesc object;
+  object.eigenvalues = bank.eigenvalues;
+  object.rayleigh_stiffness = bank.material.rayleigh_stiffness;
+  object.rayleigh_mass = bank.material.rayleigh_mass;
+  object.radiation_weight = radiationWeights(bank, settings.distance_m);
+  for (double& w : object.radiation_weight) w *= settings.gain / kFullScalePascal;
+  object.delay_s = settings.distance_m / kSpeedOfSoundAir_m_s;
+  const uint32_t id = synth.addObject(object);
+  ImpactDesc impact;
+  impact.object = id;
+  impact.time_s = 0.0;
+  impact.duration_s = contact_time_s;
+  impact.modal_impulse = modal_impulse.data();
+  synth.addImpact(impact);
+
+  out.audio.sample_rate_hz = settings.sample_rate_hz;
+  out.audio.channels = 1;
+  out.audio.samples.resize(static_cast<size_t>(std::llround(settings.duration_s * settings.sample_rate_hz)));
+  synth.render(out.audio.samples.data(), out.audio.samples.size());
+  for (float s : out.audio.samples) {
+    out.peak = std::max(out.peak, static_cast<double>(std::fabs(s)));
+    if (std::fabs(s) >= 1.0f) ++out.clipped_samples;
+  }
+  out.stats = synth.stats();
+  out.vertex = vertex;
+  for (int a = 0; a < 3; ++a) out.point_m[a] = point[a], out.impulse_n_s[a] = impulse[a];
+  out.contact_time_s = contact_time_s;
+  return out;
+}
+
+}  // namespace strike

@@ -16,8 +16,8 @@ parameter, the scene as rendered, the bank cache keys, the Strike version, the s
 - One bank cache (--cache, default $STRIKE_CACHE_DIR or ~/.cache/strike), shared by every worker:
   content-addressed, and a bank is solved once (a file lock per entry, src/scene/cache_lock.hpp).
   On a cluster give a folder every worker sees.
-- Renders run with one BLAS/OpenMP thread (PINNED_ENVIRONMENT): the same bytes on every
-  machine, and the same as `OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 strike render`.
+- Renders run with one BLAS/OpenMP thread (PINNED_ENVIRONMENT): one single-threaded worker per
+  core. The bytes do not depend on it: they equal `strike render`'s (docs/determinism.md).
 - --workers N (default: this machine's cores) starts a local Dask cluster, one single-threaded
   worker process per core. --scheduler ADDRESS uses a running cluster (workers need the strike
   package installed). --shard K/N renders lines K, K+N, K+2N, ... (K in 1..N) in this process,

@@ -255,7 +255,7 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
     """Renders a collision scene, as ``strike render SCENE.json -o OUT.wav`` does (same engine,
     same samples; :meth:`RenderResult.save` writes the CLI's bytes).
 
-    scene: a scene file path, or a dict in the scene format (docs: ARCHITECTURE.md); a dict's
+    scene: a scene file path, or a dict in the scene format (docs/scene-format.md); a dict's
         relative mesh and bank paths resolve against ``base_dir`` (default: the working folder).
     rate, duration: override the scene's sample_rate and duration.
     cache: the mode bank cache folder; True (default): :func:`default_cache_dir`; None or False:

@@ -25,7 +25,7 @@ std::string slurp(const fs::path& path) {
 TEST(Docs, NothingPointsOutsideTheRepository) {
   const fs::path root = STRIKE_SOURCE_DIR;
   std::vector<fs::path> files = {root / "README.md"};
-  for (const char* dir : {"docs", "src", "tools", "examples"})
+  for (const char* dir : {"docs", "src", "tools", "examples", "python"})
     for (const fs::directory_entry& e : fs::recursive_directory_iterator(root / dir))
       if (e.is_regular_file() && e.file_size() < (4u << 20)) files.push_back(e.path());
   ASSERT_GT(files.size(), 50u);

@@ -679,9 +679,11 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   // All modes from one block Lanczos run: M-orthonormal and ascending by construction.
   bool single_block_round = false;
   std::unique_ptr<CholmodSolver> solver;
-  // OpenBLAS single-threaded for the whole solve, factorization included: its threaded
-  // kernels gave other bits from run to run (the same matrix's CHOLMOD factor), and its idle
-  // threads spin. The parallelism is ours instead (two_parts.hpp): a helper thread for the
+  // OpenBLAS single-threaded for the whole solve, factorization included: with two threads
+  // the same matrix's CHOLMOD factor has other bits than with one (so the core count and
+  // OPENBLAS_NUM_THREADS would change the bank), and its idle threads spin (sched_yield): under
+  // two busy processes a solve took 30-55 s instead of 2.5 s. It costs the factorization ~1.7x
+  // on an idle 2-core machine (tests/bench/modal). The parallelism is ours instead (two_parts.hpp): a helper thread for the
   // block stage and the refinement when the machine has two cores or more, with the work cut
   // in the same two parts whether it takes part or not.
   const BlasThreadsScope one_blas_thread(1);

@@ -4,9 +4,10 @@
 //
 // The block Lanczos stage streams its basis and the factor through one core otherwise.
 // OpenBLAS's own threads would do the same split, but its idle threads spin (sched_yield), and
-// on a shared 2-core machine they take the core from the thread doing the work; its threaded
-// results also change from run to run (measured: the CHOLMOD factor of the same matrix with
-// two OpenBLAS threads gave different bits in different runs). The helper here sleeps on a
+// on a shared 2-core machine they take the core from the thread doing the work; and its results
+// depend on its thread count (measured: the CHOLMOD factor of the same matrix has other bits
+// with two OpenBLAS threads than with one), which follows the core count and
+// OPENBLAS_NUM_THREADS. The helper here sleeps on a
 // condition variable between parts. On a loaded machine a second thread gains nothing and can
 // lose (a thread woken per call waits a scheduler slice before it first runs), so a part the
 // helper has not picked up within kStartWait is done by the caller.

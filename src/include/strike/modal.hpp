@@ -35,8 +35,8 @@ struct ModalSettings {
   /// on a helper thread that sleeps between parts and is used only when it starts promptly;
   /// 1 does both halves in the calling thread. The result is the same bits either way, and
   /// whatever the load (tests/unit/modal/determinism_test.cpp). OpenBLAS itself runs
-  /// single-threaded during the solve whatever OPENBLAS_NUM_THREADS says (its threaded kernels
-  /// are not reproducible from run to run); that setting is process-wide, so it is restored
+  /// single-threaded during the solve whatever OPENBLAS_NUM_THREADS says (its results depend on
+  /// its thread count); that setting is process-wide, so it is restored
   /// afterwards, and other BLAS work should not run concurrently with a solve. What does change
   /// the bits: the BLAS kernels
   /// OpenBLAS picks for the CPU (docs/determinism.md).

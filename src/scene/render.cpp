@@ -417,6 +417,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     if (settings.progress) settings.progress("modes " + body.object->name, -1.0);
     Result<PrecomputeResult> computed = computeModeBankForMesh(*body.mesh, body.precompute);
     if (!computed) return badInput("objects \"" + body.object->name + "\": " + computed.error().message);
+    for (const MeshWarning& w : computed->report.warnings) warn("objects \"" + body.object->name + "\": " + w.message);
     body.bank = std::move(computed->bank);
     body.has_modes = true;
     body.mesh.reset();

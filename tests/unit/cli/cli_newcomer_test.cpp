@@ -122,6 +122,23 @@ TEST(NewcomerScenes, OverlapsTheGroundAndUnstruckObjectsAreNamedWithNumbers) {
             std::string::npos) << r.err;
 }
 
+// Item 13: a scene object left at the default Tet4 on a thin shape is told that its frequencies
+// come out far too high, with the wall and extent that make it thin; a solid is not.
+TEST(NewcomerScenes, AThinObjectAtTet4IsWarnedToUseOrder2) {
+  const std::string dir = folder("thin");
+  write(dir + "/scene.json", R"({"duration": 0.2, "max_modes": 4, "objects": [
+    {"name": "plate", "mesh": "box:0.06,0.06,0.003", "material": "steel", "position": [0, 0, 0.03]},
+    {"name": "cube", "mesh": "box:0.03,0.03,0.03", "material": "steel", "position": [0.2, 0, 0.03]}]})");
+  CliResult r = runCli("render '" + dir + "/scene.json' -o '" + dir + "/a.wav' --no-cache --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // 2 V / A of a 60 x 60 x 3 mm plate: 2 (10.8e-6) / (7.2e-3 + 0.72e-3) = 2.73 mm, under 6 mm.
+  EXPECT_NE(r.err.find("objects \"plate\": thin shape (wall 2.73 mm (2 V / A) is under 10% of the 60 mm extent"),
+            std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("use order 2"), std::string::npos) << r.err;
+  // A cube's 2 V / A is a third of its side: a solid, where Tet4 does not lock.
+  EXPECT_EQ(r.err.find("objects \"cube\": thin shape"), std::string::npos) << r.err;
+}
+
 TEST(NewcomerScenes, AMeshInMillimetresIsFlaggedAndUnitsMmScalesIt) {
   const std::string dir = folder("units");
   // A 100 mm cube written in millimetres.

@@ -228,6 +228,18 @@ PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration
   return PyRenderResult{take(std::move(*result)), scene.path};
 }
 
+/// A material from the dict the Python layer builds (strike/__init__.py resolves names).
+Material materialFrom(const py::dict& material) {
+  Material mat;
+  mat.name = material["name"].cast<std::string>();
+  mat.youngs_pa = material["youngs_pa"].cast<double>();
+  mat.poisson = material["poisson"].cast<double>();
+  mat.density_kg_m3 = material["density_kg_m3"].cast<double>();
+  mat.rayleigh_stiffness = material["rayleigh_stiffness"].cast<double>();
+  mat.rayleigh_mass = material["rayleigh_mass"].cast<double>();
+  return mat;
+}
+
 }  // namespace
 }  // namespace strike
 
@@ -262,14 +274,7 @@ PYBIND11_MODULE(_strike, m) {
       })
       .def_property_readonly("max_freq_hz", [](const ModeBank& b) { return b.max_freq_hz; })
       .def("similar", [](const ModeBank& b, double scale, const py::dict& material, double max_freq_hz, const std::string& mesh) {
-        Material mat;
-        mat.name = material["name"].cast<std::string>();
-        mat.youngs_pa = material["youngs_pa"].cast<double>();
-        mat.poisson = material["poisson"].cast<double>();
-        mat.density_kg_m3 = material["density_kg_m3"].cast<double>();
-        mat.rayleigh_stiffness = material["rayleigh_stiffness"].cast<double>();
-        mat.rayleigh_mass = material["rayleigh_mass"].cast<double>();
-        return std::make_shared<ModeBank>(take(similarBank(b, scale, mat, max_freq_hz, mesh)));
+        return std::make_shared<ModeBank>(take(similarBank(b, scale, materialFrom(material), max_freq_hz, mesh)));
       })
       .def_property_readonly("mode_count", &ModeBank::modeCount)
       .def_property_readonly("surface_vertex_count", &ModeBank::surfaceVertexCount)
@@ -308,14 +313,7 @@ PYBIND11_MODULE(_strike, m) {
 
   m.def("modes", [](const std::string& mesh, const py::dict& material, int order, double size_m, double max_freq_hz,
                     int max_modes, int64_t max_tets, std::optional<bool> error_estimate, std::optional<double> tolerance) {
-    Material mat;
-    mat.name = material["name"].cast<std::string>();
-    mat.youngs_pa = material["youngs_pa"].cast<double>();
-    mat.poisson = material["poisson"].cast<double>();
-    mat.density_kg_m3 = material["density_kg_m3"].cast<double>();
-    mat.rayleigh_stiffness = material["rayleigh_stiffness"].cast<double>();
-    mat.rayleigh_mass = material["rayleigh_mass"].cast<double>();
-    return computeModes(mesh, mat, order, size_m, max_freq_hz, max_modes, max_tets, error_estimate, tolerance);
+    return computeModes(mesh, materialFrom(material), order, size_m, max_freq_hz, max_modes, max_tets, error_estimate, tolerance);
   });
 
   m.def("hit", [](const ModeBank& bank, std::optional<size_t> vertex, std::optional<std::array<double, 3>> at,

@@ -136,13 +136,14 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
 /// body was struck: read them only at the vertices of those points' nearest triangles (the
 /// projector's locator finds the same vertices again when it projects). A render of 20 plates
 /// reads ~2% of their 340 MB of shapes this way.
-Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEvent>& events, RenderReport& report) {
+Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEvent>& events, bool whole,
+                        RenderReport& report) {
   body.rows.reset();
   const bool has_radiation = body.bank.radiation_m2.size() == body.bank.modeCount();
   const SurfaceLocator locator(body.bank);
-  if (!has_radiation || !locator.hasTriangles()) {
-    // Radiation strengths computed from every shape (banks written before the RADI chunk), or
-    // no triangles to locate on: the whole bank.
+  if (!has_radiation || !locator.hasTriangles() || whole) {
+    // Radiation strengths computed from every shape (banks written before the RADI chunk), no
+    // triangles to locate on, or a library that loads whole bank files: the whole bank.
     Result<ModeBank> all = body.file->readAll();
     if (!all) return all.error();
     body.bank = std::move(*all);
@@ -229,14 +230,25 @@ Status hasAudibleMode(const ModeBank& bank, const SynthSettings& synth, double r
 class EngineOutput final : public SoundOutput {
  public:
   explicit EngineOutput(const EngineSettings& settings) : engine_(settings) {}
-  Status addVoice(uint32_t slot, const VoiceDesc& desc, const std::string&) override {
-    voices_.push_back(std::make_unique<Voice>(desc, engine_.settings()));
+  Status addVoice(uint32_t slot, const VoiceDesc& desc, const std::array<double, 3>& position_m,
+                  const std::array<double, 4>& orientation_wxyz, const std::string&) override {
+    VoiceDesc placed = desc;
+    placed.pose.set(position_m.data(), orientation_wxyz.data());
+    voices_.push_back(std::make_unique<Voice>(placed, engine_.settings()));
     engine_.install(slot, voices_.back().get());
     return {};
   }
-  void setListener(const Pose& pose) override { engine_.setListener(pose); }
+  void setListener(const std::array<double, 3>& position_m) override {
+    Pose listener;
+    listener.position_m = position_m;
+    engine_.setListener(listener);
+  }
   void beginStep(double step_end_s, double step_s) override { engine_.beginStep(step_end_s, step_s); }
-  void setPose(uint32_t slot, const Pose& pose, bool asleep) override { engine_.setPose(slot, pose, asleep); }
+  void setPose(uint32_t slot, const std::array<double, 3>& position_m, const std::array<double, 4>& orientation_wxyz,
+               bool asleep) override {
+    Pose pose;
+    if (pose.set(position_m.data(), orientation_wxyz.data())) engine_.setPose(slot, pose, asleep);
+  }
   void contact(const EngineContact& contact) override { engine_.contact(contact); }
   void endStep() override { engine_.endStep(); }
   Status render(float* mono, size_t frames) override {
@@ -400,7 +412,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     }
     body.sounded = true;
     if (body.file) {
-      Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, report);
+      Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), report);
       if (read) continue;
       if (!body.object->bank.empty()) return read.error();  // the user's bank file is damaged
       // A cache entry whose shapes are damaged is recomputed, not trusted.
@@ -428,7 +440,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       lock = CacheEntryLock(cachePath(settings.cache_dir, body.cache_key, ".lock"));
       if (lock.held() && !body.from_cache && openCached(settings.cache_dir, body, report)) {
         // Solved by whoever held the lock while this render simulated or waited.
-        if (readStruckShapes(body, static_cast<uint32_t>(i), result.events, report)) {
+        if (readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), report)) {
           body.mesh.reset();
           continue;
         }
@@ -490,13 +502,13 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     for (double& w : voice.weights) w *= settings.gain / kFullScalePascal;
     voice.is_static = body.object->is_static;
     voice.contact_radius_m = body.contact_radius_m;
-    voice.pose.set(body.object->position_m.data(), body.object->orientation_wxyz.data());
-    if (Status added = output->addVoice(static_cast<uint32_t>(index), voice, body.object->name); !added) return added.error();
+    if (Status added = output->addVoice(static_cast<uint32_t>(index), voice, body.object->position_m,
+                                        body.object->orientation_wxyz, body.object->name);
+        !added)
+      return added.error();
     has_voice[index] = true;
   }
-  Pose listener;
-  listener.position_m = scene.listener_position_m;
-  output->setListener(listener);
+  output->setListener(scene.listener_position_m);
 
   // The events by physics step (they are in order of time_s, and an impact's time may fall in
   // the step before the one that solved it).
@@ -523,8 +535,10 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       partner.voice = kNoVoice;
       return partner;
     }
-    partner.voice = other;  // its sleep holds a static body's load, voice or not
-    if (has_voice[other]) return partner;
+    if (has_voice[other]) {
+      partner.voice = other;  // its material from its bank; its sleep keeps a static body's load
+      return partner;
+    }
     const Body& body = bodies[other];
     partner.youngs_pa = body.bank.material.youngs_pa;
     partner.poisson = body.bank.material.poisson;
@@ -555,9 +569,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     output->beginStep(step_end, substep);
     for (size_t i = 0; i < n; ++i) {
       const SimBodyState& state = simulated->states[k * n + i];
-      Pose pose;
-      pose.set(state.position_m.data(), state.orientation_wxyz.data());
-      output->setPose(static_cast<uint32_t>(i), pose, state.asleep);
+      if (has_voice[i]) output->setPose(static_cast<uint32_t>(i), state.position_m, state.orientation_wxyz, state.asleep);
     }
     for (size_t j = step_first[k]; j < step_first[k + 1]; ++j) {
       const ContactEvent& event = result.events[by_step[j]];
@@ -588,6 +600,9 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   const EngineStats engine_stats = output->stats();
   report.impacts = engine_stats.impacts + engine_stats.impacts_inaudible;
   report.sustained_contacts = engine_stats.sustained_contacts;
+  report.load_changes = engine_stats.load_changes;
+  report.load_holds = engine_stats.load_holds;
+  for (std::string& text : output->warnings()) warn(std::move(text));
   for (float s : audio.samples) {
     report.peak = std::max(report.peak, static_cast<double>(std::fabs(s)));
     if (std::fabs(s) >= 1.0f) ++report.clipped_samples;

@@ -15,6 +15,7 @@
 // Every pulse and step is heard propagationDelay_s(distance) after it happens.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "strike/engine.hpp"
 
@@ -30,6 +31,15 @@ double norm6(const std::array<double, 6>& v) {
 }  // namespace
 
 double SoundEngine::hertzDuration(const Voice& v, const ContactPartner& p, double speed) const {
+  // A partner that is a voice and gives no material of its own: its bank's material, its contact
+  // radius and mass (what libstrike's contact call does for two objects).
+  if (p.youngs_pa <= 0.0 && p.voice != kNoVoice) {
+    if (const Voice* q = voice(p.voice)) {
+      const double tau = hertzContactDuration(v.youngs_pa_, v.poisson_, v.contact_radius_m_, v.mass_kg_, q->youngs_pa_,
+                                              q->poisson_, q->contact_radius_m_, q->mass_kg_, speed);
+      return std::min(tau, settings_.max_contact_duration_s);
+    }
+  }
   const double youngs2 = p.youngs_pa > 0.0 ? p.youngs_pa : v.youngs_pa_;
   const double poisson2 = p.youngs_pa > 0.0 ? p.poisson : v.poisson_;
   const double radius2 = p.radius_m > 0.0 ? p.radius_m : INFINITY;

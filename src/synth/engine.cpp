@@ -35,6 +35,9 @@ bool SoundEngine::install(uint32_t slot, Voice* voice) {
   if (slot >= slots_.size() || slots_[slot] || !voice) return false;
   slots_[slot] = voice;
   voice->fresh_ = true;
+  // Its oscillators start on the engine's clock, so a contact's time means the same in every voice.
+  const uint64_t at = static_cast<uint64_t>(std::llround(voice->synth_.time() * settings_.synth.sample_rate_hz));
+  if (frames_ > at) voice->synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
   return true;
 }
 

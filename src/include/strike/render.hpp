@@ -6,6 +6,7 @@
 //      contact impulses projected onto modes, oscillator bank, mix.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -33,16 +34,21 @@ namespace strike {
 class SoundOutput {
  public:
   virtual ~SoundOutput() = default;
-  /// slot: the body's index in the scene. Errors name the body.
-  virtual Status addVoice(uint32_t slot, const VoiceDesc& voice, const std::string& name) = 0;
-  virtual void setListener(const Pose& pose) = 0;
+  /// slot: the body's index in the scene; voice.pose is ignored: the pose is given as a position
+  /// and quaternion (w, x, y, z), as a physics engine has it. Errors name the body.
+  virtual Status addVoice(uint32_t slot, const VoiceDesc& voice, const std::array<double, 3>& position_m,
+                          const std::array<double, 4>& orientation_wxyz, const std::string& name) = 0;
+  virtual void setListener(const std::array<double, 3>& position_m) = 0;
   virtual void beginStep(double step_end_s, double step_s) = 0;
-  virtual void setPose(uint32_t slot, const Pose& pose, bool asleep) = 0;
+  virtual void setPose(uint32_t slot, const std::array<double, 3>& position_m, const std::array<double, 4>& orientation_wxyz,
+                       bool asleep) = 0;
   virtual void contact(const EngineContact& contact) = 0;
   virtual void endStep() = 0;
   /// The next `frames` (<= kRenderBlockFrames) mono samples, full scale 1.0.
   virtual Status render(float* mono, size_t frames) = 0;
   virtual EngineStats stats() const = 0;
+  /// Problems to report after the render (e.g. what a fixed-size queue dropped); empty if none.
+  virtual std::vector<std::string> warnings() const { return {}; }
 };
 using SoundOutputFactory = std::function<Result<std::unique_ptr<SoundOutput>>(const EngineSettings&)>;
 
@@ -74,7 +80,8 @@ struct RenderSettings {
   /// The synthesizer's kernel (SynthSettings::simd): kernels differ only in the last bits.
   SimdLevel simd = SimdLevel::Auto;
   ProgressFn progress;
-  /// Null: the built-in sound engine. Else where the simulation goes instead (--via-library).
+  /// Null: the built-in sound engine. Else where the simulation goes instead (--via-library);
+  /// the banks are then read whole (a library loads whole bank files).
   SoundOutputFactory output;
   /// Called with each warning as soon as it is found (before the simulation for the scene's
   /// placement, so a long render does not hide it until the end); also kept in report.warnings.
@@ -97,6 +104,9 @@ struct RenderReport {
   /// per sounding body (objects_sounded) it acts on. An event between two sounding bodies counts
   /// for both; one against the ground, a silent body or one that was not heard, for one or none.
   size_t impacts = 0, sustained_contacts = 0;
+  /// Changes of a body's load (a force step each: landing, being pushed, lifted; a steady load is
+  /// silent), and steps a sleeping body's load was kept.
+  size_t load_changes = 0, load_holds = 0;
   /// Scenes that cannot be right, and silent results, in words with numbers (scene_checks.hpp).
   std::vector<std::string> warnings;
   uint64_t modes_total = 0, modes_out_of_band = 0, mode_samples = 0, max_active_modes = 0;

@@ -23,8 +23,6 @@ class CholmodSolver {
   /// Factors A (both triangles stored; CHOLMOD reads the lower one).
   Status factorize(const Eigen::SparseMatrix<double>& A);
 
-  double factorNonZeros() const { return common_.lnz; }
-
   /// x = A^{-1} b for ncols right-hand sides stored column-major with leading dimension n.
   /// With `parts`, the columns are solved in two halves, ALWAYS: the second by the helper
   /// thread when it is free, with its own CHOLMOD workspace (cholmod_solve2 only reads the

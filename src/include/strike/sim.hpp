@@ -137,6 +137,9 @@ struct ContactEvent {
   /// mesh frame), and Bullet's point is at most 4 substeps old. Proximity alone would flag a
   /// resting corner that the solver left unloaded for a while; m_lifeTime alone restarts at 0 when
   /// a manifold replaces a point, when a CCD predictive contact hands over, for GImpact and rolling.
+  /// Reported for users' analysis only: the new_contact column of `strike render --events`
+  /// (docs/cli.md) and of the Python events table. The renderer does not read it; it tells an
+  /// impact from sustained contact by normal_speed_m_s against SimSettings::impact_speed_m_s.
   bool new_contact = false;
 };
 

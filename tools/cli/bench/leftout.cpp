@@ -2,8 +2,9 @@
 // `strike bench leftout SCENE.json -o DIR`: what a render leaves out, and what that saves.
 // Renders one scene three times in this process:
 //   everything  nothing left out (RenderSettings::leave_nothing_out): every object gets a bank
-//               and an oscillator, modes up to 0.45 fs instead of 20 kHz, no audibility cut, no
-//               sleeping oscillators, no cache;
+//               and an oscillator, every mode of the banks is synthesized (no 20 kHz synth cap),
+//               the audibility threshold is at its -600 dB floor (nothing culled, nothing sleeps
+//               before it has rung down that far), no cache;
 //   normal      as `strike render` with an empty cache (eigen-solves only for what is heard);
 //   cached      as `strike render` a second time (the cache answers the eigen-solves).
 // Writes DIR/leftout.csv (one row per run: times per phase, modes, work), the everything and the

@@ -322,6 +322,7 @@ class Simulation {
   void postTick();
   double energy(std::vector<double>* kinetic) const;
   void hastenSleep();
+  void recordStates(std::vector<SimBodyState>& states) const;
   ContactCoefficients coefficients(int index_a, int index_b) const;
   static void preTickThunk(btDynamicsWorld* world, btScalar) {
     static_cast<Simulation*>(world->getWorldUserInfo())->preTick();
@@ -663,6 +664,20 @@ ContactCoefficients Simulation::coefficients(int index_a, int index_b) const {
     if (!std::isnan(pair.friction)) c.friction = pair.friction;
   }
   return c;
+}
+
+void Simulation::recordStates(std::vector<SimBodyState>& states) const {
+  for (const auto& b : bodies_) {
+    const btRigidBody& rb = *b->rigid;
+    const btTransform world_from_mesh = rb.getWorldTransform() * b->body_from_mesh;
+    const btQuaternion q = world_from_mesh.getRotation();
+    SimBodyState state;
+    state.position_m = fromBt(world_from_mesh.getOrigin());
+    state.orientation_wxyz = {q.w(), q.x(), q.y(), q.z()};
+    state.velocity_m_s = fromBt(rb.getLinearVelocity());
+    state.asleep = !b->is_static && rb.getActivationState() == ISLAND_SLEEPING;
+    states.push_back(state);
+  }
 }
 
 void Simulation::hastenSleep() {
@@ -1085,6 +1100,7 @@ Result<SimResult> Simulation::run() {
     // the step count is exact and the run is deterministic.
     world_->stepSimulation(dt, 0, dt);
     if (settings_.allow_sleep) hastenSleep();
+    if (settings_.record_states) recordStates(result.states);
     if (events_.size() > settings_.max_events)
       return badInput("simulate: more than " + std::to_string(settings_.max_events) + " contact events by t = " +
                       std::to_string(double(step_ + 1) * dt) +

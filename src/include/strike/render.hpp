@@ -7,11 +7,13 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "strike/audio.hpp"
 #include "strike/bank_cache.hpp"
+#include "strike/engine.hpp"
 #include "strike/mesh.hpp"
 #include "strike/progress.hpp"
 #include "strike/scene.hpp"
@@ -22,6 +24,31 @@ namespace strike {
 
 // The tools' output level convention, kFullScalePascal (1.0 = 20 Pa), is in strike/synth.hpp:
 // libstrike uses it too.
+
+/// Where renderScene sends the simulation, step by step, exactly as a game would: the built-in
+/// sound engine, or libstrike through its public C API (`strike render --via-library`, in
+/// tools/cli/via_library.cpp). Calls come in this order: addVoice for every sounding body and
+/// setListener; then per physics step beginStep, setPose for every body, contact for each side
+/// of each contact point, endStep; and render() whenever the audio may advance.
+class SoundOutput {
+ public:
+  virtual ~SoundOutput() = default;
+  /// slot: the body's index in the scene. Errors name the body.
+  virtual Status addVoice(uint32_t slot, const VoiceDesc& voice, const std::string& name) = 0;
+  virtual void setListener(const Pose& pose) = 0;
+  virtual void beginStep(double step_end_s, double step_s) = 0;
+  virtual void setPose(uint32_t slot, const Pose& pose, bool asleep) = 0;
+  virtual void contact(const EngineContact& contact) = 0;
+  virtual void endStep() = 0;
+  /// The next `frames` (<= kRenderBlockFrames) mono samples, full scale 1.0.
+  virtual Status render(float* mono, size_t frames) = 0;
+  virtual EngineStats stats() const = 0;
+};
+using SoundOutputFactory = std::function<Result<std::unique_ptr<SoundOutput>>(const EngineSettings&)>;
+
+/// Audio comes out of the engine in blocks of this many frames, each rendered as soon as the
+/// physics has passed it by one step (a game's audio callback, at a fixed latency).
+constexpr size_t kRenderBlockFrames = 256;
 
 struct RenderSettings {
   double sample_rate_hz = 0.0;   ///< 0: the scene's
@@ -50,6 +77,8 @@ struct RenderSettings {
   /// The synthesizer's kernel (SynthSettings::simd): kernels differ only in the last bits.
   SimdLevel simd = SimdLevel::Auto;
   ProgressFn progress;
+  /// Null: the built-in sound engine. Else where the simulation goes instead (--via-library).
+  SoundOutputFactory output;
   /// Called with each warning as soon as it is found (before the simulation for the scene's
   /// placement, so a long render does not hide it until the end); also kept in report.warnings.
   std::function<void(const std::string&)> on_warning;
@@ -104,6 +133,9 @@ struct RenderResult {
 };
 
 Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& settings);
+
+/// The engine settings of a render at this sample rate and cut-off (both outputs use them).
+EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& settings, double rate_hz, double max_freq_hz);
 
 /// One row per contact event: time, bodies, points, impulses, speeds (see the header row).
 Status writeEventsCsv(const std::string& path, const RenderResult& result);

@@ -84,6 +84,9 @@ struct SimSettings {
   /// Memory cap: a run that records more contact events than this stops with an error naming
   /// the cap (`strike render --max-events`). ~100 bytes each: the default is ~2 GB.
   size_t max_events = 20'000'000;
+  /// Record every body's pose after every substep (SimResult::states): what a game engine hands
+  /// the sound engine each frame. ~80 bytes per body and substep.
+  bool record_states = false;
   ProgressFn progress;  ///< phase "simulate", fraction of simulated time; every ~100 ms of wall time
 };
 
@@ -146,8 +149,19 @@ struct ContactEvent {
   bool new_contact = false;
 };
 
+/// A body after a substep, as a game engine reports it every frame.
+struct SimBodyState {
+  std::array<double, 3> position_m{};                 ///< mesh-frame origin, world
+  std::array<double, 4> orientation_wxyz{1, 0, 0, 0}; ///< mesh frame -> world
+  std::array<double, 3> velocity_m_s{};               ///< of the centre of mass, world
+  bool asleep = false;  ///< Bullet deactivated it: it reports no contacts, yet still rests on its support
+};
+
 struct SimResult {
   std::vector<ContactEvent> events;    ///< in order of time_s
+  /// With SimSettings::record_states: states[k * bodies + i] is body i after substep k (at time
+  /// (k + 1) * substep_s). Static bodies too (never asleep).
+  std::vector<SimBodyState> states;
   /// Total mechanical energy (kinetic + gravitational potential) of the dynamic bodies, J,
   /// sampled every substep; and each body's kinetic energy maximum over the run.
   /// energy_trace_j[0] is the initial energy, then one value after each substep (substeps + 1).

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 // Private helper of src/audio: temporary names beside an output, so that rename() is atomic
-// (same directory, same file system). strike_sndfile and strike_fftw each link one dependency
-// only, so they do not link strike_bank's writeFileAtomically; this is the same scheme
-// ("<path>.tmp-<pid>-<counter>").
+// (same directory, same file system). Used by audio_file.cpp: libsndfile opens the file by name,
+// and strike_sndfile links libsndfile only, not strike_bank, so it cannot use strike_bank's
+// temporaryPathFor (strike/atomic_file.hpp); this makes names of the same form,
+// "<path>.tmp-<pid>-<counter>". (strike_fftw does link strike_bank: its PNGs are written with
+// writeFileAtomically.)
 #pragma once
 
 #include <unistd.h>

@@ -67,11 +67,14 @@ struct RenderSettings {
   int64_t max_tets = kDefaultMaxTets;  ///< size cap of each object's tet mesh (PrecomputeSettings::max_tets)
   size_t max_events = SimSettings{}.max_events;  ///< cap on recorded contact events (SimSettings::max_events)
   /// For `strike bench leftout` only: leave nothing out, to measure what leaving out saves. Every
-  /// object gets a bank and an oscillator (struck or not, however softly), every mode of the
-  /// banks is synthesized up to 0.45 x the sample rate (no 20 kHz synth cap), and the synth's
-  /// audibility threshold drops to its floor (1e-30 full scale, -600 dB): no mode is culled and
-  /// none sleeps. The eigen-solve's cut-off stays the scene's: a bank solved to another cut-off
-  /// has other eigenvector signs, which the sign-less radiation weight hears (README).
+  /// object gets a bank and an oscillator (struck or not, however softly); the synth keeps every
+  /// mode of the banks (no 20 kHz synth cap: the banks' own cut-off, the scene's max_freq_hz
+  /// capped at 0.45 x the sample rate, is the only one); and its audibility threshold drops to its
+  /// floor (1e-30 full scale, -600 dB), so no mode is culled and a mode sleeps only once it has
+  /// rung down below -600 dB. The eigen-solve's cut-off stays the scene's: a bank solved to
+  /// another cut-off has other eigenvector signs and degenerate-pair bases, which the per-mode
+  /// radiation weight (an rms over directions, without sign) does not undo, so the two renders
+  /// would differ by that arbitrariness rather than by what was left out (README).
   bool leave_nothing_out = false;
   /// Physics step, s (at most 1 ms, what the issue allows). Contact times fall on this grid, so an
   /// impact is placed within one step (48 samples at 48 kHz); 1 ms halves the simulation cost of

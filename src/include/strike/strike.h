@@ -77,9 +77,6 @@
 #define STRIKE_CALL
 #endif
 
-/** Marks API that may still change in a minor release. Everything is experimental before 1.0. */
-#define STRIKE_EXPERIMENTAL
-
 #ifdef __cplusplus
 extern "C" {
 #endif

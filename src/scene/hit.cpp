@@ -75,22 +75,21 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
     for (int a = 0; a < 3; ++a) impulse[a] = (*settings.impulse_n_s)[a];
 
   // How long the contact lasts: Hertz theory for a sphere striking a locally flat surface, at the
-  // speed that gives this impulse in an elastic rebound (J = 2 m* v).
-  double contact_time_s = 0.0;
-  if (settings.contact_time_s) {
-    contact_time_s = *settings.contact_time_s;
-  } else {
+  // speed that gives this impulse in an elastic rebound (J = 2 m* v); the engine's own rule.
+  ContactPartner striker_sphere;
+  double speed = 0.0;
+  if (!settings.contact_time_s) {
     Result<Material> striker = builtinMaterials().find(settings.striker);
     if (!striker) return striker.error();
     const double radius = settings.striker_radius_m;
     const double striker_mass = striker->density_kg_m3 * 4.0 / 3.0 * M_PI * std::pow(radius, 3);
     const double reduced_mass = striker_mass * bank.mass_kg / (striker_mass + bank.mass_kg);
     const double j_normal = std::fabs(impulse[0] * normal[0] + impulse[1] * normal[1] + impulse[2] * normal[2]);
-    const double speed = j_normal / (2.0 * reduced_mass);
-    if (speed > 0)
-      contact_time_s = hertzContactDuration(striker->youngs_pa, striker->poisson, radius, striker_mass,
-                                            bank.material.youngs_pa, bank.material.poisson,
-                                            std::numeric_limits<double>::infinity(), bank.mass_kg, speed);
+    speed = j_normal / (2.0 * reduced_mass);
+    striker_sphere.youngs_pa = striker->youngs_pa;
+    striker_sphere.poisson = striker->poisson;
+    striker_sphere.radius_m = radius;
+    striker_sphere.mass_kg = striker_mass;
   }
 
   // The sound engine with one voice, as `strike render` and libstrike run it. The listener is
@@ -100,7 +99,7 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
   engine_settings.synth.simd = settings.simd;
   engine_settings.max_voices = 1;
   engine_settings.max_block_frames = kRenderBlockFrames;
-  engine_settings.max_contact_duration_s = std::max(contact_time_s, 0.0);
+  engine_settings.max_contact_duration_s = 1.0;  // --contact-time allows up to 1 s
   engine_settings.realtime = false;
   SoundEngine engine(engine_settings);
   VoiceDesc desc;
@@ -115,6 +114,9 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
   Pose listener;
   for (int a = 0; a < 3; ++a) listener.position_m[a] = bank.centre_m[a] + settings.distance_m * side[a] / side_length;
   engine.setListener(listener);
+  const double contact_time_s = settings.contact_time_s ? *settings.contact_time_s
+                                : speed > 0.0 ? engine.contactDuration(0, striker_sphere, speed)
+                                              : 0.0;
   EngineImpact impact;
   impact.voice = 0;
   if (settings.at_m) impact.point = {requested[0], requested[1], requested[2]};

@@ -29,6 +29,11 @@ double norm6(const std::array<double, 6>& v) {
 
 }  // namespace
 
+double SoundEngine::contactDuration(uint32_t slot, const ContactPartner& partner, double normal_speed_m_s) const {
+  const Voice* v = voice(slot);
+  return v ? hertzDuration(*v, partner, normal_speed_m_s) : 0.0;
+}
+
 double SoundEngine::hertzDuration(const Voice& v, const ContactPartner& p, double speed) const {
   // A partner that is a voice and gives no material of its own: its bank's material, its contact
   // radius and mass (what libstrike's contact call does for two objects).

@@ -216,6 +216,9 @@ class SoundEngine {
   void contact(const EngineContact& contact);
   void endStep();
   void impact(const EngineImpact& impact);
+  /// The Hertz contact time of the voice in `slot` struck by `partner` at normal_speed_m_s
+  /// (capped at max_contact_duration_s), s; what contact() and impact() use. 0 for an empty slot.
+  double contactDuration(uint32_t slot, const ContactPartner& partner, double normal_speed_m_s) const;
 
   // ---- audio ---------------------------------------------------------------------------
   /// Renders the next frames (<= max_block_frames) into `channels` planar buffers (overwrites).

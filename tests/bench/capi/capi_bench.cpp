@@ -84,7 +84,8 @@ void BM_CapiRender(benchmark::State& state) {
     benchmark::DoNotOptimize(s.l.data());
     benchmark::ClobberMemory();
   }
-  strike_stats st;
+  strike_stats st{};
+  st.struct_size = sizeof st;  // 0.3: the library writes at most this many bytes
   strike_context_get_stats(s.ctx, &st);
   state.counters["active_modes"] = st.active_modes;
   state.counters["rt_factor"] = benchmark::Counter(kBlock / kRate, benchmark::Counter::kIsIterationInvariantRate);

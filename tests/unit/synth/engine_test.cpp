@@ -247,6 +247,101 @@ TEST(ContactScheduler, ASleepingBodyKeepsItsLoadInsteadOfRingingAsIfLifted) {
   EXPECT_EQ(stats.load_changes, 1u);
 }
 
+// ---- voices and the budget ----------------------------------------------------------------
+
+TEST(Voices, TheBudgetPutsTheQuietestVoiceToSleepFirst) {
+  // Two identical bodies struck alike, one at 1 m and one at 10 m (20 dB quieter at the
+  // listener); a budget of the 4 modes of one body keeps the near one ringing whole.
+  EngineSettings settings;
+  settings.synth.sample_rate_hz = kRate;
+  settings.max_voices = 2;
+  settings.max_block_frames = 256;
+  settings.max_active_modes = 4;
+  SoundEngine engine(settings);
+  VoiceDesc desc;
+  desc.bank = plateBank();
+  Voice near_voice(desc, settings), far_voice(desc, settings);
+  engine.install(0, &near_voice);
+  engine.install(1, &far_voice);
+  Pose near_pose, far_pose;
+  near_pose.position_m = {0.0, 1.0, -0.05};
+  far_pose.position_m = {0.0, 10.0, -0.05};
+  engine.setPose(0, near_pose);
+  engine.setPose(1, far_pose);
+  for (uint32_t slot : {0u, 1u}) {
+    EngineImpact hit;
+    hit.voice = slot;
+    hit.point = {0.0, 0.0, 0.0};
+    hit.impulse = {0.0, 0.0, 0.01};
+    hit.contact_duration_s = 0.0;
+    hit.time_s = 0.0;
+    engine.impact(hit);
+  }
+  std::vector<float> block(256);
+  float* ch[1] = {block.data()};
+  for (int k = 0; k < 8; ++k) engine.render(ch, 256);  // past the far body's 29 ms delay
+  const EngineStats stats = engine.stats();
+  EXPECT_EQ(stats.active_modes, 4u) << "the budget holds";
+  EXPECT_EQ(stats.modes_culled, 4u) << "the far body's four modes went";
+  EXPECT_EQ(near_voice.synthStats().active_modes, 4u);
+  EXPECT_EQ(far_voice.synthStats().active_modes, 0u);
+}
+
+TEST(ContactScheduler, AnImpactOnAnotherVoiceTakesThatVoicesMaterialRadiusAndMass) {
+  // The partner given as a voice (libstrike's contact between two objects) and the same partner
+  // given by its material, radius and mass (the ground, or a body that is not heard) must give
+  // the same Hertz pulse: the same samples.
+  auto render = [](bool as_voice) {
+    EngineSettings settings;
+    settings.synth.sample_rate_hz = kRate;
+    settings.max_voices = 2;
+    settings.max_block_frames = 256;
+    settings.realtime = false;
+    SoundEngine engine(settings);
+    VoiceDesc desc;
+    desc.bank = plateBank();
+    desc.contact_radius_m = 0.02;
+    Voice struck(desc, settings);
+    auto soft = std::make_shared<ModeBank>(*plateBank());
+    soft->material.youngs_pa = 3e9;  // a plastic partner: a longer, duller pulse
+    soft->material.poisson = 0.4;
+    soft->mass_kg = 0.05;
+    VoiceDesc other = desc;
+    other.bank = soft;
+    other.contact_radius_m = 0.01;
+    Voice partner(other, settings);
+    engine.install(0, &struck);
+    engine.install(1, &partner);
+    EngineContact c;
+    c.point = {0.0, 0.0, 0.0};
+    c.impulse = {0.0, 0.0, 0.05};
+    c.normal_speed_m_s = 2.0;
+    c.time_s = 0.001;
+    if (as_voice) {
+      c.partner.voice = 1;
+    } else {
+      c.partner.youngs_pa = 3e9;
+      c.partner.poisson = 0.4;
+      c.partner.radius_m = 0.01;
+      c.partner.mass_kg = 0.05;
+    }
+    engine.beginStep(0.002, 0.001);
+    engine.contact(c);
+    engine.endStep();
+    EXPECT_NEAR(engine.contactDuration(0, c.partner, 2.0),
+                hertzContactDuration(2e11, 0.3, 0.02, 1.0, 3e9, 0.4, 0.01, 0.05, 2.0), 1e-15);
+    std::vector<float> out(4096);
+    for (size_t n = 0; n < out.size(); n += 256) {
+      float* ch[1] = {out.data() + n};
+      engine.render(ch, 256);
+    }
+    return out;
+  };
+  const std::vector<float> by_voice = render(true), by_material = render(false);
+  ASSERT_GT(test::peakAbs(by_voice), 0.0);
+  for (size_t n = 0; n < by_voice.size(); ++n) ASSERT_EQ(by_voice[n], by_material[n]) << "sample " << n;
+}
+
 // ---- the listener follows the body --------------------------------------------------------
 
 TEST(Listener, EachBounceIsHeardWithTheDelayAndLevelOfItsDistance) {

@@ -23,8 +23,8 @@
 #include "bench_studies.hpp"
 #include "commands.hpp"
 #include "output_check.hpp"
-#include "common/beam_theory.hpp"   // tests/unit/common: the Timoshenko free-free bar reference
-#include "extreme/lamb_sphere.hpp"   // tests/unit/extreme: Lamb's free-sphere modes
+#include "references/beam_theory.hpp"  // src/references: the Timoshenko free-free bar reference
+#include "references/lamb_sphere.hpp"  // src/references: Lamb's free-sphere modes
 #include "strike/constants.hpp"
 #include "strike/precompute.hpp"
 #include "strike/synth.hpp"

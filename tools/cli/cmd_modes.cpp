@@ -7,11 +7,11 @@
 #include "commands.hpp"
 #include "output_check.hpp"
 #include "progress_reporter.hpp"
-#include "strike/bank_cache.hpp"
 #include "strike/element_order.hpp"
 #include "strike/error_estimate.hpp"
 #include "strike/mesh.hpp"
 #include "strike/materials.hpp"
+#include "strike/parse_size.hpp"
 #include "strike/precompute.hpp"
 
 namespace strike::cli {

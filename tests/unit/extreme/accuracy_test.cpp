@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Validation of the per-mode frequency error estimate (src/scene/error_estimate.cpp) on cases
+// Validation of the per-mode frequency error estimate (src/precompute/error_estimate.cpp) on cases
 // with known answers: the free-free bar (Timoshenko bending, src/references/beam_theory.hpp),
 // the free solid sphere (Lamb 1882, lamb_sphere.hpp), and a free thick plate against finer meshes. "Covered" means the true relative
 // error is at most the estimate.

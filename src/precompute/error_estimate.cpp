@@ -94,8 +94,7 @@ struct CoarseSolve {
 Result<CoarseSolve> solveCoarse(const TetMesh& mesh, const PrecomputeSettings& settings, size_t wanted,
                                 double fine_max_hz) {
   Eigen::SparseMatrix<double> K, M;
-  assembleStiffness(mesh, settings.material, K);
-  assembleMass(mesh, settings.material.density_kg_m3, M);
+  assembleStiffnessAndMass(mesh, settings.material, K, M);
   ModalSettings modal;
   // A coarser mesh is stiffer: its partners of the fine modes lie higher. Ask for the same count
   // up to twice the highest fine frequency (and never fewer than one mode).

@@ -152,8 +152,7 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
   const auto assembly_start = std::chrono::steady_clock::now();
   if (settings.progress) settings.progress("assemble", -1.0);
   Eigen::SparseMatrix<double> K, M;
-  assembleStiffness(mesh, settings.material, K);
-  assembleMass(mesh, settings.material.density_kg_m3, M);
+  assembleStiffnessAndMass(mesh, settings.material, K, M);
   const MassProperties mass = computeMassProperties(mesh, settings.material.density_kg_m3);
   bank.assembly_seconds = secondsSince(assembly_start);
   result.report.dofs = static_cast<size_t>(K.rows());

@@ -7,15 +7,11 @@
 #include <cmath>
 #include <limits>
 
+#include "strike/engine.hpp"
 #include "strike/materials.hpp"
 #include "strike/render.hpp"
 
 namespace strike {
-namespace {
-
-constexpr double kSpeedOfSoundAir_m_s = 343.0;  // dry air at 20 C
-
-}  // namespace
 
 double objectSizeM(const ModeBank& bank) {
   double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -77,8 +73,6 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
   double impulse[3] = {-0.01 * normal[0], -0.01 * normal[1], -0.01 * normal[2]};
   if (settings.impulse_n_s)
     for (int a = 0; a < 3; ++a) impulse[a] = (*settings.impulse_n_s)[a];
-  const std::vector<double> modal_impulse =
-      settings.at_m ? projectImpulse(bank, requested, impulse) : projectImpulseAtVertex(bank, vertex, impulse);
 
   // How long the contact lasts: Hertz theory for a sphere striking a locally flat surface, at the
   // speed that gives this impulse in an elastic rebound (J = 2 m* v).
@@ -99,34 +93,49 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
                                             std::numeric_limits<double>::infinity(), bank.mass_kg, speed);
   }
 
-  SynthSettings synth_settings;
-  synth_settings.sample_rate_hz = settings.sample_rate_hz;
-  synth_settings.simd = settings.simd;
-  OscillatorBank synth(synth_settings);
-  ModalObjectDesc object;
-  object.eigenvalues = bank.eigenvalues;
-  object.rayleigh_stiffness = bank.material.rayleigh_stiffness;
-  object.rayleigh_mass = bank.material.rayleigh_mass;
-  object.radiation_weight = radiationWeights(bank, settings.distance_m);
-  for (double& w : object.radiation_weight) w *= settings.gain / kFullScalePascal;
-  object.delay_s = settings.distance_m / kSpeedOfSoundAir_m_s;
-  const uint32_t id = synth.addObject(object);
-  ImpactDesc impact;
-  impact.object = id;
+  // The sound engine with one voice, as `strike render` and libstrike run it. The listener is
+  // distance_m from the object's centre of mass, on the side struck.
+  EngineSettings engine_settings;
+  engine_settings.synth.sample_rate_hz = settings.sample_rate_hz;
+  engine_settings.synth.simd = settings.simd;
+  engine_settings.max_voices = 1;
+  engine_settings.max_block_frames = kRenderBlockFrames;
+  engine_settings.max_contact_duration_s = std::max(contact_time_s, 0.0);
+  engine_settings.realtime = false;
+  SoundEngine engine(engine_settings);
+  VoiceDesc desc;
+  desc.bank = std::shared_ptr<const ModeBank>(std::shared_ptr<const ModeBank>(), &bank);  // not owned
+  desc.weights = radiationWeights(bank, engine_settings.reference_distance_m);
+  for (double& w : desc.weights) w *= settings.gain / kFullScalePascal;
+  Voice voice(desc, engine_settings);
+  engine.install(0, &voice);
+  std::array<double, 3> side = {point[0] - bank.centre_m[0], point[1] - bank.centre_m[1], point[2] - bank.centre_m[2]};
+  double side_length = std::sqrt(side[0] * side[0] + side[1] * side[1] + side[2] * side[2]);
+  if (!(side_length > 1e-12)) side = {-normal[0], -normal[1], -normal[2]}, side_length = 1.0;
+  Pose listener;
+  for (int a = 0; a < 3; ++a) listener.position_m[a] = bank.centre_m[a] + settings.distance_m * side[a] / side_length;
+  engine.setListener(listener);
+  EngineImpact impact;
+  impact.voice = 0;
+  if (settings.at_m) impact.point = {requested[0], requested[1], requested[2]};
+  else impact.surface_vertex = static_cast<int32_t>(vertex);
+  impact.impulse = {impulse[0], impulse[1], impulse[2]};
+  impact.contact_duration_s = contact_time_s;
   impact.time_s = 0.0;
-  impact.duration_s = contact_time_s;
-  impact.modal_impulse = modal_impulse.data();
-  synth.addImpact(impact);
+  engine.impact(impact);
 
   out.audio.sample_rate_hz = settings.sample_rate_hz;
   out.audio.channels = 1;
   out.audio.samples.resize(static_cast<size_t>(std::llround(settings.duration_s * settings.sample_rate_hz)));
-  synth.render(out.audio.samples.data(), out.audio.samples.size());
+  for (size_t done = 0; done < out.audio.samples.size(); done += kRenderBlockFrames) {
+    float* channels[1] = {out.audio.samples.data() + done};
+    engine.render(channels, std::min(kRenderBlockFrames, out.audio.samples.size() - done));
+  }
   for (float s : out.audio.samples) {
     out.peak = std::max(out.peak, static_cast<double>(std::fabs(s)));
     if (std::fabs(s) >= 1.0f) ++out.clipped_samples;
   }
-  out.stats = synth.stats();
+  out.stats = voice.synthStats();
   out.vertex = vertex;
   for (int a = 0; a < 3; ++a) out.point_m[a] = point[a], out.impulse_n_s[a] = impulse[a];
   out.contact_time_s = contact_time_s;

@@ -29,23 +29,11 @@
 namespace strike {
 namespace {
 
-constexpr double kSpeedOfSoundAir_m_s = 343.0;  // dry air at 20 C
 // A velocity change below 1 micrometre per second cannot be heard from any object of audible
 // size; objects struck only that softly get no eigen-solve (a conservative audibility bound).
 constexpr double kInaudibleVelocityChange_m_s = 1e-6;
-// A contact approaching faster than this is an impact (a Hertz pulse); slower ones are sustained
-// contact (a force over the step). Gravity alone adds g * step = 10 mm/s per 1 ms step to a
-// resting body, five times less. Bullet may spread one impact over several substeps and flag only
-// the first as new, so the approach speed, not the flag, decides.
-constexpr double kImpactSpeed_m_s = 0.05;
-// Sustained force changes smaller than this (relative, per step) are solver jitter, not sound.
-constexpr double kSteadyForceTolerance = 1e-3;
-// Sustained contacts closer in time than this belong to one contact span (contact damping).
-// Sleeping bodies report no contacts, so an open span at the end of the events stays open.
-constexpr double kContactGap_s = 0.02;
-// Listener closer than this to a contact is treated as this far (the point-source model's 1/r
-// would blow up).
-constexpr double kMinListenerDistance_m = 0.05;
+// Hertz pulses are capped at this length (a rubber ball's is ~1 ms): no physical pulse is cut.
+constexpr double kMaxContactDuration_s = 0.05;
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -66,15 +54,7 @@ struct Body {
   double max_velocity_change_m_s = 0.0;
   bool sounded = false;              ///< struck audibly: gets a bank and an oscillator
   bool silent = false;               ///< ...but no mode in the synthesized band
-  uint32_t synth_id = 0;
-  std::unique_ptr<ContactProjector> projector;  ///< contact impulses onto modes
-  double sustained_time_s = -1.0;           ///< substep whose sustained contacts are being summed
-  double last_sustained_time_s = -1.0;      ///< the last substep with sustained contact
-  std::vector<double> sustained_modal;      ///< their summed modal impulses
-  std::vector<uint32_t> sustained_partners; ///< the bodies it touched in that substep
-  double box_start_s = 0.0;                 ///< the open run of steady sustained force: start,
-  int box_steps = 0;                        ///< length in substeps,
-  std::vector<double> box_force;            ///< and modal impulse per substep
+  std::optional<ShapeRows> rows;     ///< shapes read at the struck vertices only (readStruckShapes)
   double contact_radius_m = 0.0;     ///< radius of the sphere of equal volume, for Hertz
 };
 
@@ -156,17 +136,18 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
 /// body was struck: read them only at the vertices of those points' nearest triangles (the
 /// projector's locator finds the same vertices again when it projects). A render of 20 plates
 /// reads ~2% of their 340 MB of shapes this way.
-Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEvent>& events, RenderReport& report) {
-  body.projector = std::make_unique<ContactProjector>(body.bank);
+Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEvent>& events, bool whole,
+                        RenderReport& report) {
+  body.rows.reset();
   const bool has_radiation = body.bank.radiation_m2.size() == body.bank.modeCount();
-  if (!has_radiation || !body.projector->locator().hasTriangles()) {
-    // Radiation strengths computed from every shape (banks written before the RADI chunk), or
-    // no triangles to locate on: the whole bank.
+  const SurfaceLocator locator(body.bank);
+  if (!has_radiation || !locator.hasTriangles() || whole) {
+    // Radiation strengths computed from every shape (banks written before the RADI chunk), no
+    // triangles to locate on, or a library that loads whole bank files: the whole bank.
     Result<ModeBank> all = body.file->readAll();
     if (!all) return all.error();
     body.bank = std::move(*all);
     body.file.reset();
-    body.projector = std::make_unique<ContactProjector>(body.bank);
     report.shape_vertices_read += body.bank.surfaceVertexCount();
     report.shape_vertices_total += body.bank.surfaceVertexCount();
     return {};
@@ -182,14 +163,14 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   for (const std::array<double, 3>& point : points) {
     uint32_t v[3];
     double w[3];
-    body.projector->locator().nearest(point.data(), v, w);
+    locator.nearest(point.data(), v, w);
     vertices.insert(vertices.end(), v, v + 3);
   }
   Result<ShapeRows> rows = body.file->readShapeRows(std::move(vertices));
   if (!rows) return rows.error();
   report.shape_vertices_read += rows->vertices.size();
   report.shape_vertices_total += body.bank.surfaceVertexCount();
-  body.projector->useRows(std::move(*rows));
+  body.rows = std::move(*rows);
   return {};
 }
 
@@ -245,7 +226,63 @@ Status hasAudibleMode(const ModeBank& bank, const SynthSettings& synth, double r
   return badInput(std::string("silent: no mode in the audible band (") + why + ")");
 }
 
+/// The built-in sound engine as a SoundOutput.
+class EngineOutput final : public SoundOutput {
+ public:
+  explicit EngineOutput(const EngineSettings& settings) : engine_(settings) {}
+  Status addVoice(uint32_t slot, const VoiceDesc& desc, const std::array<double, 3>& position_m,
+                  const std::array<double, 4>& orientation_wxyz, const std::string&) override {
+    VoiceDesc placed = desc;
+    placed.pose.set(position_m.data(), orientation_wxyz.data());
+    voices_.push_back(std::make_unique<Voice>(placed, engine_.settings()));
+    engine_.install(slot, voices_.back().get());
+    return {};
+  }
+  void setListener(const std::array<double, 3>& position_m) override {
+    Pose listener;
+    listener.position_m = position_m;
+    engine_.setListener(listener);
+  }
+  void beginStep(double step_end_s, double step_s) override { engine_.beginStep(step_end_s, step_s); }
+  void setPose(uint32_t slot, const std::array<double, 3>& position_m, const std::array<double, 4>& orientation_wxyz,
+               bool asleep) override {
+    Pose pose;
+    if (pose.set(position_m.data(), orientation_wxyz.data())) engine_.setPose(slot, pose, asleep);
+  }
+  void contact(const EngineContact& contact) override { engine_.contact(contact); }
+  void endStep() override { engine_.endStep(); }
+  Status render(float* mono, size_t frames) override {
+    float* channels[1] = {mono};
+    engine_.render(channels, frames);
+    return {};
+  }
+  EngineStats stats() const override { return engine_.stats(); }
+
+ private:
+  SoundEngine engine_;
+  std::vector<std::unique_ptr<Voice>> voices_;
+};
+
 }  // namespace
+
+EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& settings, double rate_hz, double max_freq_hz) {
+  EngineSettings engine;
+  engine.synth.sample_rate_hz = rate_hz;
+  engine.synth.max_freq_hz = std::min(20000.0, max_freq_hz);
+  engine.synth.simd = settings.simd;
+  if (settings.leave_nothing_out) {
+    engine.synth.max_freq_hz = max_freq_hz;
+    engine.synth.audibility_threshold = 0.0;
+  }
+  engine.channels = 1;
+  engine.max_voices = static_cast<uint32_t>(scene.objects.size());
+  engine.max_block_frames = kRenderBlockFrames;
+  engine.max_active_modes = 0;  // a render keeps every audible mode
+  engine.max_contact_duration_s = kMaxContactDuration_s;
+  engine.contact_damping_per_s = scene.contact_damping_per_s;
+  engine.realtime = false;
+  return engine;
+}
 
 std::string defaultCacheDir() {
   if (const char* dir = std::getenv("STRIKE_CACHE_DIR"); dir && *dir) return dir;
@@ -304,6 +341,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   sim.gravity_m_s2 = scene.gravity_m_s2;
   sim.substep_s = substep;
   sim.max_events = settings.max_events;
+  sim.record_states = true;  // the sound engine follows each body as it moves
   sim.impact_speed_m_s = kImpactSpeed_m_s;  // impacts are timed within the step (ContactEvent::time_s)
   sim.ground = scene.has_ground;
   sim.ground_height_m = scene.ground_height_m;
@@ -374,12 +412,12 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     }
     body.sounded = true;
     if (body.file) {
-      Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, report);
+      Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), report);
       if (read) continue;
       if (!body.object->bank.empty()) return read.error();  // the user's bank file is damaged
       // A cache entry whose shapes are damaged is recomputed, not trusted.
       body.file.reset();
-      body.projector.reset();
+      body.rows.reset();
       body.has_modes = false;
       if (body.from_cache) {
         --report.banks_cached;
@@ -402,14 +440,14 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       lock = CacheEntryLock(cachePath(settings.cache_dir, body.cache_key, ".lock"));
       if (lock.held() && !body.from_cache && openCached(settings.cache_dir, body, report)) {
         // Solved by whoever held the lock while this render simulated or waited.
-        if (readStruckShapes(body, static_cast<uint32_t>(i), result.events, report)) {
+        if (readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), report)) {
           body.mesh.reset();
           continue;
         }
         --report.banks_cached;
         report.precompute_saved_seconds -= body.bank.factorize_seconds + body.bank.lanczos_seconds;
         body.file.reset();
-        body.projector.reset();
+        body.rows.reset();
         body.has_modes = false;
         body.from_cache = false;
       }
@@ -435,215 +473,144 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     if (pruned) report.cache_pruned = pruned->removed, report.cache_pruned_bytes = pruned->bytes_removed;
   }
 
-  // ---- Phase 3: impacts into the oscillator bank --------------------------------------------
+  // ---- Phase 3: the simulation, step by step, into the sound engine -------------------------
   const auto synth_start = std::chrono::steady_clock::now();
-  SynthSettings synth_settings;
-  synth_settings.sample_rate_hz = rate;
-  synth_settings.max_freq_hz = std::min(20000.0, max_freq_hz);
-  synth_settings.simd = settings.simd;
-  if (settings.leave_nothing_out) {
-    synth_settings.max_freq_hz = max_freq_hz;
-    synth_settings.audibility_threshold = 0.0;
+  const EngineSettings engine_settings = renderEngineSettings(scene, settings, rate, max_freq_hz);
+  std::unique_ptr<SoundOutput> output;
+  if (settings.output) {
+    Result<std::unique_ptr<SoundOutput>> made = settings.output(engine_settings);
+    if (!made) return made.error();
+    output = std::move(*made);
+  } else {
+    output = std::make_unique<EngineOutput>(engine_settings);
   }
-  OscillatorBank synth(synth_settings);
-  for (Body& body : bodies) {
+  std::vector<bool> has_voice(bodies.size(), false);
+  for (size_t index = 0; index < bodies.size(); ++index) {
+    Body& body = bodies[index];
     if (!body.sounded) continue;
-    if (Status audible = hasAudibleMode(body.bank, synth_settings, rate); !audible) {
+    if (Status audible = hasAudibleMode(body.bank, engine_settings.synth, rate); !audible) {
       ++report.objects_silent;
       body.silent = true;
       warn("objects \"" + body.object->name + "\": " + audible.error().message);
-    } else {
-      ++report.objects_sounded;
-    }
-    // The listener hears each object from where it was first struck (objects that travel far
-    // while ringing are not tracked: a documented simplification).
-    std::array<double, 3> where = body.object->position_m;
-    const uint32_t index = static_cast<uint32_t>(&body - bodies.data());
-    for (const ContactEvent& event : result.events)
-      if (event.body_a == index || event.body_b == index) {
-        where = event.point_world;
-        break;
-      }
-    std::array<double, 3> offset{};
-    for (int a = 0; a < 3; ++a) offset[a] = where[a] - scene.listener_position_m[a];
-    const double distance = std::max(kMinListenerDistance_m, norm(offset));
-    ModalObjectDesc desc;
-    desc.eigenvalues = body.bank.eigenvalues;
-    desc.rayleigh_stiffness = body.bank.material.rayleigh_stiffness;
-    desc.rayleigh_mass = body.bank.material.rayleigh_mass;
-    desc.radiation_weight = radiationWeights(body.bank, distance);
-    for (double& w : desc.radiation_weight) w *= settings.gain / kFullScalePascal;
-    desc.delay_s = distance / kSpeedOfSoundAir_m_s;
-    body.synth_id = synth.addObject(desc);
-    if (!body.projector) body.projector = std::make_unique<ContactProjector>(body.bank);
-  }
-
-  // Contact damping: while a body is in sustained contact, its modes lose energy into what it
-  // touches. Contact spans are the runs of sustained-contact steps with gaps under kContactGap_s.
-  if (scene.contact_damping_per_s > 0) {
-    for (size_t index = 0; index < bodies.size(); ++index) {
-      Body& body = bodies[index];
-      if (!body.sounded) continue;
-      double span_start = -1.0, last = -1.0;
-      for (const ContactEvent& event : result.events) {
-        if ((event.body_a != index && event.body_b != index) || event.normal_speed_m_s > kImpactSpeed_m_s) continue;
-        if (span_start >= 0 && event.time_s - last > kContactGap_s) {
-          synth.setExtraDamping(body.synth_id, span_start, scene.contact_damping_per_s);
-          synth.setExtraDamping(body.synth_id, last + kContactGap_s, 0.0);
-          span_start = -1.0;
-        }
-        if (span_start < 0) span_start = event.time_s;
-        last = event.time_s;
-      }
-      // A span still open at the end lasts: the body came to rest on something.
-      if (span_start >= 0) synth.setExtraDamping(body.synth_id, span_start, scene.contact_damping_per_s);
-    }
-  }
-
-  // Sustained contacts of one body in one substep are one force over that step: their modal
-  // impulses add (the projection is linear in J). Consecutive steps whose force stays within
-  // kSteadyForceTolerance of the run's first step are one longer box (contiguous boxes of one
-  // force are exactly one box), so a body resting for seconds costs a few pulses, not thousands;
-  // what is dropped is solver jitter 60 dB below the resting force.
-  std::vector<double> modal;
-  auto emitBox = [&](Body& body) {
-    if (body.box_steps == 0) return;
-    for (double& g : body.box_force) g *= body.box_steps;
-    ImpactDesc impact;
-    impact.object = body.synth_id;
-    // Ramped over one step and centred on the steps: the step forces are linearly interpolated,
-    // not held, so solver jitter does not ring at the step rate (1 kHz) and its harmonics.
-    impact.time_s = body.box_start_s - 0.5 * substep;
-    impact.duration_s = body.box_steps * substep;
-    impact.ramp_s = substep;
-    impact.shape = PulseShape::Box;
-    impact.modal_impulse = body.box_force.data();
-    synth.addImpact(impact);
-    body.box_steps = 0;
-  };
-  auto flushSustained = [&](Body& body) {
-    if (body.sustained_time_s < 0) return;
-    const bool contiguous = body.box_steps > 0 &&
-        std::fabs(body.sustained_time_s - (body.box_start_s + body.box_steps * substep)) < 0.25 * substep;
-    bool steady = contiguous;
-    if (steady) {
-      double scale = 0.0, change = 0.0;
-      for (size_t i = 0; i < body.box_force.size(); ++i) {
-        scale = std::max(scale, std::fabs(body.box_force[i]));
-        change = std::max(change, std::fabs(body.sustained_modal[i] - body.box_force[i]));
-      }
-      steady = change <= kSteadyForceTolerance * scale;
-    }
-    if (!steady) {
-      emitBox(body);
-      body.box_start_s = body.sustained_time_s;
-      body.box_force = body.sustained_modal;
-    }
-    ++body.box_steps;
-    body.last_sustained_time_s = body.sustained_time_s;
-    body.sustained_time_s = -1.0;
-  };
-  for (const ContactEvent& event : result.events) {
-    for (int side = 0; side < 2; ++side) {
-      const uint32_t index = side == 0 ? event.body_a : event.body_b;
-      const uint32_t other = side == 0 ? event.body_b : event.body_a;
-      if (index == kGroundBody || !bodies[index].sounded) continue;
-      Body& body = bodies[index];
-      const auto& point = side == 0 ? event.point_a_mesh : event.point_b_mesh;
-      const auto& impulse = side == 0 ? event.impulse_on_a_mesh : event.impulse_on_b_mesh;
-      modal.resize(body.bank.modeCount());
-      body.projector->projectImpulseInto(point.data(), impulse.data(), modal.data());
-      if (event.normal_speed_m_s > kImpactSpeed_m_s) {
-        // An impact: a Hertz pulse, short and bright when hard and fast [Johnson 1985].
-        const Material& m1 = body.bank.material;
-        const bool ground = other == kGroundBody;
-        const Material& m2 = ground ? scene.ground_material : bodies[other].bank.material;
-        const double r2 = ground ? INFINITY : bodies[other].contact_radius_m;
-        const double mass2 = ground || bodies[other].object->is_static ? INFINITY : bodies[other].bank.mass_kg;
-        const double mass1 = body.object->is_static ? INFINITY : body.bank.mass_kg;
-        ImpactDesc impact;
-        impact.object = body.synth_id;
-        impact.time_s = event.time_s;
-        impact.modal_impulse = modal.data();
-        impact.duration_s = hertzContactDuration(m1.youngs_pa, m1.poisson, body.contact_radius_m, mass1, m2.youngs_pa,
-                                                 m2.poisson, r2, mass2, event.normal_speed_m_s);
-        impact.shape = PulseShape::HalfSine;
-        synth.addImpact(impact);
-        if (!body.silent) ++report.impacts;
-      } else {
-        // Sustained contact: the step's impulse is a constant force over the step, so a
-        // steady resting force is a constant and makes no sound; only its changes do.
-        if (body.sustained_time_s != event.time_s) {
-          flushSustained(body);
-          body.sustained_time_s = event.time_s;
-          body.sustained_modal.assign(modal.size(), 0.0);
-          body.sustained_partners.clear();
-        }
-        body.sustained_partners.push_back(other);
-        for (size_t i = 0; i < modal.size(); ++i) body.sustained_modal[i] += modal[i];
-        if (!body.silent) ++report.sustained_contacts;
-      }
-    }
-  }
-  for (Body& body : bodies) {
-    flushSustained(body);
-    emitBox(body);
-  }
-
-  // A body Bullet puts to sleep reports no more contacts, but it still rests on its support: its
-  // last resting force is held to the end, or its disappearance would ring the modes like a lift.
-  // The same for a static body (a table) whose last sustained contacts were all with bodies that
-  // fell asleep on it: the weight it carries stays.
-  const std::vector<double>& asleep_since = simulated->sleep_start_s;
-  auto asleepAtEnd = [&](uint32_t index) {
-    return index != kGroundBody && index < asleep_since.size() && std::isfinite(asleep_since[index]);
-  };
-  for (size_t index = 0; index < bodies.size(); ++index) {
-    Body& body = bodies[index];
-    if (!body.sounded || body.last_sustained_time_s < 0) continue;
-    const double hold_start = body.last_sustained_time_s + substep;
-    if (hold_start >= duration) continue;
-    if (body.object->is_static) {
-      bool all_asleep = !body.sustained_partners.empty();
-      for (uint32_t other : body.sustained_partners) all_asleep = all_asleep && asleepAtEnd(other);
-      if (!all_asleep) continue;
-    } else if (norm(simulated->final_velocity_m_s[index]) > kImpactSpeed_m_s) {
       continue;
     }
-    bool later_impact = false;
-    for (const ContactEvent& event : result.events)
-      if ((event.body_a == index || event.body_b == index) && event.step_time_s > body.last_sustained_time_s) later_impact = true;
-    if (later_impact) continue;
-    const double hold = duration - hold_start;
-    for (double& g : body.sustained_modal) g *= hold / substep;  // same force, longer box
-    ImpactDesc impact;
-    impact.object = body.synth_id;
-    impact.time_s = hold_start - 0.5 * substep;
-    impact.duration_s = hold;
-    impact.ramp_s = substep;
-    impact.shape = PulseShape::Box;
-    impact.modal_impulse = body.sustained_modal.data();
-    synth.addImpact(impact);
+    ++report.objects_sounded;
+    VoiceDesc voice;
+    voice.bank = std::shared_ptr<const ModeBank>(std::shared_ptr<const ModeBank>(), &body.bank);  // not owned
+    if (body.rows) voice.rows = std::move(*body.rows), voice.use_rows = true;
+    voice.weights = radiationWeights(body.bank, engine_settings.reference_distance_m);
+    for (double& w : voice.weights) w *= settings.gain / kFullScalePascal;
+    voice.is_static = body.object->is_static;
+    voice.contact_radius_m = body.contact_radius_m;
+    if (Status added = output->addVoice(static_cast<uint32_t>(index), voice, body.object->position_m,
+                                        body.object->orientation_wxyz, body.object->name);
+        !added)
+      return added.error();
+    has_voice[index] = true;
   }
+  output->setListener(scene.listener_position_m);
+
+  // The events by physics step (they are in order of time_s, and an impact's time may fall in
+  // the step before the one that solved it).
+  const size_t steps = simulated->substeps;
+  std::vector<size_t> step_first(steps + 1, 0);
+  for (const ContactEvent& event : result.events)
+    ++step_first[std::min<size_t>(steps - 1, static_cast<size_t>(std::llround(event.step_time_s / substep))) + 1];
+  for (size_t k = 0; k < steps; ++k) step_first[k + 1] += step_first[k];
+  std::vector<uint32_t> by_step(result.events.size());
+  {
+    std::vector<size_t> fill(step_first.begin(), step_first.end() - 1);
+    for (size_t e = 0; e < result.events.size(); ++e) {
+      const size_t k = std::min<size_t>(steps - 1, static_cast<size_t>(std::llround(result.events[e].step_time_s / substep)));
+      by_step[fill[k]++] = static_cast<uint32_t>(e);
+    }
+  }
+  // The other body as the Hertz contact time needs it: a sounding body by its voice, anything
+  // else by its material, size and mass.
+  auto partnerOf = [&](uint32_t other) {
+    ContactPartner partner;
+    if (other == kGroundBody) {
+      partner.youngs_pa = scene.ground_material.youngs_pa;
+      partner.poisson = scene.ground_material.poisson;
+      partner.voice = kNoVoice;
+      return partner;
+    }
+    if (has_voice[other]) {
+      partner.voice = other;  // its material from its bank; its sleep keeps a static body's load
+      return partner;
+    }
+    const Body& body = bodies[other];
+    partner.youngs_pa = body.bank.material.youngs_pa;
+    partner.poisson = body.bank.material.poisson;
+    partner.radius_m = body.contact_radius_m;
+    partner.mass_kg = body.object->is_static ? 0.0 : body.bank.mass_kg;
+    return partner;
+  };
 
   AudioBuffer& audio = result.audio;
   audio.sample_rate_hz = rate;
   audio.channels = 1;
   audio.samples.assign(static_cast<size_t>(std::llround(duration * rate)), 0.0f);
-  const size_t chunk = 8192;
-  for (size_t done = 0; done < audio.samples.size(); done += chunk) {
-    synth.render(audio.samples.data() + done, std::min(chunk, audio.samples.size() - done));
-    if (settings.progress) settings.progress("synthesize", static_cast<double>(done) / audio.samples.size());
+  size_t rendered = 0;
+  // Blocks whose end lies a physics step behind the step just fed: nothing later can land in them.
+  auto renderUpTo = [&](size_t frame_end) -> Status {
+    frame_end = std::min(frame_end, audio.samples.size());
+    while (rendered + kRenderBlockFrames <= frame_end || (frame_end == audio.samples.size() && rendered < frame_end)) {
+      const size_t frames = std::min(kRenderBlockFrames, audio.samples.size() - rendered);
+      if (Status ok = output->render(audio.samples.data() + rendered, frames); !ok) return ok;
+      rendered += frames;
+    }
+    return {};
+  };
+  const size_t n = bodies.size();
+  double last_progress = -1.0;
+  for (size_t k = 0; k < steps; ++k) {
+    const double step_end = static_cast<double>(k + 1) * substep;
+    output->beginStep(step_end, substep);
+    for (size_t i = 0; i < n; ++i) {
+      const SimBodyState& state = simulated->states[k * n + i];
+      if (has_voice[i]) output->setPose(static_cast<uint32_t>(i), state.position_m, state.orientation_wxyz, state.asleep);
+    }
+    for (size_t j = step_first[k]; j < step_first[k + 1]; ++j) {
+      const ContactEvent& event = result.events[by_step[j]];
+      for (int side = 0; side < 2; ++side) {
+        const uint32_t index = side == 0 ? event.body_a : event.body_b;
+        const uint32_t other = side == 0 ? event.body_b : event.body_a;
+        if (index == kGroundBody || !has_voice[index]) continue;
+        EngineContact contact;
+        contact.voice = index;
+        contact.point = side == 0 ? event.point_a_mesh : event.point_b_mesh;
+        contact.impulse = side == 0 ? event.impulse_on_a_mesh : event.impulse_on_b_mesh;
+        contact.normal_speed_m_s = event.normal_speed_m_s;
+        contact.time_s = event.time_s;
+        contact.partner = partnerOf(other);
+        output->contact(contact);
+      }
+    }
+    output->endStep();
+    const double safe_s = step_end - substep;  // the next step's contacts start no earlier
+    if (Status ok = renderUpTo(safe_s > 0 ? static_cast<size_t>(std::floor(safe_s * rate)) : 0); !ok) return ok.error();
+    const double fraction = static_cast<double>(rendered) / std::max<size_t>(audio.samples.size(), 1);
+    if (settings.progress && fraction - last_progress >= 0.01) {
+      settings.progress("synthesize", fraction);
+      last_progress = fraction;
+    }
   }
+  if (Status ok = renderUpTo(audio.samples.size()); !ok) return ok.error();
+  const EngineStats engine_stats = output->stats();
+  report.impacts = engine_stats.impacts + engine_stats.impacts_inaudible;
+  report.sustained_contacts = engine_stats.sustained_contacts;
+  report.load_changes = engine_stats.load_changes;
+  report.load_holds = engine_stats.load_holds;
+  for (std::string& text : output->warnings()) warn(std::move(text));
   for (float s : audio.samples) {
     report.peak = std::max(report.peak, static_cast<double>(std::fabs(s)));
     if (std::fabs(s) >= 1.0f) ++report.clipped_samples;
   }
-  const SynthStats stats = synth.stats();
-  report.modes_total = stats.modes_total;
-  report.modes_out_of_band = stats.modes_out_of_band;
-  report.mode_samples = stats.mode_samples;
-  report.max_active_modes = stats.max_active_modes;
+  report.modes_total = engine_stats.modes_total;
+  report.modes_out_of_band = engine_stats.modes_out_of_band;
+  report.mode_samples = engine_stats.mode_samples;
+  report.max_active_modes = engine_stats.max_active_modes;
   report.synthesize_seconds = secondsSince(synth_start);
   for (const Body& body : bodies)
     result.banks.push_back({body.object->bank.empty() ? body.cache_key : 0, body.object->bank, body.sounded});

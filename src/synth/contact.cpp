@@ -233,7 +233,12 @@ void SurfaceLocator::projectImpulseInto(const double point[3], const double impu
 }
 
 ContactProjector::ContactProjector(const ModeBank& bank, size_t max_points)
-    : locator_(bank), bank_(&bank), max_points_(std::max<size_t>(max_points, 1)) {}
+    : locator_(bank), bank_(&bank), max_points_(std::max<size_t>(max_points, 1)) {
+  // All the memory it will use, now: projecting never allocates (libstrike's audio thread).
+  points_.reserve(3 * max_points_);
+  weights_.reserve(3 * max_points_);
+  shapes_.reserve(bank.modeCount() * 9 * max_points_);
+}
 
 void ContactProjector::useRows(ShapeRows rows) {
   rows_ = std::move(rows);

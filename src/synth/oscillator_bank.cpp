@@ -58,6 +58,10 @@ using detail::Complex;
 constexpr size_t kBlock = kSynthAnchorBlock;
 // Below ~-600 dB nothing is audible whatever the threshold; also keeps doubles out of denormals.
 constexpr double kThresholdFloor = 1e-30;
+// Contact-damping changes an object may have pending at once without allocating (a contact span
+// opens and closes at most once per physics step, and only changes within the listener delay and
+// the scheduling lead are pending).
+constexpr size_t kDampingReserve = 64;
 
 size_t roundUp(size_t n, size_t m) { return (n + m - 1) / m * m; }
 
@@ -198,8 +202,7 @@ struct OscillatorBank::Impl {
     uint32_t object;
     double extra_decay_per_s;
   };
-  std::vector<DampingChange> damping_changes;  // sorted by sample
-  size_t damping_cursor = 0;
+  std::vector<DampingChange> damping_changes;  // pending, sorted by sample; capacity kDampingReserve per object
   SynthStats stats;
 
   explicit Impl(const SynthSettings& s) : settings(s) {
@@ -268,6 +271,8 @@ struct OscillatorBank::Impl {
     slot_mode.grow(cap);
     damped_mode.reserve(damped_total);
     damped_x.reserve(2 * damped_total);
+    obj.damping_schedule.reserve(kDampingReserve);
+    damping_changes.reserve(kDampingReserve * (objects.size() + 1));
     objects.push_back(obj);
     if (reserved_hits > 0 || reserved_transient > 0) reserveImpacts(pool.size(), reserved_transient);
     return static_cast<uint32_t>(objects.size() - 1);
@@ -500,6 +505,109 @@ struct OscillatorBank::Impl {
     return ImpactResult::Scheduled;
   }
 
+  // A change dF of a sustained force, ramped linearly over [t0, t0 + r] (r = 0: a step). For a
+  // ringing mode the force ramp's response is, besides the static deflection that cancels the
+  // force's own feedthrough (as for the box above), e^{pU} b g / (p^2 r) at t0 minus the same at
+  // t0 + r, g = phi . dF; for r = 0 one injection b g / p. A non-ringing mode's deviation from its
+  // new static deflection starts at (omega0 q, q') = (-g / omega0, 0), taken at the ramp's
+  // centroid (such modes decay within a few periods, far shorter than anything heard of a ramp).
+  // Cost: two or three injections, whatever the force.
+  ImpactResult addForceStep(const ForceStepDesc& desc, bool no_alloc) {
+    if (desc.object >= objects.size()) return ImpactResult::BadObject;
+    const ObjectInfo& obj = objects[desc.object];
+    double t0 = (desc.time_s + obj.delay_s) * fs;
+    if (!(t0 >= static_cast<double>(pos))) t0 = static_cast<double>(pos);
+    const double ramp = desc.ramp_s * fs;
+    const bool ramped = ramp >= 1e-6 && std::isfinite(ramp);
+    const double ramp_s = ramped ? ramp * h : 0.0;
+    const int ringing_edges = ramped ? 2 : 1;
+    bool has_damped = false;
+    for (uint32_t j = 0; j < obj.mode_count && desc.modal_force_change; ++j)
+      if (modes[obj.first_mode + j].kind == ModeKind::Damped && desc.modal_force_change[j] != 0.0) has_damped = true;
+    const size_t records = static_cast<size_t>(ringing_edges) + (has_damped ? 1 : 0);
+    if (free_records.size() < records) {
+      if (no_alloc) return ImpactResult::NoCapacity;
+      reserveImpacts(std::max<size_t>(16, pool.size() * 2 + records), 0);
+    }
+    if (no_alloc)
+      for (size_t k = 0; k < records; ++k)
+        if (pool[free_records[free_records.size() - 1 - k]].hits.capacity() < obj.mode_count) return ImpactResult::NoCapacity;
+    double extra_damping = 0.0;
+    {
+      const auto& schedule = obj.damping_schedule;
+      const uint64_t first = std::max<uint64_t>(static_cast<uint64_t>(std::ceil(t0 - 1e-7)), pos);
+      auto after = std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(first, static_cast<double>(INFINITY)));
+      if (after != schedule.begin()) extra_damping = std::prev(after)->second;
+    }
+    ++stats.impacts;
+    bool audible = false;
+    auto schedule = [&](Impact& im, uint32_t record) {
+      if (im.hits.empty()) {
+        free_records.push_back(record);
+        return;
+      }
+      auto at = std::upper_bound(pending.begin(), pending.end(), im.start_sample,
+                                 [this](uint64_t s0, uint32_t other) { return s0 < pool[other].start_sample; });
+      pending.insert(at, record);
+    };
+    auto take = [&](double at_sample) {
+      const uint32_t record = free_records.back();
+      free_records.pop_back();
+      Impact& im = pool[record];
+      im.start_sample = im.end_sample = std::max<uint64_t>(static_cast<uint64_t>(std::ceil(at_sample - 1e-7)), pos);
+      im.injected = false;
+      im.hits.clear();
+      im.transient.clear();
+      return record;
+    };
+    for (int edge = 0; edge < ringing_edges; ++edge) {
+      const double te = t0 + (edge == 1 ? ramp : 0.0);
+      const uint32_t record = take(te);
+      Impact& im = pool[record];
+      const double after_s = (static_cast<double>(im.start_sample) - te) * h;
+      const double sign = edge == 0 ? 1.0 : -1.0;
+      for (uint32_t j = 0; j < obj.mode_count && desc.modal_force_change; ++j) {
+        const double g = desc.modal_force_change[j];
+        if (g == 0.0 || !std::isfinite(g)) continue;
+        const uint32_t mi = obj.first_mode + j;
+        const ModeInfo& m = modes[mi];
+        if (m.kind != ModeKind::Ringing) continue;
+        const Complex pole = m.base_pole - extra_damping;
+        const Complex amplitude = ramped ? g * m.out_weight / (pole * pole * ramp_s) : g * m.out_weight / pole;
+        // Audible when the net ringing after the ramp, |b g (e^{p r} - 1) / (p^2 r)|, is.
+        const Complex net = ramped ? amplitude * (std::exp(pole * ramp_s) - 1.0) : amplitude;
+        if (edge == 0 && std::abs(net) >= threshold) audible = true;
+        im.hits.push_back({mi, sign * amplitude * std::exp(pole * after_s)});
+      }
+      schedule(im, record);
+    }
+    if (has_damped) {
+      const double centroid = t0 + 0.5 * (ramped ? ramp : 0.0);
+      // Injected at the ramp's end or later, evolved from the centroid.
+      const uint32_t record = take(t0 + (ramped ? ramp : 0.0));
+      Impact& im = pool[record];
+      const double after_s = (static_cast<double>(im.start_sample) - centroid) * h;
+      for (uint32_t j = 0; j < obj.mode_count && desc.modal_force_change; ++j) {
+        const double g = desc.modal_force_change[j];
+        const uint32_t mi = obj.first_mode + j;
+        const ModeInfo& m = modes[mi];
+        if (m.kind != ModeKind::Damped || g == 0.0 || !std::isfinite(g)) continue;
+        const std::array<double, 4> x0{-g / m.omega0, 0.0, 0.0, 0.0};
+        const std::array<double, 4> x =
+            detail::mul4(detail::expm4(detail::augmentedMatrix(m.omega0, m.damping_c, 0.0), after_s), x0);
+        if (!(dampedAmplitude(m, x[0], x[1]) >= threshold)) continue;
+        audible = true;
+        im.hits.push_back({mi, Complex(x[0], x[1])});
+      }
+      schedule(im, record);
+    }
+    if (!audible) {
+      ++stats.impacts_inaudible;
+      return ImpactResult::Inaudible;
+    }
+    return ImpactResult::Scheduled;
+  }
+
   static double dampedAmplitude(const ModeInfo& m, double x1, double v) {
     return std::fabs(m.radiation) * (m.omega0 * std::fabs(x1) + m.damping_c * std::fabs(v));
   }
@@ -687,28 +795,36 @@ struct OscillatorBank::Impl {
     }
   }
 
-  void scheduleExtraDamping(uint32_t object, double time_s, double extra_decay_per_s) {
-    if (object >= objects.size() || !(extra_decay_per_s >= 0.0) || !std::isfinite(extra_decay_per_s)) return;
+  // no_alloc: refuse (false) rather than grow the schedules beyond what addObject reserved.
+  bool scheduleExtraDamping(uint32_t object, double time_s, double extra_decay_per_s, bool no_alloc) {
+    if (object >= objects.size() || !(extra_decay_per_s >= 0.0) || !std::isfinite(extra_decay_per_s)) return false;
     const double t = (time_s + objects[object].delay_s) * fs;
     // Changes take effect at block ends: round up to the block grid so impacts know exactly
     // which pole is in force.
     uint64_t sample = t > static_cast<double>(pos) ? static_cast<uint64_t>(std::ceil(t)) : pos;
     sample = (sample + kBlock - 1) / kBlock * kBlock;
-    DampingChange change{sample, object, extra_decay_per_s};
     auto& schedule = objects[object].damping_schedule;
+    // Entries in the past matter only through the last of them (the pole in force now).
+    size_t past = 0;
+    while (past + 1 < schedule.size() && schedule[past + 1].first <= pos) ++past;
+    if (past > 0) schedule.erase(schedule.begin(), schedule.begin() + static_cast<std::ptrdiff_t>(past));
+    if (no_alloc && (schedule.size() == schedule.capacity() || damping_changes.size() == damping_changes.capacity()))
+      return false;
+    DampingChange change{sample, object, extra_decay_per_s};
     schedule.insert(std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(sample, static_cast<double>(INFINITY))),
                     std::make_pair(sample, extra_decay_per_s));
-    auto at = std::upper_bound(damping_changes.begin() + static_cast<std::ptrdiff_t>(damping_cursor),
-                               damping_changes.end(), sample,
+    auto at = std::upper_bound(damping_changes.begin(), damping_changes.end(), sample,
                                [](uint64_t s0, const DampingChange& c) { return s0 < c.sample; });
     damping_changes.insert(at, change);
+    return true;
   }
 
   // Exact: the pole moves left by the extra rate, so the mode keeps its frequency and its state
   // continues from where it is; only its decay from here on changes.
   void applyDampingChanges() {
-    while (damping_cursor < damping_changes.size() && damping_changes[damping_cursor].sample <= pos) {
-      const DampingChange& c = damping_changes[damping_cursor++];
+    size_t applied = 0;
+    while (applied < damping_changes.size() && damping_changes[applied].sample <= pos) {
+      const DampingChange& c = damping_changes[applied++];
       const ObjectInfo& obj = objects[c.object];
       for (uint32_t j = 0; j < obj.mode_count; ++j) {
         ModeInfo& m = modes[obj.first_mode + j];
@@ -726,6 +842,7 @@ struct OscillatorBank::Impl {
         dco_im[i] = m.step.imag();
       }
     }
+    damping_changes.erase(damping_changes.begin(), damping_changes.begin() + static_cast<std::ptrdiff_t>(applied));
   }
 
   // Squared output level of active entry k: ringing slots first, then damped modes.
@@ -753,6 +870,30 @@ struct OscillatorBank::Impl {
     }
     stats.active_modes = n_active + damped_mode.size();
     return culled;
+  }
+
+  // Nothing rings and nothing is pending: time passes, and only the contact-damping changes due
+  // meanwhile take effect (they move poles of modes that are not ringing).
+  void skipIdle(size_t frames) {
+    pos += frames;
+    applyDampingChanges();
+  }
+
+  void reset() {
+    while (n_active > 0) removeRinging(n_active - 1);
+    while (!damped_mode.empty()) removeDamped(damped_mode.size() - 1);
+    for (uint32_t record : pending) free_records.push_back(record);
+    pending.clear();
+    damping_changes.clear();
+    for (ObjectInfo& o : objects) o.damping_schedule.clear();
+    for (ModeInfo& m : modes) {
+      if (m.kind != ModeKind::Ringing) continue;
+      m.pole = m.base_pole;
+      m.step = m.base_step;
+      m.block_step = std::exp(m.pole * (static_cast<double>(kBlock) * h));
+    }
+    pos = 0;
+    stats.active_modes = 0;
   }
 
   void render(float* out, size_t frames) {
@@ -801,11 +942,22 @@ size_t OscillatorBank::sleepModesAtOrBelow(float level2, float scale2) {
   return impl_->sleepModesAtOrBelow(level2, scale2);
 }
 void OscillatorBank::setExtraDamping(uint32_t object, double time_s, double extra_decay_per_s) {
-  impl_->scheduleExtraDamping(object, time_s, extra_decay_per_s);
+  (void)impl_->scheduleExtraDamping(object, time_s, extra_decay_per_s, false);
 }
+bool OscillatorBank::setExtraDampingNoAlloc(uint32_t object, double time_s, double extra_decay_per_s) {
+  return impl_->scheduleExtraDamping(object, time_s, extra_decay_per_s, true);
+}
+ImpactResult OscillatorBank::addForceStep(const ForceStepDesc& step) { return impl_->addForceStep(step, false); }
+ImpactResult OscillatorBank::addForceStepNoAlloc(const ForceStepDesc& step) { return impl_->addForceStep(step, true); }
 void OscillatorBank::render(float* out, size_t frames) {
   if (out && frames > 0) impl_->render(out, frames);
 }
+void OscillatorBank::skip(float* out, size_t frames) {
+  if (!idle()) return render(out, frames);
+  if (out) std::fill(out, out + frames, 0.0f);
+  impl_->skipIdle(frames);
+}
+void OscillatorBank::reset() { impl_->reset(); }
 double OscillatorBank::time() const { return static_cast<double>(impl_->pos) / impl_->fs; }
 SynthStats OscillatorBank::stats() const { return impl_->stats; }
 const char* OscillatorBank::simdName() const { return impl_->use_double ? "double" : impl_->kernels.name; }

@@ -40,13 +40,10 @@
 #include <cmath>
 #include <map>
 
+#include "strike/listener.hpp"
 #include "strike/synth.hpp"
 
 namespace strike {
-namespace {
-constexpr double kAirDensity_kg_m3 = 1.204;     // dry air at 20 C, 101.325 kPa
-constexpr double kSpeedOfSoundAir_m_s = 343.0;  // dry air at 20 C
-}  // namespace
 
 namespace {
 

@@ -59,12 +59,12 @@ mkdir -p "$work/consumer"
 cat >"$work/consumer/CMakeLists.txt" <<'CMAKE'
 cmake_minimum_required(VERSION 3.22)
 project(strike_consumer C)
-find_package(strike 0.2 REQUIRED)
+find_package(strike 0.3 REQUIRED)
 add_executable(main ../main.c)
 target_link_libraries(main PRIVATE strike::strike)
 CMAKE
 cmake -S "$work/consumer" -B "$work/consumer/build" -G "$generator" -DCMAKE_C_COMPILER="$cc" \
-      -DCMAKE_PREFIX_PATH="$prefix" >"$work/consumer.log" 2>&1 || { cat "$work/consumer.log"; fail "find_package(strike 0.2)"; }
+      -DCMAKE_PREFIX_PATH="$prefix" >"$work/consumer.log" 2>&1 || { cat "$work/consumer.log"; fail "find_package(strike 0.3)"; }
 cmake --build "$work/consumer/build" >>"$work/consumer.log" 2>&1 || { cat "$work/consumer.log"; fail "building against strike::strike"; }
 env -u LD_LIBRARY_PATH "$work/consumer/build/main" || fail "the find_package build does not run"
 

@@ -12,6 +12,7 @@
 #include "strike/bank_cache.hpp"
 #include "strike/render.hpp"
 #include "strike/scene.hpp"
+#include "via_library.hpp"
 
 namespace strike::cli {
 namespace {
@@ -40,6 +41,8 @@ CommandSpec renderSpec() {
       {"--max-tets", "N", "refuse object meshes with more tets than this (memory cap); default 2000000"},
       {"--max-events", "N", "stop if the simulation records more contact events (memory cap); default 20000000"},
       {"--simd", "KERNEL", kSimdHelp},
+      {"--via-library", "", "send the simulation through libstrike's C API, step by step, as a game would\n"
+                            "(strike_step, strike_render in blocks of 256): the same sound within -100 dB"},
       {"--quiet", "", "no progress or summary on stderr (warnings are still printed)"},
   };
   spec.examples =
@@ -73,9 +76,9 @@ void printSummary(const RenderResult& result, const std::string& output, double 
   // each event once per sounding body it acts on (both bodies when both sound).
   std::fprintf(stderr, "  events      %zu contact points recorded: %zu impacts (closing > 5 cm/s) + %zu resting or sliding\n",
                r.events, r.impact_events, r.sustained_events);
-  std::fprintf(stderr, "  heard       %zu impact pulses and %zu resting/sliding impulses on sounding bodies "
-               "(an event counts once per sounding body it touches)\n",
-               r.impacts, r.sustained_contacts);
+  std::fprintf(stderr, "  heard       %zu impact pulses, and %zu resting/sliding contacts on sounding bodies making %zu "
+               "changes of load (a steady load is silent; an event counts once per sounding body it touches)\n",
+               r.impacts, r.sustained_contacts, r.load_changes);
   std::fprintf(stderr, "  modes       %llu in the banks, %llu out of the audible band, at most %llu ringing at once\n",
                static_cast<unsigned long long>(r.modes_total), static_cast<unsigned long long>(r.modes_out_of_band),
                static_cast<unsigned long long>(r.max_active_modes));
@@ -149,6 +152,7 @@ int runRender(const std::vector<std::string>& raw_args) {
   Result<SimdLevel> simd = simdLevelFor(args);
   if (!simd) return reportError("render", simd.error());
   settings.simd = *simd;
+  if (args.has("--via-library")) settings.output = libraryOutput(settings.gain);
   settings.cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
   if (args.has("--cache-max-size")) {
     Result<uint64_t> cap = parseByteSize(args.text("--cache-max-size"), "--cache-max-size");

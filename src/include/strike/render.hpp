@@ -6,12 +6,15 @@
 //      contact impulses projected onto modes, oscillator bank, mix.
 #pragma once
 
+#include <array>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "strike/audio.hpp"
 #include "strike/bank_cache.hpp"
+#include "strike/engine.hpp"
 #include "strike/mesh.hpp"
 #include "strike/progress.hpp"
 #include "strike/scene.hpp"
@@ -22,6 +25,36 @@ namespace strike {
 
 // The tools' output level convention, kFullScalePascal (1.0 = 20 Pa), is in strike/synth.hpp:
 // libstrike uses it too.
+
+/// Where renderScene sends the simulation, step by step, exactly as a game would: the built-in
+/// sound engine, or libstrike through its public C API (`strike render --via-library`, in
+/// tools/cli/via_library.cpp). Calls come in this order: addVoice for every sounding body and
+/// setListener; then per physics step beginStep, setPose for every body, contact for each side
+/// of each contact point, endStep; and render() whenever the audio may advance.
+class SoundOutput {
+ public:
+  virtual ~SoundOutput() = default;
+  /// slot: the body's index in the scene; voice.pose is ignored: the pose is given as a position
+  /// and quaternion (w, x, y, z), as a physics engine has it. Errors name the body.
+  virtual Status addVoice(uint32_t slot, const VoiceDesc& voice, const std::array<double, 3>& position_m,
+                          const std::array<double, 4>& orientation_wxyz, const std::string& name) = 0;
+  virtual void setListener(const std::array<double, 3>& position_m) = 0;
+  virtual void beginStep(double step_end_s, double step_s) = 0;
+  virtual void setPose(uint32_t slot, const std::array<double, 3>& position_m, const std::array<double, 4>& orientation_wxyz,
+                       bool asleep) = 0;
+  virtual void contact(const EngineContact& contact) = 0;
+  virtual void endStep() = 0;
+  /// The next `frames` (<= kRenderBlockFrames) mono samples, full scale 1.0.
+  virtual Status render(float* mono, size_t frames) = 0;
+  virtual EngineStats stats() const = 0;
+  /// Problems to report after the render (e.g. what a fixed-size queue dropped); empty if none.
+  virtual std::vector<std::string> warnings() const { return {}; }
+};
+using SoundOutputFactory = std::function<Result<std::unique_ptr<SoundOutput>>(const EngineSettings&)>;
+
+/// Audio comes out of the engine in blocks of this many frames, each rendered as soon as the
+/// physics has passed it by one step (a game's audio callback, at a fixed latency).
+constexpr size_t kRenderBlockFrames = 256;
 
 struct RenderSettings {
   double sample_rate_hz = 0.0;   ///< 0: the scene's
@@ -34,11 +67,14 @@ struct RenderSettings {
   int64_t max_tets = kDefaultMaxTets;  ///< size cap of each object's tet mesh (PrecomputeSettings::max_tets)
   size_t max_events = SimSettings{}.max_events;  ///< cap on recorded contact events (SimSettings::max_events)
   /// For `strike bench leftout` only: leave nothing out, to measure what leaving out saves. Every
-  /// object gets a bank and an oscillator (struck or not, however softly), every mode of the
-  /// banks is synthesized up to 0.45 x the sample rate (no 20 kHz synth cap), and the synth's
-  /// audibility threshold drops to its floor (1e-30 full scale, -600 dB): no mode is culled and
-  /// none sleeps. The eigen-solve's cut-off stays the scene's: a bank solved to another cut-off
-  /// has other eigenvector signs, which the sign-less radiation weight hears (README).
+  /// object gets a bank and an oscillator (struck or not, however softly); the synth keeps every
+  /// mode of the banks (no 20 kHz synth cap: the banks' own cut-off, the scene's max_freq_hz
+  /// capped at 0.45 x the sample rate, is the only one); and its audibility threshold drops to its
+  /// floor (1e-30 full scale, -600 dB), so no mode is culled and a mode sleeps only once it has
+  /// rung down below -600 dB. The eigen-solve's cut-off stays the scene's: a bank solved to
+  /// another cut-off has other eigenvector signs and degenerate-pair bases, which the per-mode
+  /// radiation weight (an rms over directions, without sign) does not undo, so the two renders
+  /// would differ by that arbitrariness rather than by what was left out (README).
   bool leave_nothing_out = false;
   /// Physics step, s (at most 1 ms, what the issue allows). Contact times fall on this grid, so an
   /// impact is placed within one step (48 samples at 48 kHz); 1 ms halves the simulation cost of
@@ -47,6 +83,9 @@ struct RenderSettings {
   /// The synthesizer's kernel (SynthSettings::simd): kernels differ only in the last bits.
   SimdLevel simd = SimdLevel::Auto;
   ProgressFn progress;
+  /// Null: the built-in sound engine. Else where the simulation goes instead (--via-library);
+  /// the banks are then read whole (a library loads whole bank files).
+  SoundOutputFactory output;
   /// Called with each warning as soon as it is found (before the simulation for the scene's
   /// placement, so a long render does not hide it until the end); also kept in report.warnings.
   std::function<void(const std::string&)> on_warning;
@@ -68,6 +107,9 @@ struct RenderReport {
   /// per sounding body (objects_sounded) it acts on. An event between two sounding bodies counts
   /// for both; one against the ground, a silent body or one that was not heard, for one or none.
   size_t impacts = 0, sustained_contacts = 0;
+  /// Changes of a body's load (a force step each: landing, being pushed, lifted; a steady load is
+  /// silent), and steps a sleeping body's load was kept.
+  size_t load_changes = 0, load_holds = 0;
   /// Scenes that cannot be right, and silent results, in words with numbers (scene_checks.hpp).
   std::vector<std::string> warnings;
   uint64_t modes_total = 0, modes_out_of_band = 0, mode_samples = 0, max_active_modes = 0;
@@ -101,6 +143,9 @@ struct RenderResult {
 };
 
 Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& settings);
+
+/// The engine settings of a render at this sample rate and cut-off (both outputs use them).
+EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& settings, double rate_hz, double max_freq_hz);
 
 /// One row per contact event: time, bodies, points, impulses, speeds (see the header row).
 Status writeEventsCsv(const std::string& path, const RenderResult& result);

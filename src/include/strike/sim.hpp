@@ -61,9 +61,12 @@ struct SimSettings {
   std::vector<ContactPair> contact_pairs;
   /// Contacts whose normal impulse is below this are not recorded, N s.
   double min_impulse_n_s = 1e-9;
-  /// A contact point closing faster than this is an impact: it is solved at the moment its
-  /// surfaces meet, which can fall anywhere within a step either side of the substep that finds
-  /// it, and its event is stamped with that moment (ContactEvent::time_s). m/s.
+  /// A contact point closing faster than this is an impact. Its surfaces meet anywhere within a
+  /// step either side of the substep that finds it; Bullet still solves it at that substep, but
+  /// with the restitution that gives the rebound speed at the meeting and no speculative or
+  /// penetration term, and a body whose only loaded contacts are such impacts is then moved to
+  /// where that rebound takes it. The event is stamped with the meeting (ContactEvent::time_s).
+  /// A CCD predictive contact is left to Bullet; only its event time is estimated. m/s.
   double impact_speed_m_s = 0.05;
   /// Maximum sequential-impulse iterations per substep. An impact through a 1000:1 mass ratio
   /// needs ~1000 (with 100 a heavy box squeezes a light one out from under it); the solver stops
@@ -81,6 +84,9 @@ struct SimSettings {
   /// Memory cap: a run that records more contact events than this stops with an error naming
   /// the cap (`strike render --max-events`). ~100 bytes each: the default is ~2 GB.
   size_t max_events = 20'000'000;
+  /// Record every body's pose after every substep (SimResult::states): what a game engine hands
+  /// the sound engine each frame. ~80 bytes per body and substep.
+  bool record_states = false;
   ProgressFn progress;  ///< phase "simulate", fraction of simulated time; every ~100 ms of wall time
 };
 
@@ -137,11 +143,25 @@ struct ContactEvent {
   /// mesh frame), and Bullet's point is at most 4 substeps old. Proximity alone would flag a
   /// resting corner that the solver left unloaded for a while; m_lifeTime alone restarts at 0 when
   /// a manifold replaces a point, when a CCD predictive contact hands over, for GImpact and rolling.
+  /// Reported for users' analysis only: the new_contact column of `strike render --events`
+  /// (docs/cli.md) and of the Python events table. The renderer does not read it; it tells an
+  /// impact from sustained contact by normal_speed_m_s against SimSettings::impact_speed_m_s.
   bool new_contact = false;
+};
+
+/// A body after a substep, as a game engine reports it every frame.
+struct SimBodyState {
+  std::array<double, 3> position_m{};                 ///< mesh-frame origin, world
+  std::array<double, 4> orientation_wxyz{1, 0, 0, 0}; ///< mesh frame -> world
+  std::array<double, 3> velocity_m_s{};               ///< of the centre of mass, world
+  bool asleep = false;  ///< Bullet deactivated it: it reports no contacts, yet still rests on its support
 };
 
 struct SimResult {
   std::vector<ContactEvent> events;    ///< in order of time_s
+  /// With SimSettings::record_states: states[k * bodies + i] is body i after substep k (at time
+  /// (k + 1) * substep_s). Static bodies too (never asleep).
+  std::vector<SimBodyState> states;
   /// Total mechanical energy (kinetic + gravitational potential) of the dynamic bodies, J,
   /// sampled every substep; and each body's kinetic energy maximum over the run.
   /// energy_trace_j[0] is the initial energy, then one value after each substep (substeps + 1).

@@ -27,6 +27,21 @@
  * Status: EXPERIMENTAL (0.x). The ABI may change between minor versions until 1.0; the version
  * check in strike_context_create() refuses a header of another minor version.
  *
+ * Changes in 0.3 (recompile: the soname is now libstrike.so.0.3; see src/capi/README.md):
+ *  - One sound engine with `strike render`: the same contact scheduling, listener model and
+ *    voices. strike_step() takes a physics step's body states and contacts (resting ones
+ *    included) and decides what is an impact, what a steady load (silent) and what a change of
+ *    load; `strike render --via-library` renders scenes through it.
+ *  - The listener: level reference / max(distance, min_distance_m) from each object's centre of
+ *    mass (new min_distance_m, default 0.05 m: objects nearer than reference_distance_m are now
+ *    louder, as in the tools), and each contact is heard distance / 343 m/s after it happens.
+ *  - Output structs (strike_stats, strike_bank_info) start with struct_size: set it to
+ *    sizeof(the struct) and a newer library never writes past it.
+ *  - New: strike_context_reset(), strike_step(), strike_bank_info's material and mass
+ *    properties, strike_object_config.is_static, strike_context_config.min_distance_m,
+ *    .contact_damping_per_s, .contact_queue_capacity. strike_context_create() logs the field
+ *    and value it rejects.
+ *
  * Changes in 0.2 (source-compatible; recompile: the soname is now libstrike.so.0.2):
  *  - strike_context_config.output_full_scale_pa (new, last field): the output level convention.
  *    Its default, 20 Pa, makes the default output 20 times (26 dB) lower than 0.1's pascals; set
@@ -62,9 +77,6 @@
 #define STRIKE_CALL
 #endif
 
-/** Marks API that may still change in a minor release. Everything is experimental before 1.0. */
-#define STRIKE_EXPERIMENTAL
-
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -72,7 +84,7 @@ extern "C" {
 /* ---- Version ---------------------------------------------------------------------------- */
 /* Kept equal to project(strike VERSION ...) in CMakeLists.txt (checked at configure time). */
 #define STRIKE_VERSION_MAJOR 0
-#define STRIKE_VERSION_MINOR 2
+#define STRIKE_VERSION_MINOR 3
 #define STRIKE_VERSION_PATCH 0
 /** Packed version of this header: (major << 16) | (minor << 8) | patch. */
 #define STRIKE_VERSION \
@@ -127,7 +139,12 @@ enum { STRIKE_LOG_ERROR = 0, STRIKE_LOG_WARNING = 1, STRIKE_LOG_INFO = 2 };
 /** Log sink. Called only from [main-thread] functions, never from the audio thread.
  *  @param message valid only during the call. */
 typedef void(STRIKE_CALL* strike_log_fn)(void* user, int32_t level, const char* message);
-/** Allocator: size bytes aligned to alignment (a power of two <= 64); NULL on failure. */
+/** Allocator: size bytes aligned to alignment (a power of two <= 64); NULL on failure.
+ *  What it covers: the context and its queues, slots and histogram; each bank handle; each
+ *  object's record. What it does not: the storage inside a loaded bank (its modes and shapes)
+ *  and inside an object's oscillators, projector and contact state (sized by the bank's modes),
+ *  which come from the C++ runtime's operator new, also on the main thread only (bank load,
+ *  object add and remove, collect). Nothing is allocated on the audio thread. */
 typedef void*(STRIKE_CALL* strike_alloc_fn)(void* user, size_t size, size_t alignment);
 /** Frees what strike_alloc_fn returned (never called with NULL). */
 typedef void(STRIKE_CALL* strike_free_fn)(void* user, void* pointer);
@@ -159,7 +176,8 @@ typedef struct strike_context_config {
    *  (with the default output_full_scale_pa, 20 uPa: 0 dB SPL). */
   double audibility_threshold;
   /** Distance at which the output is the bank's radiated pressure (over output_full_scale_pa),
-   *  m (> 0); closer objects are not louder. Gain = reference / max(distance, reference). Default 1. */
+   *  m (> 0). Gain = reference / max(distance, min_distance_m), distance from the object's
+   *  centre of mass to the listener. Default 1. */
   double reference_distance_m;
   strike_log_fn log;             /**< NULL = no logging */
   strike_alloc_fn alloc;         /**< NULL = aligned_alloc; alloc and free are both set or both NULL */
@@ -172,6 +190,16 @@ typedef struct strike_context_config {
    *  tools write WAVs, so ordinary impacts stay below full scale and the same impact has the
    *  same level in both. 1 gives pascals (libstrike 0.1's output). */
   double output_full_scale_pa;
+  /** (0.3) Nearer than this the level stops growing as 1/distance, m (> 0). Default 0.05, as
+   *  the tools. */
+  double min_distance_m;
+  /** (0.3) Extra decay of an object's modes while it is in sustained contact (resting, pressed),
+   *  1/s of amplitude, >= 0: the energy it loses into what it touches. Default 0 (as the scene
+   *  file's "contact_damping"). */
+  double contact_damping_per_s;
+  /** (0.3) Records in flight between strike_step() and the next render: one per body state and
+   *  contact, plus two per step, 16 .. 1048576, rounded up to a power of two. Default 8192. */
+  uint32_t contact_queue_capacity;
 } strike_context_config;
 
 /** Defaults (see each field). [any-thread] */
@@ -182,8 +210,9 @@ STRIKE_API strike_context_config STRIKE_CALL strike_context_config_default(void)
  * Fails with STRIKE_ERR_VERSION when config->api_version has another major version or a newer
  * minor version than the library, or (before 1.0) another minor version at all,
  * STRIKE_ERR_NOT_INITIALIZED when config did not come from
- * strike_context_config_default(), STRIKE_ERR_INVALID_ARG for a value out of range.
- * [main-thread]
+ * strike_context_config_default(), STRIKE_ERR_INVALID_ARG for a value out of range. Each
+ * refusal is logged through config->log (if set), naming the field and its value, e.g.
+ * "strike_context_create: channels = 3 (must be 1 or 2)". [main-thread]
  * @param config read during the call only.
  * @param[out] out the new context on success; untouched on failure. Destroy with
  *             strike_context_destroy().
@@ -206,6 +235,9 @@ STRIKE_API const char* STRIKE_CALL strike_context_last_error(strike_context cont
 
 /** Counters since creation. Read with relaxed atomics: consistent per field, not across fields. */
 typedef struct strike_stats {
+  /** Set to sizeof(strike_stats) before the call: the library writes no more than that, so a
+   *  caller compiled against an older (smaller) struct is safe with a newer library. */
+  uint32_t struct_size;
   uint64_t impacts_queued;             /**< accepted by strike_impact() */
   uint64_t impacts_dropped_queue_full; /**< refused by strike_impact(): the queue was full */
   uint64_t impacts_dropped_stale;      /**< their object was removed before they were rendered */
@@ -216,10 +248,20 @@ typedef struct strike_stats {
   uint64_t frames_rendered;            /**< by successful strike_render() calls */
   uint32_t active_modes;               /**< ringing after the last render */
   uint32_t objects;                    /**< objects alive on the audio thread after the last render */
+  /* 0.3 */
+  uint64_t steps;                      /**< strike_step() calls rendered */
+  uint64_t contacts_queued;            /**< contacts accepted by strike_step() */
+  uint64_t contacts_dropped_queue_full;/**< body states and contacts refused: the queue was full */
+  uint64_t contacts_dropped_stale;     /**< on an object that was not alive when rendered */
+  uint64_t sustained_contacts;         /**< contacts slower than 5 cm/s: part of a load */
+  uint64_t load_changes;               /**< changes of an object's load (force steps scheduled) */
+  uint64_t load_holds;                 /**< steps a sleeping object's load was kept */
+  uint64_t clock_frames;               /**< frames since creation or the last strike_context_reset() */
 } strike_stats;
 
 /** Copies the counters. [any-thread]
- *  @param[out] out written on success. */
+ *  @param[out] out its struct_size must be set; at most that many bytes are written on success.
+ *  STRIKE_ERR_INVALID_ARG when struct_size is smaller than the 0.3 layout's first field. */
 STRIKE_API strike_status STRIKE_CALL strike_context_get_stats(strike_context context, strike_stats* out);
 
 /**
@@ -227,6 +269,13 @@ STRIKE_API strike_status STRIKE_CALL strike_context_get_stats(strike_context con
  * this too; call it periodically if you rarely call anything else. [main-thread]
  */
 STRIKE_API strike_status STRIKE_CALL strike_context_collect(strike_context context);
+
+/**
+ * Silences every object (modes, pending pulses, loads), empties the impact and step queues and
+ * restarts the context's clock at 0 at the next strike_render(); objects, banks, poses and the
+ * listener stay. For a game loading a level or a plugin's transport jumping. [main-thread]
+ */
+STRIKE_API strike_status STRIKE_CALL strike_context_reset(strike_context context);
 
 /* ---- Banks ------------------------------------------------------------------------------ */
 /**
@@ -250,6 +299,8 @@ STRIKE_API strike_status STRIKE_CALL strike_bank_load_memory(strike_context cont
 STRIKE_API void STRIKE_CALL strike_bank_destroy(strike_bank bank);
 
 typedef struct strike_bank_info {
+  /** Set to sizeof(strike_bank_info) before the call (see strike_stats.struct_size). */
+  uint32_t struct_size;
   uint32_t mode_count;             /**< modes in the bank (some may be out of band) */
   uint32_t surface_vertex_count;   /**< valid strike_impact_desc.surface_vertex values: 0 .. this-1 */
   uint32_t surface_triangle_count;
@@ -257,9 +308,24 @@ typedef struct strike_bank_info {
   double lowest_frequency_hz;      /**< of mode 0, 0 if no modes */
   double bounds_min_m[3];          /**< axis-aligned bounds of the surface, mesh frame */
   double bounds_max_m[3];
+  /* 0.3: the object's physical data, for the physics engine (mass properties) and contacts */
+  double volume_m3;
+  double centre_of_mass_m[3];      /**< mesh frame */
+  double inertia_kg_m2[9];         /**< about the centre of mass, mesh frame, row-major */
+  double surface_area_m2;
+  /** Radius of the sphere of the same volume, m: what `strike render` uses as the object's
+   *  contact radius (strike_object_config.contact_radius_m). */
+  double equal_volume_radius_m;
+  char material_name[32];          /**< NUL-terminated, truncated */
+  double youngs_pa;
+  double poisson;
+  double density_kg_m3;
+  double rayleigh_stiffness_s;     /**< a1 of C = a1 K + a2 M */
+  double rayleigh_mass_per_s;      /**< a2 */
 } strike_bank_info;
 
-/** [any-thread] (banks are immutable) @param[out] out written on success. */
+/** [any-thread] (banks are immutable) @param[out] out its struct_size must be set; at most that
+ *  many bytes are written on success. */
 STRIKE_API strike_status STRIKE_CALL strike_bank_get_info(strike_bank bank, strike_bank_info* out);
 
 /** Undamped natural frequency of one mode, Hz. [any-thread] @param[out] out_hz written on success. */
@@ -287,6 +353,9 @@ typedef struct strike_object_config {
   /** Radius of curvature of the object's surface at contacts, m, for the Hertz contact time;
    *  0 = flat (a half-space). Default 0. */
   double contact_radius_m;
+  /** (0.3) Non-zero: immovable (a table, a floor): infinite mass in the Hertz contact time,
+   *  and it keeps carrying the load of objects that fall asleep on it. Default 0. */
+  int32_t is_static;
   int32_t internal_cookie;       /**< set by strike_object_config_default(); do not touch */
 } strike_object_config;
 
@@ -370,11 +439,83 @@ STRIKE_API strike_impact_desc STRIKE_CALL strike_impact_desc_default(void);
  */
 STRIKE_API strike_status STRIKE_CALL strike_impact(strike_context context, const strike_impact_desc* impact);
 
+/* ---- Physics steps (0.3) ---------------------------------------------------------------- */
+/** Where a body is after a physics step. */
+typedef struct strike_body_state {
+  strike_object_id object;
+  double position[3];            /**< world position of the mesh-frame origin, m */
+  double orientation[4];         /**< unit quaternion w, x, y, z (world from mesh frame) */
+  /** Non-zero when the physics engine has put it to sleep: it reports no contacts, but it still
+   *  rests on its support, so its load is kept (not released as if it were lifted). */
+  int32_t asleep;
+} strike_body_state;
+
+/** One object's side of one contact point during one physics step: report every contact the
+ *  physics engine solved, resting ones included (a contact between two objects is two of these,
+ *  one per object, each with its own point and impulse). */
+typedef struct strike_contact {
+  strike_object_id object;       /**< the object heard */
+  /** The other body, if it is an object; {0, 0} for the ground or anything else. */
+  strike_object_id partner;
+  int32_t frame;                 /**< STRIKE_FRAME_OBJECT (default: object's mesh frame) or _WORLD */
+  double point[3];               /**< contact point, m */
+  double impulse[3];             /**< applied TO the object over the step (normal + friction), N s */
+  /** Speed at which the surfaces approach along the normal, m/s (>= 0). Above 0.05 m/s an impact
+   *  (a Hertz pulse); at or below, part of the object's load over the step. */
+  double normal_speed_m_s;
+  /** When, on the context's clock (seconds since creation or reset, see strike_stats.clock_frames):
+   *  for an impact the moment the surfaces met. < 0: the step's start. Times already rendered
+   *  sound at once. */
+  double time_s;
+  /** The other body's material, radius at the contact and mass for the Hertz contact time, when
+   *  it is not an object (partner {0, 0}): 0 = the object's own material, flat, immovable. */
+  double partner_youngs_pa;
+  double partner_poisson;
+  double partner_radius_m;
+  double partner_mass_kg;
+} strike_contact;
+
+/** Defaults (see each field). [any-thread] */
+STRIKE_API strike_contact STRIKE_CALL strike_contact_default(void);
+
+/** One physics step: what a game reports once per step, after stepping its physics. */
+typedef struct strike_step_desc {
+  uint32_t struct_size;          /**< sizeof(strike_step_desc); set by _default() */
+  /** End of the step on the context's clock, s. A game whose physics runs ahead of its audio
+   *  passes its physics time; the step's sound is placed there (a time already rendered sounds
+   *  at once). Render audio at least one step behind the physics for sample-accurate timing. */
+  double end_time_s;
+  double duration_s;             /**< the step, s (> 0) */
+  const strike_body_state* states;  /**< poses of the objects that moved (others keep theirs) */
+  uint32_t state_count;
+  uint32_t state_size;           /**< sizeof(strike_body_state); set by _default() */
+  const strike_contact* contacts;
+  uint32_t contact_count;
+  uint32_t contact_size;         /**< sizeof(strike_contact); set by _default() */
+} strike_step_desc;
+
+/** Defaults: sizes set, no states or contacts. [any-thread] */
+STRIKE_API strike_step_desc STRIKE_CALL strike_step_desc_default(void);
+
+/**
+ * Reports one physics step: its body states, then its contacts, copied into a lock-free queue
+ * and applied, in order, at the next strike_render(). There the contact scheduler decides what
+ * each contact is: an impact (a Hertz pulse from the two materials, radii, masses and the speed),
+ * or part of the object's load over the step. A load that stays steady (a resting box, however
+ * its contact points flicker) is silent; a change of load (landing, being pushed, lifted) is
+ * heard; a sleeping object keeps its load. This is what `strike render` does with Bullet's
+ * contacts. STRIKE_ERR_QUEUE_FULL when the queue filled: the rest of the step is dropped and
+ * counted (contacts_dropped_queue_full). STRIKE_ERR_INVALID_ARG for NULL, a struct_size or
+ * element size from no known version, or a non-finite value (nothing is queued). Lock-free, no
+ * allocation. [any-thread], but one step at a time: steps from several threads must not overlap.
+ */
+STRIKE_API strike_status STRIKE_CALL strike_step(strike_context context, const strike_step_desc* step);
+
 /* ---- Audio ------------------------------------------------------------------------------ */
 /**
  * Renders the next `frames` samples of every object into planar buffers (overwrites them).
- * Applies queued commands and impacts first, so an impact queued before this call sounds in
- * this block (at its sample_offset). Never allocates, locks, logs, does I/O or throws.
+ * Applies queued commands, steps and impacts first, so an impact queued before this call sounds
+ * in this block (at its sample_offset). Never allocates, locks, logs, does I/O or throws.
  * STRIKE_ERR_INVALID_ARG when channels differs from the context's or a pointer is NULL,
  * STRIKE_ERR_TOO_MANY_FRAMES when frames > max_block_frames (nothing is rendered). Does not set
  * last_error. [audio-thread]

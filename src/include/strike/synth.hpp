@@ -76,6 +76,18 @@ struct ImpactDesc {
   double ramp_s = 0.0;
 };
 
+/// A change of a sustained contact force (a body coming to rest, carrying a load, being pushed),
+/// ramped linearly from time_s to time_s + ramp_s; the new force then holds until the next change.
+/// A constant force makes no sound once its onset has rung out, so a body resting for seconds
+/// costs its one or two changes, not a pulse per physics step.
+struct ForceStepDesc {
+  uint32_t object = 0;
+  double time_s = 0.0;
+  double ramp_s = 0.0;  ///< 0: a sharp step
+  /// One per mode of the object: phi_i(p) . dF summed over the contact points, N / sqrt(kg).
+  const double* modal_force_change = nullptr;
+};
+
 /// What addImpactNoAlloc() did with an impact.
 enum class ImpactResult {
   Scheduled,   ///< will sound
@@ -122,6 +134,12 @@ class OscillatorBank {
   /// radiationWeights()). [audio-thread] Never allocates, locks or throws; sets FTZ/DAZ in MXCSR
   /// for the call and restores it. Output is independent of how frames are split across calls.
   void render(float* out, size_t frames);
+  /// render(), but when idle() only the clock moves (out gets zeros if not null): the same result
+  /// at no cost. [audio-thread]
+  void skip(float* out, size_t frames);
+  /// Silences every mode, drops pending impacts and contact damping, and restarts the clock at
+  /// 0 (objects and reserves stay). Real-time safe.
+  void reset();
   /// True when no mode is ringing and no impact is pending: render() would output zeros.
   bool idle() const;
   /// Modes ringing now (ringing and non-ringing kinds).
@@ -138,6 +156,15 @@ class OscillatorBank {
   /// at or after time_s (plus the object's delay): the pole moves left, the state carries on.
   /// Models energy an object loses into what it rests on (contact damping). Not real-time safe.
   void setExtraDamping(uint32_t object, double time_s, double extra_decay_per_s);
+  /// setExtraDamping() without allocation [audio-thread]: false (nothing scheduled) when the
+  /// object already has 64 changes pending.
+  bool setExtraDampingNoAlloc(uint32_t object, double time_s, double extra_decay_per_s);
+  /// Schedules a change of sustained force (ForceStepDesc). Not real-time safe (may grow the
+  /// impact records); Inaudible when no mode's ringing from it reaches the audibility threshold.
+  ImpactResult addForceStep(const ForceStepDesc& step);
+  /// addForceStep() without allocation [audio-thread]: NoCapacity when fewer than three reserved
+  /// impact records are free.
+  ImpactResult addForceStepNoAlloc(const ForceStepDesc& step);
   /// Time of the next sample to be rendered, s.
   double time() const;
   SynthStats stats() const;
@@ -180,7 +207,7 @@ class SurfaceLocator {
 /// 230,000 sustained contacts at 1,600 distinct points), so a repeated point skips the nearest-
 /// triangle search and reads its three vertices' shapes from one contiguous row instead of three
 /// gathers 12 bytes x #V apart per mode. Same arithmetic, so the same result to the bit. The bank
-/// must outlive the projector. Allocates (not real-time safe).
+/// must outlive the projector. The constructor reserves all its memory; projecting never allocates.
 class ContactProjector {
  public:
   explicit ContactProjector(const ModeBank& bank, size_t max_points = 64);

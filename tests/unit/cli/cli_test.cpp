@@ -359,23 +359,30 @@ TEST_F(BarDrop, FirstSoundOfADropArrivesAtTheClosedFormTimePlusTheListenerDelay)
                  "position": [0, 0, )" << std::to_string(h + 0.01) << "]}]}";
   CliResult r = runCli("render '" + scene + "' -o '" + wav + "' --events '" + events + "' --cache '" + cache_ + "' --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  // The render hears the bar from its first contact point.
+  // Each contact point is heard from where it is: the first sound is the earliest arrival of
+  // the impact's points (the bar lands flat, on four corners at once).
   std::ifstream in(events);
   std::string line;
   std::getline(in, line);
-  std::getline(in, line);
-  std::vector<double> fields;
-  for (size_t at = 0; at < line.size();) {
-    const size_t comma = std::min(line.find(',', at), line.size());
-    const std::string field = line.substr(at, comma - at);
-    fields.push_back(field == "bar" || field == "ground" ? 0.0 : std::stod(field));
-    at = comma + 1;
+  double first_time = -1.0, expected_sample = INFINITY;
+  while (std::getline(in, line)) {
+    std::vector<double> fields;
+    for (size_t at = 0; at < line.size();) {
+      const size_t comma = std::min(line.find(',', at), line.size());
+      const std::string field = line.substr(at, comma - at);
+      fields.push_back(field == "bar" || field == "ground" ? 0.0 : std::stod(field));
+      at = comma + 1;
+    }
+    ASSERT_GE(fields.size(), 10u) << line;
+    if (first_time < 0) {
+      first_time = fields[0];
+      EXPECT_NEAR(first_time, t_meet, 0.05e-3) << "first impact time in the event log";
+    }
+    if (fields[0] > first_time + 1e-3) break;
+    double distance2 = 0.0;
+    for (int k = 0; k < 3; ++k) distance2 += (fields[7 + size_t(k)] - listener[k]) * (fields[7 + size_t(k)] - listener[k]);
+    expected_sample = std::min(expected_sample, (fields[0] + std::sqrt(distance2) / 343.0) * 48000.0);
   }
-  ASSERT_GE(fields.size(), 10u) << line;
-  EXPECT_NEAR(fields[0], t_meet, 0.05e-3) << "first impact time in the event log";
-  double distance2 = 0.0;
-  for (int k = 0; k < 3; ++k) distance2 += (fields[7 + size_t(k)] - listener[k]) * (fields[7 + size_t(k)] - listener[k]);
-  const double expected_sample = (t_meet + std::sqrt(distance2) / 343.0) * 48000.0;
 
   Result<AudioBuffer> audio = readAudio(wav);
   ASSERT_TRUE(audio) << audio.error().message;

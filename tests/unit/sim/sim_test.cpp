@@ -261,6 +261,36 @@ TEST(SimFreeFall, HitsTheGroundOnTimeWithTheRightSpeed) {
   expectNoEnergyGain(r, "free fall");
 }
 
+TEST(SimStates, RecordedPosesFollowTheFreeFallAndSleep) {
+  // The body starts with the half-step velocity (buildBody), so semi-implicit Euler is exact for
+  // constant gravity: after k substeps z = z_0 - g t^2 / 2 at t = k dt, and the stored velocity
+  // is the half-step one, -g (k - 1/2) dt.
+  const double z0 = 1.0, dt = 1e-3;
+  SimBodyDesc box = makeBox("box", {0.04, 0.03, 0.02}, 0.1);
+  box.position_m = {0.1, -0.2, z0};
+  SimSettings settings = settingsFor(3.0);
+  settings.record_states = true;
+  const SimResult r = run({box}, settings, "free fall with states");
+  ASSERT_EQ(r.states.size(), r.substeps);
+  for (uint64_t k : {1u, 10u, 200u}) {
+    const SimBodyState& s = r.states[k - 1];
+    const double t = double(k) * dt;
+    EXPECT_NEAR(s.position_m[2], z0 - kG * t * t / 2, 1e-9) << "substep " << k;
+    EXPECT_NEAR(s.velocity_m_s[2], -kG * (t - dt / 2), 1e-9) << "substep " << k;
+    EXPECT_DOUBLE_EQ(s.position_m[0], 0.1);
+    EXPECT_DOUBLE_EQ(s.orientation_wxyz[0], 1.0);
+    EXPECT_FALSE(s.asleep);
+  }
+  // At rest on the ground at the end, asleep from sleep_start_s on (the substep ending then).
+  ASSERT_TRUE(std::isfinite(r.sleep_start_s[0]));
+  const SimBodyState& last = r.states.back();
+  EXPECT_TRUE(last.asleep);
+  EXPECT_NEAR(last.position_m[2], 0.01, 1e-3);
+  const size_t first_asleep = size_t(std::lround(r.sleep_start_s[0] / dt)) - 1;
+  EXPECT_TRUE(r.states[first_asleep].asleep);
+  EXPECT_FALSE(r.states[first_asleep - 1].asleep);
+}
+
 TEST(SimResting, ConstantForceAndNoNewContacts) {
   const double m = 1.0, dt = 1e-3;
   SimBodyDesc box = makeBox("block", {0.1, 0.1, 0.05}, m);

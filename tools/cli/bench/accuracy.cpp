@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
-// `strike bench accuracy -o DIR`: the reproducible accuracy study of issue 6.
+// `strike bench accuracy -o DIR`: the reproducible accuracy study of issue 6 (bench.cpp parses
+// the command line).
 //  - accuracy-fem.csv / .svg: mode frequency error (true, against Timoshenko theory, and the
 //    bank's own estimate) against precompute time, Tet4 and Tet10, 4 resolutions each, on the
 //    free-free steel bar 0.3 x 0.02 x 0.02 m, on a solid sphere R = 5 cm against Lamb's modes, and
@@ -19,7 +20,6 @@
 #include <random>
 #include <sstream>
 
-#include "args.hpp"
 #include "bench_studies.hpp"
 #include "commands.hpp"
 #include "output_check.hpp"
@@ -34,26 +34,6 @@ namespace {
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-CommandSpec benchSpec() {
-  CommandSpec spec;
-  spec.usage = "strike bench accuracy -o DIR | strike bench leftout SCENE.json -o DIR | strike bench render SCENE.json -o DIR";
-  spec.summary =
-      "Runs the accuracy study and writes DIR/accuracy-fem.csv (+ .svg plot), accuracy-synth.csv and\n"
-      "accuracy-euler.csv: FEM frequency error against precompute time (Tet4, Tet10, 4 sizes, free-free\n"
-      "bar vs Timoshenko, sphere vs Lamb), synthesis error against time (float vs double state, culling thresholds),\n"
-      "and symplectic Euler against the exact update at the audio step. Takes ~35 s (2 cores).\n"
-      "`leftout` renders SCENE three times (nothing left out; as normal from an empty cache; from the warm\n"
-      "cache), writes DIR/leftout.csv and prints the time ratios and the audio difference.\n"
-      "`render` times a render phase by phase against a baseline run (see `strike bench render --help`).";
-  spec.options = {{"-o", "DIR", "output folder; created if missing"},
-                  {"--plate", "", "accuracy: also the free thick plate (Tet4/Tet10 at 4 sizes against a fine Tet10\n"
-                                  "reference; ~45 s more, 1.9 GB peak)"}};
-  spec.examples = "  strike bench accuracy -o study/\n  strike bench leftout examples/scenes/bar-drop.json -o study/\n";
-  spec.min_positional = 1;
-  spec.max_positional = 2;
-  return spec;
 }
 
 /// The bank's error estimate for mode i; 1.0 ("unknown", as the bank writes it) when it has none.
@@ -310,37 +290,16 @@ double exactUpdateError(double f_hz, double c, double rate) {
 }
 
 }  // namespace
-
-int runBench(const std::vector<std::string>& raw_args) {
-  if (!raw_args.empty() && raw_args[0] == "render") return runBenchRender({raw_args.begin() + 1, raw_args.end()});
-  const CommandSpec spec = benchSpec();
-  if (wantsHelp(raw_args)) {
-    std::fputs(helpText(spec).c_str(), stdout);
-    return 0;
-  }
-  Result<ParsedArgs> parsed = parseArgs(spec, raw_args);
-  if (!parsed) return reportError("bench", parsed.error());
-  if (!parsed->has("-o")) return reportError("bench", badInput("missing -o DIR"));
-  const std::string dir = parsed->text("-o");
-  const std::string& study = parsed->positional[0];
-  if (study != "leftout" && (study != "accuracy" || parsed->positional.size() != 1))
-    return reportError("bench", badInput("unknown study '" + study + "' (known: accuracy, leftout SCENE.json, render SCENE.json)"));
-  // The folder is made (or refused) before the study runs, not after it.
-  if (Status ok = prepareOutputDir("-o", dir); !ok) return reportError("bench", ok.error());
-  if (study == "leftout") {
-    if (parsed->positional.size() != 2) return reportError("bench", badInput("bench leftout needs SCENE.json"));
-    Status ok = benchLeftOut(parsed->positional[1], dir);
-    return ok ? 0 : reportError("bench", ok.error());
-  }
-  if (study != "accuracy" || parsed->positional.size() != 1)
-    return reportError("bench", badInput("unknown study '" + study + "' (known: accuracy, leftout SCENE.json, render SCENE.json)"));
+/// `strike bench accuracy`: writes the study's files to DIR (which exists) and returns the exit
+/// code (bench_studies.hpp).
+int benchAccuracy(const std::string& dir, bool plate) {
   auto open = [&](const std::string& name, std::ofstream& file) -> Status {
     file.open(dir + "/" + name);
     if (!file) return badInput(dir + "/" + name + ": error: cannot create file");
     return {};
   };
 
-  Result<std::vector<FemRow>> fem = femStudy(parsed->has("--plate"));
+  Result<std::vector<FemRow>> fem = femStudy(plate);
   if (!fem) return reportError("bench", fem.error());
   std::ofstream csv;
   if (Status ok = open("accuracy-fem.csv", csv); !ok) return reportError("bench", ok.error());
@@ -424,5 +383,6 @@ int runBench(const std::vector<std::string>& raw_args) {
                dir.c_str(), lo);
   return 0;
 }
+
 
 }  // namespace strike::cli

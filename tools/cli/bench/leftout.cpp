@@ -2,8 +2,9 @@
 // `strike bench leftout SCENE.json -o DIR`: what a render leaves out, and what that saves.
 // Renders one scene three times in this process:
 //   everything  nothing left out (RenderSettings::leave_nothing_out): every object gets a bank
-//               and an oscillator, modes up to 0.45 fs instead of 20 kHz, no audibility cut, no
-//               sleeping oscillators, no cache;
+//               and an oscillator, every mode of the banks is synthesized (no 20 kHz synth cap),
+//               the audibility threshold is at its -600 dB floor (nothing culled, nothing sleeps
+//               before it has rung down that far), no cache;
 //   normal      as `strike render` with an empty cache (eigen-solves only for what is heard);
 //   cached      as `strike render` a second time (the cache answers the eigen-solves).
 // Writes DIR/leftout.csv (one row per run: times per phase, modes, work), the everything and the
@@ -22,33 +23,6 @@
 #include "strike/scene.hpp"
 
 namespace strike::cli {
-
-SpectralDifference spectralDifference(const AudioBuffer& reference, const AudioBuffer& test) {
-  AnalyzeOptions options;
-  options.fit_decay = false;
-  const AudioAnalysis a = analyzeAudio(reference, options), b = analyzeAudio(test, options);
-  SpectralDifference d;
-  d.peaks = a.peaks.size();
-  // The strongest peak sets 0 dB in each analysis; compare absolute levels (dBFS) instead.
-  for (const SpectralPeak& p : a.peaks) {
-    const SpectralPeak* nearest = nullptr;
-    for (const SpectralPeak& q : b.peaks)
-      if (!nearest || std::abs(q.freq_hz - p.freq_hz) < std::abs(nearest->freq_hz - p.freq_hz)) nearest = &q;
-    if (!nearest) {
-      d.unmatched_peaks++;
-      continue;
-    }
-    // A peak that moved by more than 1 % is a different line: the reference's line went missing.
-    if (std::abs(nearest->freq_hz - p.freq_hz) > 0.01 * p.freq_hz) {
-      d.unmatched_peaks++;
-      continue;
-    }
-    d.max_freq_rel = std::max(d.max_freq_rel, std::abs(nearest->freq_hz - p.freq_hz) / p.freq_hz);
-    d.max_level_db = std::max(d.max_level_db, std::abs(nearest->level_dbfs - p.level_dbfs));
-  }
-  return d;
-}
-
 namespace {
 
 struct LeftOutRun {

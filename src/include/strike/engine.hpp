@@ -1,0 +1,253 @@
+// SPDX-License-Identifier: MIT
+// The sound engine: what `strike render`, `strike hit` and libstrike all run. Target
+// strike_synth (C++ standard library only).
+//
+// A physics engine reports, every step, where its bodies are (setPose) and the contacts it
+// solved (beginStep, contact, endStep). The engine decides what each contact is (the contact
+// scheduler, contact_scheduler.cpp):
+//  - an impact, when the surfaces approach faster than kImpactSpeed_m_s: a Hertz pulse whose
+//    length follows from the two materials, radii, masses and the speed [Johnson 1985];
+//  - sustained contact otherwise: the step's impulses are a force over the step. A force that
+//    stays steady (a body resting) is silent; a change of load is a ramped force step;
+//  - while a body is in sustained contact its modes lose energy into what it touches (contact
+//    damping), and a body that falls asleep keeps its load.
+// Each sounding body is a Voice: its modes in an OscillatorBank, its pose, its gain. The
+// listener model (listener.hpp) gives each voice a level from its distance, ramped over each
+// render call, and each contact a delay from its own distance. render() mixes the voices and
+// keeps the number of ringing modes within a budget, quietest first.
+//
+// Threads: the engine belongs to one thread (the audio thread in libstrike). Voices are built
+// anywhere (makeVoice allocates) and installed by slot; with EngineSettings::realtime nothing
+// after that allocates, locks or throws.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "strike/bank.hpp"
+#include "strike/listener.hpp"
+#include "strike/synth.hpp"
+
+namespace strike {
+
+/// A contact approaching faster than this is an impact (a Hertz pulse); slower ones are sustained
+/// contact. Gravity alone adds g * step = 10 mm/s per 1 ms step to a resting body, five times
+/// less; a physics engine may spread one impact over several steps, so the approach speed, not
+/// a "new contact" flag, decides.
+constexpr double kImpactSpeed_m_s = 0.05;
+/// Sustained contacts closer in time than this belong to one contact span (contact damping).
+constexpr double kContactGap_s = 0.02;
+/// A body's sustained load is steady while its net contact force and moment (about its centre
+/// of mass, moment over the body's size) change by less than this fraction of the load since the
+/// last change: a physics engine's contact points come and go between steps (2 to 4 points under
+/// a resting glass), which moves the load between points without changing it.
+constexpr double kSteadyLoadTolerance = 0.02;
+
+constexpr uint32_t kNoVoice = 0xffffffffu;
+
+/// World from object (the bank's mesh frame).
+struct Pose {
+  std::array<double, 3> position_m{};
+  std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};  ///< row-major
+  /// From a position and a quaternion (w, x, y, z; normalized here). False when not finite or
+  /// a zero quaternion (pose unchanged).
+  bool set(const double position[3], const double orientation_wxyz[4]);
+  std::array<double, 3> toWorld(const std::array<double, 3>& local) const;
+  std::array<double, 3> toLocalDirection(const std::array<double, 3>& world) const;
+  std::array<double, 3> toLocalPoint(const std::array<double, 3>& world) const;
+};
+
+struct EngineSettings {
+  SynthSettings synth;                 ///< sample rate, band, audibility threshold, kernel
+  uint32_t channels = 1;               ///< 1, or 2 (constant-power pan by the listener's x)
+  uint32_t max_voices = 64;
+  uint32_t max_block_frames = 1024;    ///< largest render() call
+  /// Ringing modes over all voices; above it at the end of a render call the quietest (at the
+  /// listener) sleep first. 0: no budget.
+  uint64_t max_active_modes = 0;
+  double reference_distance_m = kReferenceDistance_m;  ///< where the voices' weights hold
+  double min_distance_m = kMinListenerDistance_m;      ///< 1/d stops growing here
+  double max_contact_duration_s = 0.005;  ///< longer Hertz pulses are shortened to this
+  /// Extra modal decay while in sustained contact, 1/s (amplitude); 0 = none. [scene file
+  /// "contact_damping"]
+  double contact_damping_per_s = 0.0;
+  /// No allocation after makeVoice/install: impacts, force steps and damping changes beyond the
+  /// reserve are dropped and counted. false (offline renders): the reserve grows.
+  bool realtime = true;
+  uint32_t max_pending_impacts_per_voice = 32;  ///< realtime reserve of pulses in flight per voice
+};
+
+/// What a voice is made of. The bank must outlive the voice (libstrike keeps it in a shared
+/// pointer, the renderer in its body list).
+struct VoiceDesc {
+  std::shared_ptr<const ModeBank> bank;
+  /// Shapes read only at the surface vertices the contacts touch (ContactProjector::useRows);
+  /// empty: the bank's own shapes.
+  ShapeRows rows;
+  bool use_rows = false;
+  /// Per mode: output units per unit modal acceleration at the reference distance (pressure
+  /// weights over the output's full scale); empty means 1 (modal acceleration).
+  std::vector<double> weights;
+  bool is_static = false;           ///< immovable (a table): infinite mass for Hertz
+  double contact_radius_m = 0.0;    ///< curvature radius at contacts; 0 = flat
+  Pose pose;
+  float gain = 1.0f;
+};
+
+/// The other body in a contact, as the Hertz contact time needs it.
+struct ContactPartner {
+  double youngs_pa = 0.0;           ///< 0: the same material as the struck body
+  double poisson = 0.3;
+  double radius_m = 0.0;            ///< 0: flat (a half-space)
+  double mass_kg = 0.0;             ///< 0: immovable
+  /// Its voice, if it is one: a static body keeps carrying a load whose bodies fell asleep.
+  uint32_t voice = kNoVoice;
+};
+
+/// One body's side of one contact point in one physics step.
+struct EngineContact {
+  uint32_t voice = 0;
+  bool world_frame = false;              ///< point and impulse in the world (else the mesh frame)
+  std::array<double, 3> point{};         ///< m
+  std::array<double, 3> impulse{};       ///< applied to this body over the step, N s
+  double normal_speed_m_s = 0.0;         ///< approach speed along the normal (> kImpactSpeed_m_s: impact)
+  /// When it happened on the engine's clock (seconds since the first sample), the moment the
+  /// surfaces met for an impact; < 0: now. Late times start now.
+  double time_s = -1.0;
+  ContactPartner partner;
+};
+
+/// An explicit contact pulse (strike_impact, `strike hit`): no scheduling, no load tracking.
+struct EngineImpact {
+  uint32_t voice = 0;
+  bool world_frame = false;
+  int32_t surface_vertex = -1;           ///< >= 0: at this surface vertex (point ignored)
+  std::array<double, 3> point{}, impulse{};
+  double normal_speed_m_s = 1.0;
+  double contact_duration_s = -1.0;      ///< < 0: Hertz; 0: ideal impulse; > 0: this long
+  ContactPartner partner;
+  double time_s = -1.0;                  ///< engine clock; < 0: now
+  PulseShape shape = PulseShape::HalfSine;
+};
+
+struct EngineStats {
+  uint64_t impacts = 0;               ///< contacts that struck (Hertz pulses scheduled)
+  uint64_t impacts_inaudible = 0;
+  uint64_t impacts_dropped = 0;       ///< realtime reserve full
+  uint64_t sustained_contacts = 0;    ///< contact points of sustained contact
+  uint64_t load_changes = 0;          ///< force steps scheduled (a load starting, changing, ending)
+  uint64_t load_holds = 0;            ///< steps a sleeping body's load was kept
+  uint64_t modes_culled = 0;          ///< by the budget
+  uint64_t stale = 0;                 ///< contacts or impacts on an empty slot
+  uint64_t mode_samples = 0;          ///< active modes x samples, all voices
+  uint64_t modes_total = 0, modes_out_of_band = 0;
+  uint64_t max_active_modes = 0;      ///< of any render call's end, all voices
+  uint64_t active_modes = 0;          ///< after the last render call
+};
+
+/// One sounding body. Built off the audio thread (allocates everything it will need).
+class Voice {
+ public:
+  Voice(const VoiceDesc& desc, const EngineSettings& settings);
+  ~Voice();
+  Voice(const Voice&) = delete;
+  Voice& operator=(const Voice&) = delete;
+  const ModeBank& bank() const { return *bank_; }
+  SynthStats synthStats() const { return synth_.stats(); }
+
+ private:
+  friend class SoundEngine;
+  std::shared_ptr<const ModeBank> bank_;
+  OscillatorBank synth_;
+  ContactProjector projector_;
+  std::vector<double> modal_;        ///< #modes: projection scratch
+  std::vector<double> step_force_;   ///< #modes: this step's sustained modal force (N / sqrt(kg))
+  std::vector<double> held_force_;   ///< #modes: the sustained modal force in force now
+  std::vector<float> mono_;          ///< max_block_frames
+  std::vector<float> levels_;        ///< #modes: budget scratch
+  std::array<double, 3> centre_m_{}; ///< centre of mass, mesh frame
+  double size_m_ = 1.0;              ///< largest extent of its surface (load moments over it)
+  double youngs_pa_ = 0, poisson_ = 0, mass_kg_ = 0, contact_radius_m_ = 0;
+  bool is_static_ = false;
+  // Pose and level (engine thread).
+  Pose pose_;
+  bool asleep_ = false;
+  float gain_ = 1.0f;
+  float cur_gain_[2] = {0, 0}, target_gain_[2] = {0, 0};
+  float level_gain2_ = 0.0f;
+  bool fresh_ = true;
+  // Contact scheduler state (contact_scheduler.cpp).
+  bool in_step_ = false;             ///< has sustained contact in the open step
+  std::array<double, 6> step_load_{};   ///< force (N) and moment / size (N) of the open step
+  std::array<double, 6> held_load_{};   ///< of the held force
+  bool holding_ = false;             ///< held_force_ is not zero
+  std::array<uint32_t, 8> partners_{};  ///< voices it touched in its last sustained step
+  uint32_t partner_count_ = 0;
+  bool partners_overflow_ = false;   ///< more than 8: a static body keeps no load when they sleep
+  double last_sustained_s_ = -1.0;   ///< time of its last sustained contact
+  bool span_open_ = false;           ///< contact damping in force
+};
+
+class SoundEngine {
+ public:
+  explicit SoundEngine(const EngineSettings& settings);
+  ~SoundEngine();
+  SoundEngine(const SoundEngine&) = delete;
+  SoundEngine& operator=(const SoundEngine&) = delete;
+  const EngineSettings& settings() const { return settings_; }
+
+  // ---- voices (no allocation) ------------------------------------------------------------
+  /// Puts a voice in an empty slot < max_voices; the engine does not own it. False if taken.
+  bool install(uint32_t slot, Voice* voice);
+  /// Empties a slot; returns its voice (the caller frees it, later, off the audio thread).
+  Voice* uninstall(uint32_t slot);
+  Voice* voice(uint32_t slot) const { return slot < slots_.size() ? slots_[slot] : nullptr; }
+  void setPose(uint32_t slot, const Pose& pose, bool asleep = false);
+  void setGain(uint32_t slot, float gain);
+  void setListener(const Pose& pose);
+
+  // ---- one physics step's contacts ------------------------------------------------------
+  /// A step of step_s seconds ending at step_end_s (engine clock). Contacts outside
+  /// beginStep/endStep open a step of their own at their time.
+  void beginStep(double step_end_s, double step_s);
+  void contact(const EngineContact& contact);
+  void endStep();
+  void impact(const EngineImpact& impact);
+
+  // ---- audio ---------------------------------------------------------------------------
+  /// Renders the next frames (<= max_block_frames) into `channels` planar buffers (overwrites).
+  void render(float* const* out, size_t frames);
+  double time() const;
+  EngineStats stats() const;
+  /// Silences everything (modes, pending pulses, loads) and restarts the clock at 0; keeps
+  /// the voices and the listener.
+  void reset();
+
+ private:
+  struct Step {
+    bool open = false;
+    double end_s = 0.0, length_s = 0.0;
+  };
+  void endStepFor(Voice& v, uint32_t slot);
+  void scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
+                      const std::array<double, 3>& world_point);
+  void scheduleForceStep(Voice& v, const double* modal_change, double time_s, double ramp_s,
+                         const std::array<double, 3>& world_point);
+  double hertzDuration(const Voice& v, const ContactPartner& p, double speed) const;
+  double delayTo(const std::array<double, 3>& world_point) const;
+  void updateGains(Voice& v);
+  void enforceBudget(uint64_t& active);
+
+  EngineSettings settings_;
+  std::vector<Voice*> slots_;
+  Pose listener_;
+  Step step_;
+  uint64_t frames_ = 0;
+  std::vector<uint32_t> histogram_;
+  EngineStats stats_;
+};
+
+}  // namespace strike

@@ -1,0 +1,185 @@
+// SPDX-License-Identifier: MIT
+// What the parts of the simulation share (private to src/sim): the Bullet world, each body's
+// state, and the Simulation that steps them. The parts: checks.cpp (input checks), shapes.cpp
+// (collision shapes, Simulation::buildBody), impact_timing.cpp (when an impact's surfaces met),
+// contact_events.cpp (the events of a substep) and sim.cpp (the world and the run). The frames
+// are explained in sim.cpp.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "strike/result.hpp"
+#include "strike/sim.hpp"
+
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <LinearMath/btConvexHullComputer.h>
+#include <btBulletDynamicsCommon.h>
+
+namespace strike::detail {
+
+using Vec3 = std::array<double, 3>;
+
+/// Hulls up to this many vertices get SAT + clipping contacts (see buildBody).
+constexpr int kMaxPolyhedralVertices = 128;
+/// BodyState::still_since_step of a body whose pose clock has not started.
+constexpr uint64_t kNotStill = ~uint64_t(0);
+
+inline btVector3 toBt(const Vec3& v) { return btVector3(v[0], v[1], v[2]); }
+inline Vec3 fromBt(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
+
+/// A number for a message, "%.9g" (checks.cpp).
+std::string fmt(double value);
+/// "body INDEX \"NAME\"", how messages name a body (checks.cpp).
+std::string bodyLabel(const SimBodyDesc& body, size_t index);
+
+/// The settings' ranges (checks.cpp).
+Status checkSettings(const SimSettings& settings);
+/// Checks one body; writes the normalized orientation (checks.cpp).
+Status checkBody(const SimBodyDesc& body, size_t index, btQuaternion& orientation);
+
+/// Acceleration of a body between contacts: gravity when it moves, none when static
+/// (impact_timing.cpp).
+btVector3 freeAcceleration(const btCollisionObject* object);
+/// Velocity of an object's material point at `world` (zero for static objects; impact_timing.cpp).
+btVector3 velocityAt(const btCollisionObject* object, const btVector3& world);
+/// When, from the start of the substep, a contact point's surfaces meet; negative when they met
+/// in the previous substep, NaN when they never do (impact_timing.cpp).
+double meetingOffset(double gap_m, double closing_m_s, double closing_accel_m_s2, double step_s);
+
+/// Everything Bullet needs for one body; addresses must stay fixed (Bullet keeps pointers).
+struct BodyState {
+  btTransform mesh_from_body;       // fixed
+  btTransform body_from_mesh;
+  btVector3 principal_inertia{0, 0, 0};  // kg m^2, body frame
+  double mass_kg = 0.0;
+  double size_m = 0.0;              // largest extent of the body-frame bounding box
+  double min_extent_m = 0.0;        // smallest extent
+  double margin_m = 0.0;
+  SimBodyDesc::Shape shape_used = SimBodyDesc::Shape::ConvexHull;
+  bool is_static = false;
+  // Storage for concave shapes (btTriangleIndexVertexArray points into these).
+  std::vector<btScalar> body_xyz;
+  std::vector<int> indices;
+  std::unique_ptr<btTriangleIndexVertexArray> mesh_interface;
+  std::vector<std::unique_ptr<btConvexHullShape>> pieces;  // children of a compound shape
+  std::vector<std::vector<double>> pieces_mesh;             // their points, mesh frame
+  bool pieces_computed = false;
+  double pieces_seconds = 0.0;
+  std::unique_ptr<btCollisionShape> shape;
+  std::unique_ptr<btRigidBody> rigid;
+  // Saved at the start of each substep (pre-tick callback).
+  btTransform pre_transform;
+  btVector3 pre_linear{0, 0, 0}, pre_angular{0, 0, 0};
+  // The pose still-clock (Simulation::hastenSleep): the pose when it started, and the substep.
+  btTransform still_anchor = btTransform::getIdentity();
+  uint64_t still_since_step = kNotStill;
+  double sleep_start_s = NAN;  // when it fell asleep; NaN while awake
+};
+
+/// btDiscreteDynamicsWorld keeps its CCD predictive manifolds protected; their points sit at the
+/// body's centre of mass (a swept sphere), so the event extraction must recognise them.
+class StrikeWorld : public btDiscreteDynamicsWorld {
+ public:
+  using btDiscreteDynamicsWorld::btDiscreteDynamicsWorld;
+  bool isPredictive(const btPersistentManifold* manifold) const {
+    for (int k = 0; k < m_predictiveManifolds.size(); ++k) {
+      if (m_predictiveManifolds[k] == manifold) return true;
+    }
+    return false;
+  }
+  /// Called after the narrow phase and before the solver of every substep.
+  std::function<void()> before_solve;
+
+ protected:
+  void solveConstraints(btContactSolverInfo& info) override {
+    if (before_solve) before_solve();
+    btDiscreteDynamicsWorld::solveConstraints(info);
+  }
+};
+
+/// A contact point that strikes within the current substep (see Simulation::timeImpacts).
+struct ImpactPoint {
+  const btManifoldPoint* point = nullptr;
+  double offset_s = 0.0;  ///< when the surfaces met, from the start of the substep, in [-step, step]
+  bool retimed = false;   ///< solved as touching at offset_s (Simulation::moveImpactsToTheirTime)
+};
+
+/// A body's loaded contacts in the current substep (see Simulation::moveImpactsToTheirTime).
+struct StruckBody {
+  double impulse_n_s = 0.0;           ///< normal impulse of its retimed impacts
+  double impulse_times_offset = 0.0;  ///< their sum of impulse x offset, N s^2
+  bool other_contact = false;         ///< a loaded contact that is not a retimed impact
+};
+
+struct RecentContact {
+  uint64_t step = 0;
+  btVector3 world, a_mesh, b_mesh;
+};
+
+class Simulation {
+ public:
+  Simulation(const std::vector<SimBodyDesc>& bodies, const SimSettings& settings)
+      : descs_(bodies), settings_(settings) {}
+  ~Simulation() {
+    if (world_) {
+      for (auto& b : bodies_) {
+        if (b->rigid) world_->removeRigidBody(b->rigid.get());
+      }
+      if (ground_) world_->removeRigidBody(ground_.get());
+    }
+  }
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  Status build(const std::vector<btQuaternion>& orientations);
+  Result<SimResult> run();
+
+ private:
+  Status buildBody(size_t index, const btQuaternion& orientation);
+  void preTick();
+  void timeImpacts();
+  void moveImpactsToTheirTime();
+  void postTick();
+  double energy(std::vector<double>* kinetic) const;
+  void hastenSleep();
+  void recordStates(std::vector<SimBodyState>& states) const;
+  ContactCoefficients coefficients(int index_a, int index_b) const;
+  static void preTickThunk(btDynamicsWorld* world, btScalar) {
+    static_cast<Simulation*>(world->getWorldUserInfo())->preTick();
+  }
+  static void postTickThunk(btDynamicsWorld* world, btScalar) {
+    static_cast<Simulation*>(world->getWorldUserInfo())->postTick();
+  }
+
+  const std::vector<SimBodyDesc>& descs_;
+  const SimSettings& settings_;
+  std::vector<std::unique_ptr<BodyState>> bodies_;
+  std::unique_ptr<btDefaultCollisionConfiguration> config_;
+  std::unique_ptr<btCollisionDispatcher> dispatcher_;
+  std::unique_ptr<btBroadphaseInterface> broadphase_;
+  std::unique_ptr<btSequentialImpulseConstraintSolver> solver_;
+  std::unique_ptr<StrikeWorld> world_;
+  std::unique_ptr<btCollisionShape> ground_shape_;
+  std::unique_ptr<btRigidBody> ground_;
+  bool gimpact_registered_ = false;
+  std::map<uint64_t, std::vector<std::vector<double>>> pieces_by_surface_;  // by content hash
+
+  uint64_t step_ = 0;
+  std::vector<ContactEvent> events_;
+  std::vector<ContactEvent> step_events_;
+  std::vector<RecentContact> step_recent_;
+  std::vector<int> step_lifetimes_;
+  std::vector<ImpactPoint> step_impacts_;
+  std::vector<StruckBody> step_struck_;
+  std::map<std::pair<uint32_t, uint32_t>, std::vector<RecentContact>> recent_;
+};
+
+}  // namespace strike::detail

@@ -1,0 +1,242 @@
+// SPDX-License-Identifier: MIT
+// The contact scheduler: what a physics engine's contacts sound like. Per body and step:
+//  - an impact (approach faster than kImpactSpeed_m_s) is a Hertz half-sine pulse of the
+//    contact time of the two bodies [Johnson 1985, Contact Mechanics, eq. 11.24];
+//  - sustained contact is a force: the step's impulses over the step. Its modal force is held
+//    until the body's load changes (its net force and moment, by kSteadyLoadTolerance), and
+//    each change is a force step ramped over one physics step, so a steady load is silent
+//    whatever the physics engine does with its contact points, and the step forces are linearly
+//    interpolated rather than a staircase that rings at the step rate;
+//  - a body with no sustained contact in a step lets go of its load (a ramp to zero), unless it
+//    is asleep (the physics engine stopped reporting it, but it still rests) or it is static and
+//    every body it carried is asleep;
+//  - contact damping (extra modal decay) is on from a body's first sustained contact until
+//    kContactGap_s after its last, and stays on while it sleeps on its support.
+// Every pulse and step is heard propagationDelay_s(distance) after it happens.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "strike/engine.hpp"
+
+namespace strike {
+namespace {
+
+double norm6(const std::array<double, 6>& v) {
+  double s = 0.0;
+  for (double x : v) s += x * x;
+  return std::sqrt(s);
+}
+
+}  // namespace
+
+double SoundEngine::hertzDuration(const Voice& v, const ContactPartner& p, double speed) const {
+  // A partner that is a voice and gives no material of its own: its bank's material, its contact
+  // radius and mass (what libstrike's contact call does for two objects).
+  if (p.youngs_pa <= 0.0 && p.voice != kNoVoice) {
+    if (const Voice* q = voice(p.voice)) {
+      const double tau = hertzContactDuration(v.youngs_pa_, v.poisson_, v.contact_radius_m_, v.mass_kg_, q->youngs_pa_,
+                                              q->poisson_, q->contact_radius_m_, q->mass_kg_, speed);
+      return std::min(tau, settings_.max_contact_duration_s);
+    }
+  }
+  const double youngs2 = p.youngs_pa > 0.0 ? p.youngs_pa : v.youngs_pa_;
+  const double poisson2 = p.youngs_pa > 0.0 ? p.poisson : v.poisson_;
+  const double radius2 = p.radius_m > 0.0 ? p.radius_m : INFINITY;
+  const double mass2 = p.mass_kg > 0.0 ? p.mass_kg : INFINITY;
+  const double tau = hertzContactDuration(v.youngs_pa_, v.poisson_, v.contact_radius_m_, v.mass_kg_, youngs2, poisson2,
+                                          radius2, mass2, speed);
+  return std::min(tau, settings_.max_contact_duration_s);
+}
+
+void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
+                                 const std::array<double, 3>& world_point) {
+  ImpactDesc impact;
+  impact.object = 0;
+  impact.time_s = time_s + delayTo(world_point);
+  impact.duration_s = duration_s;
+  impact.shape = shape;
+  impact.modal_impulse = modal;
+  if (!settings_.realtime) {
+    const SynthStats before = v.synth_.stats();
+    v.synth_.addImpact(impact);
+    if (v.synth_.stats().impacts_inaudible > before.impacts_inaudible) ++stats_.impacts_inaudible;
+    else ++stats_.impacts;
+    return;
+  }
+  switch (v.synth_.addImpactNoAlloc(impact)) {
+    case ImpactResult::Scheduled: ++stats_.impacts; break;
+    case ImpactResult::Inaudible: ++stats_.impacts_inaudible; break;
+    case ImpactResult::NoCapacity:
+    case ImpactResult::BadObject: ++stats_.impacts_dropped; break;
+  }
+}
+
+void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double time_s, double ramp_s,
+                                    const std::array<double, 3>& world_point) {
+  ForceStepDesc step;
+  step.object = 0;
+  step.time_s = time_s + delayTo(world_point);
+  step.ramp_s = ramp_s;
+  step.modal_force_change = modal_change;
+  const ImpactResult r = settings_.realtime ? v.synth_.addForceStepNoAlloc(step) : v.synth_.addForceStep(step);
+  if (r == ImpactResult::NoCapacity) ++stats_.impacts_dropped;
+  else ++stats_.load_changes;
+}
+
+void SoundEngine::beginStep(double step_end_s, double step_s) {
+  if (step_.open) endStep();
+  step_.open = true;
+  step_.end_s = step_end_s >= 0.0 && std::isfinite(step_end_s) ? step_end_s : time();
+  step_.length_s = step_s > 0.0 && std::isfinite(step_s) ? step_s : 0.0;
+}
+
+void SoundEngine::contact(const EngineContact& c) {
+  const bool own_step = !step_.open;
+  if (own_step) beginStep(c.time_s, 0.0);
+  Voice* v = voice(c.voice);
+  if (!v) {
+    ++stats_.stale;
+    if (own_step) endStep();
+    return;
+  }
+  const std::array<double, 3> point = c.world_frame ? v->pose_.toLocalPoint(c.point) : c.point;
+  const std::array<double, 3> impulse = c.world_frame ? v->pose_.toLocalDirection(c.impulse) : c.impulse;
+  const std::array<double, 3> world = c.world_frame ? c.point : v->pose_.toWorld(c.point);
+  const double now = time();
+  v->projector_.projectImpulseInto(point.data(), impulse.data(), v->modal_.data());
+  if (c.normal_speed_m_s > kImpactSpeed_m_s) {
+    const double t = c.time_s >= 0.0 ? c.time_s : now;
+    scheduleImpact(*v, v->modal_.data(), t, hertzDuration(*v, c.partner, c.normal_speed_m_s), PulseShape::HalfSine, world);
+  } else {
+    // Sustained: a force over the step (its impulse / step length), summed over the step's points.
+    ++stats_.sustained_contacts;
+    const double per_s = step_.length_s > 0.0 ? 1.0 / step_.length_s : 1.0;
+    for (size_t i = 0; i < v->modal_.size(); ++i) v->step_force_[i] += v->modal_[i] * per_s;
+    const std::array<double, 3> arm = {point[0] - v->centre_m_[0], point[1] - v->centre_m_[1], point[2] - v->centre_m_[2]};
+    const std::array<double, 3> moment = {arm[1] * impulse[2] - arm[2] * impulse[1], arm[2] * impulse[0] - arm[0] * impulse[2],
+                                          arm[0] * impulse[1] - arm[1] * impulse[0]};
+    for (int k = 0; k < 3; ++k) {
+      v->step_load_[k] += impulse[k] * per_s;
+      v->step_load_[3 + k] += moment[k] * per_s / v->size_m_;
+    }
+    if (!v->in_step_) v->partner_count_ = 0, v->partners_overflow_ = false;  // this step's partners from here
+    v->in_step_ = true;
+    if (c.partner.voice != kNoVoice) {
+      bool known = false;
+      for (uint32_t k = 0; k < v->partner_count_; ++k) known = known || v->partners_[k] == c.partner.voice;
+      if (!known && v->partner_count_ < v->partners_.size()) v->partners_[v->partner_count_++] = c.partner.voice;
+      else if (!known) v->partners_overflow_ = true;
+    } else {
+      v->partners_overflow_ = true;  // the ground or an unnamed body: it never sleeps
+    }
+    const double t = c.time_s >= 0.0 ? c.time_s : now;
+    if (settings_.contact_damping_per_s > 0.0 && !v->span_open_) {
+      if (settings_.realtime) (void)v->synth_.setExtraDampingNoAlloc(0, t + delayTo(world), settings_.contact_damping_per_s);
+      else v->synth_.setExtraDamping(0, t + delayTo(world), settings_.contact_damping_per_s);
+      v->span_open_ = true;
+    }
+    v->last_sustained_s_ = t;
+  }
+  if (own_step) endStep();
+}
+
+void SoundEngine::endStep() {
+  if (!step_.open) return;
+  for (uint32_t slot = 0; slot < slots_.size(); ++slot)
+    if (slots_[slot]) endStepFor(*slots_[slot], slot);
+  step_.open = false;
+}
+
+void SoundEngine::endStepFor(Voice& v, uint32_t slot) {
+  (void)slot;
+  // A step's force acts over the step: centred on the step, its change ramps over one step.
+  const double step_start_s = step_.end_s - step_.length_s;
+  const double change_at_s = step_start_s - 0.5 * step_.length_s;
+  const std::array<double, 3> centre = v.pose_.toWorld(v.centre_m_);
+  if (v.in_step_) {
+    std::array<double, 6> change{};
+    for (int k = 0; k < 6; ++k) change[k] = v.step_load_[k] - v.held_load_[k];
+    const bool steady = v.holding_ && norm6(change) <= kSteadyLoadTolerance * norm6(v.held_load_);
+    if (!steady) {
+      for (size_t i = 0; i < v.modal_.size(); ++i) v.modal_[i] = v.step_force_[i] - v.held_force_[i];
+      scheduleForceStep(v, v.modal_.data(), change_at_s, step_.length_s, centre);
+      v.held_force_ = v.step_force_;  // same size: no allocation
+      v.held_load_ = v.step_load_;
+      v.holding_ = true;
+    }
+    std::fill(v.step_force_.begin(), v.step_force_.end(), 0.0);
+    v.step_load_ = {};
+    v.in_step_ = false;
+    return;
+  }
+  bool keep = false;
+  if (v.holding_) {
+    if (v.asleep_) {
+      keep = true;
+    } else if (v.is_static_ && v.partner_count_ > 0 && !v.partners_overflow_) {
+      keep = true;
+      for (uint32_t k = 0; k < v.partner_count_; ++k) {
+        const Voice* p = voice(v.partners_[k]);
+        keep = keep && p && p->asleep_;
+      }
+    }
+    if (keep) {
+      ++stats_.load_holds;
+    } else {
+      for (size_t i = 0; i < v.modal_.size(); ++i) v.modal_[i] = -v.held_force_[i];
+      scheduleForceStep(v, v.modal_.data(), change_at_s, step_.length_s, centre);
+      std::fill(v.held_force_.begin(), v.held_force_.end(), 0.0);
+      v.held_load_ = {};
+      v.holding_ = false;
+    }
+  }
+  if (v.span_open_ && !keep && step_start_s - v.last_sustained_s_ > kContactGap_s) {
+    const double t = v.last_sustained_s_ + kContactGap_s + delayTo(centre);
+    if (settings_.realtime) (void)v.synth_.setExtraDampingNoAlloc(0, t, 0.0);
+    else v.synth_.setExtraDamping(0, t, 0.0);
+    v.span_open_ = false;
+  }
+}
+
+void SoundEngine::impact(const EngineImpact& d) {
+  Voice* v = voice(d.voice);
+  if (!v) {
+    ++stats_.stale;
+    return;
+  }
+  const std::array<double, 3> point = d.world_frame ? v->pose_.toLocalPoint(d.point) : d.point;
+  const std::array<double, 3> impulse = d.world_frame ? v->pose_.toLocalDirection(d.impulse) : d.impulse;
+  const ModeBank& bank = *v->bank_;
+  std::array<double, 3> world = d.world_frame ? d.point : v->pose_.toWorld(d.point);
+  if (d.surface_vertex >= 0 && static_cast<size_t>(d.surface_vertex) < bank.surfaceVertexCount()) {
+    const size_t vertex = static_cast<size_t>(d.surface_vertex);
+    projectImpulseAtVertexInto(bank, vertex, impulse.data(), v->modal_.data());
+    world = v->pose_.toWorld({bank.surface_positions[3 * vertex], bank.surface_positions[3 * vertex + 1],
+                              bank.surface_positions[3 * vertex + 2]});
+  } else {
+    v->projector_.projectImpulseInto(point.data(), impulse.data(), v->modal_.data());
+  }
+  const double duration = d.contact_duration_s < 0.0 ? hertzDuration(*v, d.partner, d.normal_speed_m_s)
+                                                     : std::min(d.contact_duration_s, settings_.max_contact_duration_s);
+  scheduleImpact(*v, v->modal_.data(), d.time_s >= 0.0 ? d.time_s : time(), duration, d.shape, world);
+}
+
+void SoundEngine::reset() {
+  for (Voice* v : slots_) {
+    if (!v) continue;
+    v->synth_.reset();
+    std::fill(v->step_force_.begin(), v->step_force_.end(), 0.0);
+    std::fill(v->held_force_.begin(), v->held_force_.end(), 0.0);
+    v->step_load_ = {};
+    v->held_load_ = {};
+    v->holding_ = v->in_step_ = v->span_open_ = false;
+    v->partner_count_ = 0;
+    v->last_sustained_s_ = -1.0;
+    v->fresh_ = true;
+  }
+  step_ = Step{};
+  frames_ = 0;
+}
+
+}  // namespace strike

@@ -1,0 +1,175 @@
+// SPDX-License-Identifier: MIT
+// The sound engine's voices, listener, mix and budget (the contacts are in
+// contact_scheduler.cpp). Follow render(): each voice's level from its distance, its modes
+// rendered, mixed with that level ramped over the call, then the budget of ringing modes.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "strike/engine.hpp"
+
+namespace strike {
+namespace {
+
+constexpr size_t kHistogramBins = 4096;  // float bits >> 19 of a non-negative float
+
+uint32_t histogramBin(float level2) {
+  uint32_t bits;
+  std::memcpy(&bits, &level2, sizeof bits);
+  if (!(level2 > 0.0f)) return 0;
+  return std::min<uint32_t>(bits >> 19, kHistogramBins - 1);  // monotonic for non-negative floats
+}
+
+}  // namespace
+
+SoundEngine::SoundEngine(const EngineSettings& settings) : settings_(settings) {
+  settings_.channels = settings_.channels == 2 ? 2 : 1;
+  settings_.max_block_frames = std::max<uint32_t>(settings_.max_block_frames, 1);
+  slots_.assign(settings_.max_voices, nullptr);
+  histogram_.assign(kHistogramBins, 0);
+}
+
+SoundEngine::~SoundEngine() = default;
+
+bool SoundEngine::install(uint32_t slot, Voice* voice) {
+  if (slot >= slots_.size() || slots_[slot] || !voice) return false;
+  slots_[slot] = voice;
+  voice->fresh_ = true;
+  // Its oscillators start on the engine's clock, so a contact's time means the same in every voice.
+  const uint64_t at = static_cast<uint64_t>(std::llround(voice->synth_.time() * settings_.synth.sample_rate_hz));
+  if (frames_ > at) voice->synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
+  return true;
+}
+
+Voice* SoundEngine::uninstall(uint32_t slot) {
+  if (slot >= slots_.size()) return nullptr;
+  Voice* v = slots_[slot];
+  slots_[slot] = nullptr;
+  return v;
+}
+
+void SoundEngine::setPose(uint32_t slot, const Pose& pose, bool asleep) {
+  if (Voice* v = voice(slot)) v->pose_ = pose, v->asleep_ = asleep;
+}
+
+void SoundEngine::setGain(uint32_t slot, float gain) {
+  if (Voice* v = voice(slot)) v->gain_ = gain;
+}
+
+void SoundEngine::setListener(const Pose& pose) { listener_ = pose; }
+
+double SoundEngine::time() const { return static_cast<double>(frames_) / settings_.synth.sample_rate_hz; }
+
+double SoundEngine::delayTo(const std::array<double, 3>& world_point) const {
+  return propagationDelay_s(distance(world_point, listener_.position_m));
+}
+
+// The listener model (listener.hpp): the level from the distance of the body's centre of mass
+// now; the pan from its direction in the listener's frame (+x to the right).
+void SoundEngine::updateGains(Voice& v) {
+  const std::array<double, 3> centre = v.pose_.toWorld(v.centre_m_);
+  const double d = distance(centre, listener_.position_m);
+  const double g = static_cast<double>(v.gain_) * distanceGain(d, settings_.reference_distance_m, settings_.min_distance_m);
+  v.level_gain2_ = static_cast<float>(g * g);
+  if (settings_.channels == 1) {
+    v.target_gain_[0] = static_cast<float>(g);
+  } else {
+    const std::array<double, 3> local = listener_.toLocalPoint(centre);
+    const double pan = d > 1e-9 ? std::clamp(local[0] / d, -1.0, 1.0) : 0.0;
+    const double theta = (pan + 1.0) * (M_PI / 4.0);  // constant power: gl^2 + gr^2 = g^2
+    v.target_gain_[0] = static_cast<float>(g * std::cos(theta));
+    v.target_gain_[1] = static_cast<float>(g * std::sin(theta));
+  }
+  if (v.fresh_) {
+    v.cur_gain_[0] = v.target_gain_[0], v.cur_gain_[1] = v.target_gain_[1];
+    v.fresh_ = false;
+  }
+}
+
+void SoundEngine::render(float* const* out, size_t frames) {
+  frames = std::min<size_t>(frames, settings_.max_block_frames);
+  const uint32_t channels = settings_.channels;
+  for (uint32_t c = 0; c < channels; ++c) std::fill(out[c], out[c] + frames, 0.0f);
+  uint64_t active = 0;
+  for (Voice* v : slots_) {
+    if (!v) continue;
+    updateGains(*v);
+    if (frames == 0) continue;
+    if (v->synth_.idle()) {
+      v->cur_gain_[0] = v->target_gain_[0], v->cur_gain_[1] = v->target_gain_[1];
+      v->synth_.skip(nullptr, frames);  // keeps its clock: its next pulse lands at the right sample
+      continue;
+    }
+    const SynthStats before = v->synth_.stats();
+    v->synth_.render(v->mono_.data(), frames);
+    stats_.mode_samples += v->synth_.stats().mode_samples - before.mode_samples;
+    const float inv = 1.0f / static_cast<float>(frames);
+    for (uint32_t c = 0; c < channels; ++c) {
+      const float g0 = v->cur_gain_[c], dg = (v->target_gain_[c] - g0) * inv;
+      float* o = out[c];
+      const float* m = v->mono_.data();
+      if (dg == 0.0f) {
+        for (size_t n = 0; n < frames; ++n) o[n] += g0 * m[n];
+      } else {
+        for (size_t n = 0; n < frames; ++n) o[n] += (g0 + dg * static_cast<float>(n + 1)) * m[n];
+      }
+      v->cur_gain_[c] = v->target_gain_[c];
+    }
+    active += v->synth_.activeModeCount();
+  }
+  enforceBudget(active);
+  stats_.active_modes = active;
+  stats_.max_active_modes = std::max(stats_.max_active_modes, active);
+  frames_ += frames;
+}
+
+// When more modes ring than the budget allows, a histogram of their squared levels at the
+// listener (float bits, 1/16-octave bins of level^2) finds the cut, and every mode at or below it
+// sleeps: the quietest go first, and the whole boundary bin (within 0.4 dB) goes, so the count
+// lands at or just under the budget.
+void SoundEngine::enforceBudget(uint64_t& active) {
+  const uint64_t budget = settings_.max_active_modes;
+  if (budget == 0 || active <= budget) return;
+  std::fill(histogram_.begin(), histogram_.end(), 0u);
+  for (Voice* v : slots_) {
+    if (!v) continue;
+    const size_t n = v->synth_.activeModeLevels(v->levels_.data(), v->levels_.size());
+    for (size_t k = 0; k < n; ++k) ++histogram_[histogramBin(v->levels_[k] * v->level_gain2_)];
+  }
+  // Keep the loudest bins while they fit; cull the first bin that does not, and all below it.
+  uint64_t kept = 0;
+  size_t cut = kHistogramBins;
+  for (size_t b = kHistogramBins; b-- > 0;) {
+    if (kept + histogram_[b] > budget) {
+      cut = b;
+      break;
+    }
+    kept += histogram_[b];
+  }
+  if (cut == kHistogramBins) return;
+  // Largest float in bin `cut`; +inf (cull all) for the top bin.
+  const uint32_t top_bits = static_cast<uint32_t>((cut + 1) << 19) - 1u;
+  float threshold;
+  std::memcpy(&threshold, &top_bits, sizeof threshold);
+  if (cut == kHistogramBins - 1) threshold = HUGE_VALF;
+  active = 0;
+  for (Voice* v : slots_) {
+    if (!v) continue;
+    stats_.modes_culled += v->synth_.sleepModesAtOrBelow(threshold, v->level_gain2_);
+    active += v->synth_.activeModeCount();
+  }
+}
+
+EngineStats SoundEngine::stats() const {
+  EngineStats s = stats_;
+  s.modes_total = s.modes_out_of_band = 0;
+  for (const Voice* v : slots_) {
+    if (!v) continue;
+    const SynthStats vs = v->synth_.stats();
+    s.modes_total += vs.modes_total;
+    s.modes_out_of_band += vs.modes_out_of_band;
+  }
+  return s;
+}
+
+}  // namespace strike

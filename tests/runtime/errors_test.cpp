@@ -88,6 +88,8 @@ void objectsImpactsAndRendering(strike_context context) {
   for (int i = 0; i < 4; ++i) CHECK_OK(strike_impact(context, &hit));
   CHECK_STATUS(strike_impact(context, &hit), STRIKE_ERR_QUEUE_FULL);
   strike_stats stats{};
+  CHECK_STATUS(strike_context_get_stats(context, &stats), STRIKE_ERR_INVALID_ARG);  // struct_size not set
+  stats.struct_size = sizeof stats;
   CHECK_OK(strike_context_get_stats(context, &stats));
   CHECK(stats.impacts_dropped_queue_full == 1);
 

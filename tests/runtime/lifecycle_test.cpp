@@ -121,6 +121,7 @@ void contextDestroyedWithObjectsThenBank() {  // a bank outliving its context
   CHECK(strikeAndRender(context, object) > 0.0);
   strike_context_destroy(context);  // object still in it, bank handle still held
   strike_bank_info info{};
+  info.struct_size = sizeof info;
   CHECK_OK(strike_bank_get_info(bank, &info));  // the bank is usable on its own
   CHECK(info.mode_count == 2);
   strike_bank_destroy(bank);

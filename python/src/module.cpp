@@ -150,6 +150,8 @@ py::dict reportDict(const PyRenderResult& r) {
   d["events"] = s.events;
   d["impacts"] = s.impacts;
   d["sustained_contacts"] = s.sustained_contacts;
+  d["load_changes"] = s.load_changes;
+  d["load_holds"] = s.load_holds;
   d["modes_total"] = s.modes_total;
   d["modes_out_of_band"] = s.modes_out_of_band;
   d["mode_samples"] = s.mode_samples;

@@ -15,7 +15,6 @@
 // Every pulse and step is heard propagationDelay_s(distance) after it happens.
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "strike/engine.hpp"
 

@@ -271,9 +271,9 @@ struct OscillatorBank::Impl {
     slot_mode.grow(cap);
     damped_mode.reserve(damped_total);
     damped_x.reserve(2 * damped_total);
-    obj.damping_schedule.reserve(kDampingReserve);
     damping_changes.reserve(kDampingReserve * (objects.size() + 1));
     objects.push_back(obj);
+    objects.back().damping_schedule.reserve(kDampingReserve);  // after the copy: a copy keeps no capacity
     if (reserved_hits > 0 || reserved_transient > 0) reserveImpacts(pool.size(), reserved_transient);
     return static_cast<uint32_t>(objects.size() - 1);
   }

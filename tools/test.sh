@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# The README's second command (and CI's): install what is missing, build with warnings as errors,
+# The README's second command (and CI's): install what is missing, build libstrike alone with
+# nothing but a compiler and CMake (heavy packages hidden), build everything with warnings as errors,
 # fuzz smoke, the test suite under ASan + UBSan and the C API's threading tests under TSan, then
 # the whole test suite. Any finding of a fuzzer or sanitizer fails the script (set -e); the table
 # of stage times is printed at the end either way (tools/stages.sh).
@@ -16,6 +17,25 @@ asan_build() {
   cmake --preset asan >/dev/null
   cmake --build --preset asan
 }
+# libstrike alone (STRIKE_RUNTIME_ONLY) with every package the project looks for hidden from CMake:
+# each find_package disabled (tests/tools checks that none is missing from this list), pkg-config
+# pointed at nothing, and find_library/find_path blind to the system prefixes. It configures only
+# if the runtime build asks for none of them; a full configure under the same hiding must fail,
+# or the hiding proves nothing. Build dir build/runtime (seconds: the runtime only).
+runtime_only_build_and_tests() {
+  local hide=(--no-warn-unused-cli -DCMAKE_IGNORE_PREFIX_PATH="/usr;/usr/local")
+  for package in Eigen3 PkgConfig Bullet nlohmann_json GTest Threads Python pybind11 benchmark; do
+    hide+=("-DCMAKE_DISABLE_FIND_PACKAGE_${package}=ON")
+  done
+  if PKG_CONFIG_LIBDIR= cmake -S . -B build/runtime-hiding-check -G Ninja "${hide[@]}" >/dev/null 2>&1; then
+    echo "runtime-only stage: the full build configured with the packages hidden; the hiding does not work" >&2
+    return 1
+  fi
+  PKG_CONFIG_LIBDIR= cmake -S . -B build/runtime -G Ninja -DCMAKE_BUILD_TYPE=Release -DSTRIKE_RUNTIME_ONLY=ON \
+    -DSTRIKE_WERROR=ON "${hide[@]}" >/dev/null
+  cmake --build build/runtime
+  ctest --test-dir build/runtime -j2 --output-on-failure
+}
 tsan_build_and_tests() {
   cmake --preset tsan >/dev/null
   cmake --build --preset tsan
@@ -23,6 +43,7 @@ tsan_build_and_tests() {
 }
 
 stage "install dependencies" bash tools/install-deps.sh
+stage "runtime-only build + tests" runtime_only_build_and_tests
 stage "ci build (-Werror)" ci_build
 # Fuzz smoke (issue 7): every parser's libFuzzer target, built with clang + ASan + UBSan (build-fuzz/),
 # runs 10 s over its seed corpus; a crash, leak, UB, >10 s input or >2 GB RSS fails CI.

@@ -11,11 +11,11 @@
 #include "fftw_lock.hpp"
 #include "impact_onsets.hpp"
 #include "strike/audio.hpp"
+#include "strike/constants.hpp"
 
 namespace strike {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kNepersPerDb = 0.11512925464970229;  // ln(10) / 20
 /// A spectral line must stand this many times (6 dB) above the modelled leakage of the
 /// stronger lines at its frequency.

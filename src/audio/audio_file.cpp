@@ -12,7 +12,7 @@
 #include <cstring>
 #include <limits>
 
-#include "atomic_rename.hpp"
+#include "strike/atomic_file.hpp"  // temporaryPathFor
 #include "strike/interrupt_cleanup.hpp"
 #include "strike/audio.hpp"
 
@@ -91,7 +91,7 @@ Status writeAudio(const std::string& path, const AudioBuffer& audio, SampleEncod
     return badInput(path + ": error: libsndfile cannot write " + std::string(encodingName(encoding)) + " " + ext.substr(1) +
                     " with " + std::to_string(audio.channels) + " channels at " + std::to_string(info.samplerate) + " Hz");
 
-  const std::string temp = detail::audioTemporaryPathFor(path);
+  const std::string temp = temporaryPathFor(path);
   TemporaryRegistration registration(temp);  // removed if SIGINT/SIGTERM arrives mid-write
   SNDFILE* file = sf_open(temp.c_str(), SFM_WRITE, &info);
   if (!file) return badInput(path + ": error: cannot create output file: " + sf_strerror(nullptr));

@@ -14,11 +14,11 @@
 #include "strike/atomic_file.hpp"
 #include "fftw_lock.hpp"
 #include "strike/audio.hpp"
+#include "strike/constants.hpp"
 
 namespace strike {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 using Rgb = std::array<uint8_t, 3>;
 

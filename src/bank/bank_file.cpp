@@ -23,8 +23,9 @@
 #include <cstring>
 #include <limits>
 
-#include "strike/atomic_file.hpp"
 #include "strike/bank.hpp"
+#include "strike/hash.hpp"
+#include "strike/read_file.hpp"
 
 namespace strike {
 namespace {
@@ -693,13 +694,6 @@ Result<ModeBank> readBank(const std::string& path) {
   Result<BankFile> file = BankFile::open(path);
   if (!file) return file.error();
   return file->readAll();
-}
-
-Status writeBank(const std::string& path, const ModeBank& bank, ShapeEncoding shapes) {
-  const std::string problem = bank.checkConsistency();
-  if (!problem.empty()) return internalError("refusing to write an inconsistent mode bank to " + path + ": " + problem);
-  const std::vector<uint8_t> bytes = encodeBank(bank, shapes);
-  return writeFileAtomically(path, bytes.data(), bytes.size());
 }
 
 }  // namespace strike

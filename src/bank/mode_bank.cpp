@@ -68,16 +68,4 @@ const float* ShapeRows::row(uint32_t vertex) const {
   return values.data() + static_cast<size_t>(it - vertices.begin()) * modes * 3;
 }
 
-uint64_t fnv1a64(const void* data, size_t size, uint64_t seed) {
-  // FNV-1a, 64-bit (Fowler, Noll, Vo): simple, deterministic, good enough to detect corruption
-  // and key a cache; not a cryptographic hash.
-  const auto* bytes = static_cast<const uint8_t*>(data);
-  uint64_t hash = seed;
-  for (size_t i = 0; i < size; ++i) {
-    hash ^= bytes[i];
-    hash *= 0x100000001b3ull;
-  }
-  return hash;
-}
-
 }  // namespace strike

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "mesh_io.hpp"
+#include "strike/format.hpp"
 #include "strike/mesh.hpp"
 
 namespace strike {
@@ -22,13 +23,6 @@ using detail::at;
 using detail::quoteToken;
 
 constexpr int64_t kMaxNodes = 200'000'000;
-
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
 
 class GmshParser {
  public:
@@ -94,7 +88,7 @@ class GmshParser {
     const std::string_view t = tok_.nextOnLine();
     if (t.empty()) return fail("missing node coordinate, expected x y z");
     if (!detail::parseDouble(t, value)) return fail("node coordinate " + quoteToken(t) + " is not a number");
-    if (!std::isfinite(value)) return fail("node coordinate is " + num(value) + ", expected a finite number");
+    if (!std::isfinite(value)) return fail("node coordinate is " + formatNumber(value, 17) + ", expected a finite number");
     return {};
   }
 
@@ -194,7 +188,7 @@ class GmshParser {
         if (tok_.atEnd()) return fail("end of file in the coordinates of node " + std::to_string(tag) + " (truncated file)");
         const std::string_view first = tok_.next();
         if (!detail::parseDouble(first, xyz[0])) return fail("node coordinate " + quoteToken(first) + " is not a number");
-        if (!std::isfinite(xyz[0])) return fail("node coordinate is " + num(xyz[0]) + ", expected a finite number");
+        if (!std::isfinite(xyz[0])) return fail("node coordinate is " + formatNumber(xyz[0], 17) + ", expected a finite number");
         for (int c = 1; c < 3; ++c) {
           if (Status s = readCoord(xyz[c]); !s) return s;
         }

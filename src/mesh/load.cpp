@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "mesh_io.hpp"
+#include "strike/hash.hpp"
 #include "strike/mesh.hpp"
 
 namespace strike {
@@ -107,7 +108,7 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
     std::string kind;
     Result<std::vector<double>> values = parsePrimitive(spec, kind);
     if (!values) return values.error();
-    loaded.source_hash = detail::fnv1a64Local(spec.data(), spec.size());
+    loaded.source_hash = fnv1a64(spec.data(), spec.size());
     const std::vector<double>& v = *values;
     if (kind == "box") {
       Result<TetMesh> mesh = makeBox(v[0], v[1], v[2], options);
@@ -137,7 +138,7 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
   if (ext == ".obj" || ext == ".stl" || ext == ".ply") {
     Result<std::string> bytes = detail::readWholeFile(spec);
     if (!bytes) return bytes.error();
-    loaded.source_hash = detail::fnv1a64Local(bytes->data(), bytes->size());
+    loaded.source_hash = fnv1a64(bytes->data(), bytes->size());
     Result<SurfaceMesh> surface = readSurfaceMesh(spec, &loaded.warnings);
     if (!surface) return surface.error();
     if (options.scale != 1.0) surface->V *= options.scale;  // to metres before TetGen sizes anything
@@ -157,13 +158,13 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
       for (const char* suffix : {".node", ".ele"}) {
         Result<std::string> bytes = detail::readWholeFile(stem + suffix);
         if (!bytes) return bytes.error();
-        hash = detail::fnv1a64Local(bytes->data(), bytes->size(), hash);
+        hash = fnv1a64(bytes->data(), bytes->size(), hash);
       }
       loaded.source_hash = hash;
     } else {
       Result<std::string> bytes = detail::readWholeFile(spec);
       if (!bytes) return bytes.error();
-      loaded.source_hash = detail::fnv1a64Local(bytes->data(), bytes->size());
+      loaded.source_hash = fnv1a64(bytes->data(), bytes->size());
     }
     if (Status s = validateAndRepair(*mesh, spec, &loaded.warnings); !s) return s.error();
     keepFileOrder(*mesh, options, spec, loaded.warnings);

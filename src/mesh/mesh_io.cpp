@@ -6,8 +6,9 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <system_error>
+
+#include "strike/read_file.hpp"
 
 namespace strike::detail {
 
@@ -18,31 +19,7 @@ Result<std::string> readWholeFile(const std::string& path) {
   if (ec || !fs::exists(status)) return badInput(path + ": error: mesh file not found");
   if (fs::is_directory(status)) return badInput(path + ": error: is a directory, expected a mesh file");
   if (!fs::is_regular_file(status)) return badInput(path + ": error: not a regular file, expected a mesh file");
-  const uintmax_t size = fs::file_size(path, ec);
-  if (ec) return badInput(path + ": error: cannot read the file size: " + ec.message());
-  if (size > kMaxMeshFileBytes) {
-    return badInput(path + ": error: file is " + std::to_string(size) + " bytes, expected at most " +
-                    std::to_string(kMaxMeshFileBytes) + " for a mesh");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return badInput(path + ": error: cannot open the file for reading");
-  std::string bytes(static_cast<size_t>(size), '\0');
-  in.read(bytes.data(), static_cast<std::streamsize>(size));
-  if (static_cast<uintmax_t>(in.gcount()) != size) {
-    return badInput(path + ": error: read " + std::to_string(in.gcount()) + " of " + std::to_string(size) +
-                    " bytes (file changed while reading?)");
-  }
-  return bytes;
-}
-
-uint64_t fnv1a64Local(const void* data, size_t size, uint64_t seed) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  uint64_t h = seed;
-  for (size_t i = 0; i < size; ++i) {
-    h ^= p[i];
-    h *= 0x100000001b3ull;
-  }
-  return h;
+  return strike::readWholeFile(path, kMaxMeshFileBytes);
 }
 
 std::string lowerExtension(const std::string& path) {

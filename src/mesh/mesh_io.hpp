@@ -18,13 +18,9 @@ namespace strike::detail {
 /// hostile path (e.g. /dev/zero) from exhausting memory.
 constexpr uint64_t kMaxMeshFileBytes = uint64_t{4} << 30;
 
-/// Reads a whole regular file. Missing file, directory, unreadable or too large: BadInput
-/// naming the path.
+/// Reads a whole mesh file: strike::readWholeFile (read_file.hpp) capped at kMaxMeshFileBytes,
+/// after refusing anything but a regular file (a device like /dev/zero reports size 0).
 Result<std::string> readWholeFile(const std::string& path);
-
-/// FNV-1a 64, same constants as strike::fnv1a64 (bank.hpp), kept local so that strike_mesh does
-/// not link strike_bank.
-uint64_t fnv1a64Local(const void* data, size_t size, uint64_t seed = 0xcbf29ce484222325ull);
 
 /// Lower-cased extension including the dot (".obj"), or "" when there is none.
 std::string lowerExtension(const std::string& path);

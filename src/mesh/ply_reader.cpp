@@ -23,7 +23,6 @@ namespace {
 using detail::at;
 using detail::finishSurface;
 using detail::kMaxVertices;
-using detail::num;
 using detail::quoteToken;
 using detail::Soup;
 
@@ -293,7 +292,7 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
           const double max_items = static_cast<double>(format == PlyFormat::Ascii ? tok.remainingBytes() / 2 + 1
                                                                                   : cursor.remaining() / plySize(p.type));
           if (!(count_value >= 0) || count_value != std::floor(count_value) || count_value > max_items) {
-            return badInput(location() + e.name + " " + std::to_string(i) + " list " + p.name + " has count " + num(count_value) +
+            return badInput(location() + e.name + " " + std::to_string(i) + " list " + p.name + " has count " + formatNumber(count_value, 17) +
                             ", expected a non-negative integer that fits in the rest of the file (truncated file?)");
           }
           const int64_t count = static_cast<int64_t>(count_value);
@@ -304,7 +303,7 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
             if (static_cast<int>(k) == index_prop) {
               const int64_t limit = vertices_done ? num_vertices_read : kMaxVertices;
               if (item != std::floor(item) || item < 0 || item >= static_cast<double>(limit)) {
-                return badInput(location() + "face " + std::to_string(i) + " references vertex " + num(item) + ", the file has " +
+                return badInput(location() + "face " + std::to_string(i) + " references vertex " + formatNumber(item, 17) + ", the file has " +
                                 std::to_string(vertex_element->count) + " vertices (0-based indices)");
               }
               polygon.push_back(static_cast<int64_t>(item));
@@ -327,7 +326,7 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
             for (int c = 0; c < 3; ++c) {
               if (static_cast<int>(k) == xyz_prop[c]) {
                 if (!std::isfinite(value)) {
-                  return badInput(location() + "vertex " + std::to_string(i) + " coordinate " + p.name + " is " + num(value) +
+                  return badInput(location() + "vertex " + std::to_string(i) + " coordinate " + p.name + " is " + formatNumber(value, 17) +
                                   ", expected a finite number");
                 }
                 xyz[c] = value;

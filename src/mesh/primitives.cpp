@@ -12,26 +12,20 @@
 
 #include <Eigen/Geometry>  // cross()
 
+#include "strike/constants.hpp"
+#include "strike/format.hpp"
 #include "strike/mesh.hpp"
 
 namespace strike {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kMaxSubdivision = 200;  // 20 * 200^2 = 800k triangles: beyond any sane FEM mesh
 constexpr int kMaxSegments = 20000;
 
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(9);
-  s << v;
-  return s.str();
-}
-
 Status checkLength(const char* what, const char* name, double value, bool allow_zero) {
   if (!std::isfinite(value) || value < 0.0 || (!allow_zero && value == 0.0)) {
-    return badInput(std::string(what) + ": " + name + " = " + num(value) + " (must be a finite length in metres " +
+    return badInput(std::string(what) + ": " + name + " = " + formatNumber(value, 9) + " (must be a finite length in metres " +
                     (allow_zero ? ">= 0" : "> 0") + ")");
   }
   return {};
@@ -69,7 +63,7 @@ Result<SurfaceMesh> makeSphereSurface(double radius, double target_edge_m) {
   if (target_edge_m > 0.0) {
     const double want = std::ceil(ico_edge * radius / target_edge_m);
     if (!(want <= kMaxSubdivision)) {
-      return badInput("sphere: target edge " + num(target_edge_m) + " m is too small for radius " + num(radius) +
+      return badInput("sphere: target edge " + formatNumber(target_edge_m, 9) + " m is too small for radius " + formatNumber(radius, 9) +
                       " m (more than " + std::to_string(20 * kMaxSubdivision * kMaxSubdivision) + " triangles)");
     }
     k = std::max(2, static_cast<int>(want));
@@ -154,7 +148,7 @@ Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double tar
   if (target_edge_m > 0.0) {
     const double want = std::ceil(2.0 * kPi * radius / target_edge_m);
     if (!(want <= kMaxSegments)) {
-      return badInput("cylinder: target edge " + num(target_edge_m) + " m is too small for radius " + num(radius) + " m");
+      return badInput("cylinder: target edge " + formatNumber(target_edge_m, 9) + " m is too small for radius " + formatNumber(radius, 9) + " m");
     }
     n = std::max(8, static_cast<int>(want));
   }
@@ -163,7 +157,7 @@ Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double tar
   const double rows_want = std::round(height / edge);
   const double rings_want = std::round(radius / (2.0 * kPi * radius / n));
   if (!(rows_want <= kMaxSegments) || !(rings_want <= kMaxSegments)) {
-    return badInput("cylinder: R = " + num(radius) + ", H = " + num(height) + " with edge " + num(edge) +
+    return badInput("cylinder: R = " + formatNumber(radius, 9) + ", H = " + formatNumber(height, 9) + " with edge " + formatNumber(edge, 9) +
                     " m gives too many triangles");
   }
   const int rows = std::max(1, static_cast<int>(rows_want));

@@ -20,7 +20,6 @@ using detail::at;
 using detail::finishSurface;
 using detail::kMaxVertices;
 using detail::nonFinite;
-using detail::num;
 using detail::quoteToken;
 using detail::Soup;
 
@@ -45,7 +44,7 @@ Result<SurfaceMesh> parseBinaryStl(const std::string& bytes, const std::string& 
       const double c = readFloatLe(p + offset + 4 * static_cast<uint64_t>(k));
       if (!std::isfinite(c)) {
         return badInput(path + ": byte " + std::to_string(offset + 4 * static_cast<uint64_t>(k)) + ": error: triangle " +
-                        std::to_string(t) + " coordinate is " + num(c) + ", expected a finite number");
+                        std::to_string(t) + " coordinate is " + formatNumber(c, 17) + ", expected a finite number");
       }
       soup.xyz.push_back(c);
     }

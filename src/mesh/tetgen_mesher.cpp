@@ -19,6 +19,7 @@
 
 #include <Eigen/Geometry>  // cross()
 
+#include "strike/format.hpp"
 #include "strike/mesh.hpp"
 
 namespace strike {
@@ -31,13 +32,6 @@ namespace {
 // refinement produces roughly 2-4x more tets than volume / maxvolume, so this lands typical
 // objects in the low thousands of tets.
 constexpr double kDefaultRegularTets = 600.0;
-
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
 
 std::string tetgenErrorText(int code) {
   switch (code) {
@@ -81,11 +75,11 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
     return badInput(source + ": error: element order " + std::to_string(options.order) + ", expected 1 or 2");
   }
   if (!std::isfinite(options.target_edge_m) || options.target_edge_m < 0.0) {
-    return badInput(source + ": error: target edge length " + num(options.target_edge_m) + " m, expected >= 0 (0 = automatic)");
+    return badInput(source + ": error: target edge length " + formatNumber(options.target_edge_m, 6) + " m, expected >= 0 (0 = automatic)");
   }
   // Below ~1.1 TetGen's refinement may never terminate; above ~10 the bound does nothing.
   if (!(options.radius_edge_ratio >= 1.1 && options.radius_edge_ratio <= 10.0)) {
-    return badInput(source + ": error: radius-edge ratio " + num(options.radius_edge_ratio) + ", expected 1.1 .. 10");
+    return badInput(source + ": error: radius-edge ratio " + formatNumber(options.radius_edge_ratio, 6) + ", expected 1.1 .. 10");
   }
   if (Status s = checkClosedSurface(surface, source); !s) return s.error();
 
@@ -98,7 +92,7 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
   volume = std::abs(volume);  // TetGen does not care about the winding
   const double extent = (surface.V.colwise().maxCoeff() - surface.V.colwise().minCoeff()).norm();
   if (!(volume > 1e-12 * extent * extent * extent)) {
-    return badInput(source + ": error: the closed surface encloses volume " + num(volume) + " m^3, expected a solid");
+    return badInput(source + ": error: the closed surface encloses volume " + formatNumber(volume, 6) + " m^3, expected a solid");
   }
   const double regular_tet = 1.0 / (6.0 * std::sqrt(2.0));  // volume of a regular tet of edge 1
   double max_volume = 0.0;
@@ -109,8 +103,8 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
   }
   const double max_tets = static_cast<double>(options.max_tets);
   if (volume / max_volume > max_tets) {
-    return badInput(source + ": error: target edge " + num(options.target_edge_m) + " m would give more than " +
-                    num(max_tets) + " tets (the --max-tets cap) for volume " + num(volume) +
+    return badInput(source + ": error: target edge " + formatNumber(options.target_edge_m, 6) + " m would give more than " +
+                    formatNumber(max_tets, 6) + " tets (the --max-tets cap) for volume " + formatNumber(volume, 6) +
                     " m^3; use a larger --size, or raise the cap with --max-tets N");
   }
 
@@ -139,7 +133,7 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
   // that no formatting of small numbers (1e-9) can be misread by TetGen's parser.
   tetgenbehavior behavior;
   char switches[] = "pqQ";
-  const std::string shown = "pq" + num(options.radius_edge_ratio) + "a" + num(max_volume) + "Q";
+  const std::string shown = "pq" + formatNumber(options.radius_edge_ratio, 6) + "a" + formatNumber(max_volume, 6) + "Q";
   if (!behavior.parse_commandline(switches)) return internalError("TetGen rejected the switches " + shown);
   behavior.quality = 1;
   behavior.minratio = options.radius_edge_ratio;
@@ -167,8 +161,8 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
       for (int c = 0; c < 3; ++c) {
         const int v = diagnosis.trifacelist[c] - diagnosis.firstnumber;
         if (v < 0 || v >= in.numberofpoints) continue;
-        where += (c ? ", " : "") + std::to_string(v) + " (" + num(in.pointlist[3 * v]) + ", " + num(in.pointlist[3 * v + 1]) +
-                 ", " + num(in.pointlist[3 * v + 2]) + ")";
+        where += (c ? ", " : "") + std::to_string(v) + " (" + formatNumber(in.pointlist[3 * v], 6) + ", " + formatNumber(in.pointlist[3 * v + 1], 6) +
+                 ", " + formatNumber(in.pointlist[3 * v + 2], 6) + ")";
       }
       return badInput(source + ": error: the surface intersects itself: TetGen found " +
                       std::to_string(diagnosis.numberoftrifaces) + " intersecting triangles, the first with vertices " + where +

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "mesh_io.hpp"
+#include "strike/format.hpp"
 #include "strike/mesh.hpp"
 
 namespace strike {
@@ -29,13 +30,6 @@ constexpr int64_t kMaxNodes = 200'000'000;
 // Checked against the installed libtet (mid-edge nodes at edge midpoints, see
 // tests/unit/mesh/tetgen_reader_test.cpp).
 constexpr int kTetgenToGmsh[10] = {0, 1, 2, 3, 6, 7, 9, 5, 4, 8};
-
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
 
 struct Reader {
   detail::Tokenizer tok;
@@ -121,7 +115,7 @@ Result<TetMesh> readTetgen(const std::string& path, std::vector<MeshWarning>* /*
         double x = 0;
         if (t.empty()) return r.fail("node " + std::to_string(index) + " has " + std::to_string(c) + " coordinates, expected 3");
         if (!detail::parseDouble(t, x)) return r.fail("node " + std::to_string(index) + " coordinate " + quoteToken(t) + " is not a number");
-        if (!std::isfinite(x)) return r.fail("node " + std::to_string(index) + " coordinate is " + num(x) + ", expected a finite number");
+        if (!std::isfinite(x)) return r.fail("node " + std::to_string(index) + " coordinate is " + formatNumber(x, 17) + ", expected a finite number");
         mesh.nodes(i, c) = x;
       }
       r.tok.skipLine();  // attributes and boundary marker

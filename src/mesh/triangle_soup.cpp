@@ -5,16 +5,8 @@
 #include <algorithm>
 #include <cstring>
 #include <numeric>
-#include <sstream>
 
 namespace strike::detail {
-
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
 
 SurfaceMesh finishSurface(Soup soup, const std::string& path, bool warn_on_weld,
                           std::vector<MeshWarning>* warnings) {
@@ -96,7 +88,7 @@ SurfaceMesh finishSurface(Soup soup, const std::string& path, bool warn_on_weld,
 }
 
 Error nonFinite(const std::string& where, const char* what, double value) {
-  return badInput(where + what + " is " + num(value) + ", expected a finite number");
+  return badInput(where + what + " is " + formatNumber(value, 17) + ", expected a finite number");
 }
 
 }  // namespace strike::detail

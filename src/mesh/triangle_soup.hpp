@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "strike/format.hpp"  // formatNumber(v, 17): the readers' numbers in messages, exact
 #include "strike/mesh.hpp"
 #include "strike/result.hpp"
 
@@ -17,9 +18,6 @@ namespace strike::detail {
 /// Most vertices a surface file may hold (and a quarter of int's range: 3 coordinates per
 /// vertex and 3 indices per triangle stay indexable by int).
 inline constexpr int64_t kMaxVertices = std::numeric_limits<int>::max() / 4;
-
-/// Full-precision text of a number for error messages.
-std::string num(double v);
 
 // Raw triangle soup as read from a file, before welding.
 struct Soup {

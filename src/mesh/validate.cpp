@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>  // cross()
 
+#include "strike/format.hpp"
 #include "strike/mesh.hpp"
 
 namespace strike {
@@ -23,15 +24,8 @@ namespace {
 // coincident points give ~1e-16. The gap is wide, so the exact value is not critical.
 constexpr double kDegenerateShape = 1e-10;
 
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(9);
-  s << v;
-  return s.str();
-}
-
 std::string point(const Eigen::MatrixXd& V, Eigen::Index i) {
-  return "(" + num(V(i, 0)) + ", " + num(V(i, 1)) + ", " + num(V(i, 2)) + ")";
+  return "(" + formatNumber(V(i, 0), 9) + ", " + formatNumber(V(i, 1), 9) + ", " + formatNumber(V(i, 2), 9) + ")";
 }
 
 std::string prefix(const std::string& source) { return source + ": error: "; }
@@ -57,7 +51,7 @@ Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<M
     for (int c = 0; c < 3; ++c) {
       if (!std::isfinite(mesh.nodes(i, c))) {
         return badInput(prefix(source) + "node " + std::to_string(i) + " coordinate " + std::string(1, static_cast<char>('x' + c)) +
-                        " is " + num(mesh.nodes(i, c)) + ", expected a finite number");
+                        " is " + formatNumber(mesh.nodes(i, c), 9) + ", expected a finite number");
       }
     }
   }
@@ -89,8 +83,8 @@ Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<M
       for (int k = 0; k < 4; ++k) {
         nodes += (k ? ", " : "") + std::to_string(mesh.tets(t, k)) + " " + point(mesh.nodes, mesh.tets(t, k));
       }
-      return badInput(prefix(source) + "tet " + std::to_string(t) + " is degenerate: volume " + num(volume) +
-                      " m^3 with mean edge " + num(mean_edge) + " m (flat or collapsed); nodes " + nodes);
+      return badInput(prefix(source) + "tet " + std::to_string(t) + " is degenerate: volume " + formatNumber(volume, 9) +
+                      " m^3 with mean edge " + formatNumber(mean_edge, 9) + " m (flat or collapsed); nodes " + nodes);
     }
     if (volume < 0) {
       // Swapping corners 1 and 2 flips the orientation; the mid-edge nodes follow their edges:
@@ -173,7 +167,7 @@ Status checkClosedSurface(const SurfaceMesh& surface, const std::string& source)
   for (Eigen::Index i = 0; i < nv; ++i) {
     for (int c = 0; c < 3; ++c) {
       if (!std::isfinite(surface.V(i, c))) {
-        return badInput(prefix(source) + "vertex " + std::to_string(i) + " coordinate is " + num(surface.V(i, c)) +
+        return badInput(prefix(source) + "vertex " + std::to_string(i) + " coordinate is " + formatNumber(surface.V(i, c), 9) +
                         ", expected a finite number");
       }
     }

@@ -1,7 +1,9 @@
 # SPDX-License-Identifier: MIT
 # cmake -DLIB=path/to/libstrike.so -P check_exports.cmake
 # Fails if libstrike exports a symbol without the strike_ prefix, or depends (directly or
-# through its dependency closure) on Bullet, ARPACK, FFTW, TetGen, libsndfile or SuiteSparse.
+# through its dependency closure) on Bullet, ARPACK, FFTW, TetGen, libsndfile or SuiteSparse, or
+# carries the CLI's process-global interrupt-cleanup registry (strike_output: it belongs to
+# programs, not to a library loaded into a game or plugin host).
 if(NOT LIB OR NOT EXISTS "${LIB}")
   message(FATAL_ERROR "LIB not given or missing: ${LIB}")
 endif()
@@ -43,5 +45,15 @@ endforeach()
 execute_process(COMMAND ldd "${LIB}" OUTPUT_VARIABLE ldd_out RESULT_VARIABLE rc)
 if(ldd_out MATCHES "${forbidden}")
   message(FATAL_ERROR "libstrike's dependency closure has a forbidden library:\n${ldd_out}")
+endif()
+# All symbols, local ones included (the build tree's library is not stripped).
+execute_process(COMMAND nm -C "${LIB}" OUTPUT_VARIABLE nm_all RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "nm failed on ${LIB}")
+endif()
+string(REGEX MATCH "[^\n]*(g_temporary_slots|registerTemporary|installInterruptCleanup|temporaryPathFor|writeFileAtomically)[^\n]*"
+       global_state "${nm_all}")
+if(global_state)
+  message(FATAL_ERROR "libstrike carries the interrupt-cleanup registry or the atomic writer (strike_output): ${global_state}")
 endif()
 message(STATUS "libstrike: ${count} exported strike_ symbols; NEEDED: ${needed}")

@@ -7,11 +7,11 @@
 #include "commands.hpp"
 #include "output_check.hpp"
 #include "progress_reporter.hpp"
-#include "strike/bank_cache.hpp"
 #include "strike/element_order.hpp"
 #include "strike/error_estimate.hpp"
 #include "strike/mesh.hpp"
 #include "strike/materials.hpp"
+#include "strike/parse_size.hpp"
 #include "strike/precompute.hpp"
 
 namespace strike::cli {
@@ -201,7 +201,7 @@ double availableMemoryBytes() {
 }
 
 /// `--tolerance PCT`: refine until the estimated error meets PCT for every kept mode, within
-/// the memory and time budgets (src/scene/error_estimate.cpp); prints each step's forecast
+/// the memory and time budgets (src/precompute/error_estimate.cpp); prints each step's forecast
 /// before it runs, what it cost, and how it ended.
 Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSettings& settings, bool quiet) {
   Result<double> tolerance = parseTolerance(args.text("--tolerance"));
@@ -308,7 +308,7 @@ int runModes(const std::vector<std::string>& raw_args) {
   for (const char* option : {"--max-memory", "--max-seconds"})
     if (args.has(option) && !args.has("--tolerance"))
       return reportError("modes", badInput(std::string(option) + " is a budget for --tolerance; give --tolerance too"));
-  // No --order: Tet10 for thin shapes, Tet4 for solids (src/scene/element_order.cpp), judged on
+  // No --order: Tet10 for thin shapes, Tet4 for solids (src/precompute/element_order.cpp), judged on
   // the automatic Tet4 mesh (one extra meshing). Tet files keep their own order.
   std::string order_reason;
   if (!args.has("--order") && !args.has("--tolerance") && canRemesh(settings.mesh_spec)) {

@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: MIT
-// Writing outputs so that nothing half-written is ever left where the output should be.
+// Writing outputs so that nothing half-written is ever left where the output should be
+// (strike_output; the temporaries are removed on Ctrl-C through interrupt_cleanup.hpp).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <string>
 
+#include "strike/read_file.hpp"  // the reading side, for the callers that do both
 #include "strike/result.hpp"
 
 namespace strike {
@@ -17,8 +19,5 @@ std::string temporaryPathFor(const std::string& path);
 /// Writes `size` bytes to a temporary file beside `path`, closes it, then renames it over
 /// `path`. On any failure the temporary file is removed and `path` is untouched.
 Status writeFileAtomically(const std::string& path, const void* data, size_t size);
-
-/// Reads a whole file; refuses directories and files larger than max_bytes (naming the cap).
-Result<std::string> readWholeFile(const std::string& path, uint64_t max_bytes);
 
 }  // namespace strike

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "strike/hash.hpp"  // fnv1a64: bank checksums, and the cache keys of bank users
 #include "strike/material.hpp"
 #include "strike/result.hpp"
 
@@ -142,7 +143,8 @@ class BankFile {
   Status verifyBlock(size_t block, const uint8_t* bytes, size_t size) const;
 };
 
-/// Writes atomically: to PATH.tmp-XXXX in the same directory, then rename().
+/// Writes atomically: to PATH.tmp-XXXX in the same directory, then rename(). Defined in
+/// strike_bank_writer (links strike_output), not strike_bank, so libstrike has no atomic writer.
 Status writeBank(const std::string& path, const ModeBank& bank, ShapeEncoding shapes = ShapeEncoding::Float32);
 /// Serializes to bytes (what writeBank writes).
 std::vector<uint8_t> encodeBank(const ModeBank& bank, ShapeEncoding shapes = ShapeEncoding::Float32);
@@ -156,8 +158,5 @@ Result<ModeBank> decodeBank(const uint8_t* data, size_t size, const std::string&
 /// the faster word-lane variant (docs/bank-format.md; format 3 checksums the head and each shape
 /// block with it). Byte-wise FNV-1a is one serial multiply per byte, ~20 ms for a 17 MB bank.
 uint64_t bankPayloadChecksum(uint32_t format_version, const uint8_t* payload, size_t size);
-
-/// FNV-1a 64-bit hash, used for mesh hashes and cache keys.
-uint64_t fnv1a64(const void* data, size_t size, uint64_t seed = 0xcbf29ce484222325ull);
 
 }  // namespace strike

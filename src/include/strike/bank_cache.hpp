@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "strike/parse_size.hpp"  // the --cache-max-size and --older-than spellings
 #include "strike/result.hpp"
 
 namespace strike {
@@ -47,10 +48,5 @@ struct PruneReport {
 /// write temporaries. `dry_run` reports what would go without removing it.
 Result<PruneReport> pruneCache(const std::string& dir, uint64_t max_bytes, double max_age_s, std::time_t now,
                                bool dry_run = false);
-
-/// Parses a size such as "500M", "2G", "1.5GiB", "800000" (bytes; K/M/G/T are powers of 1024).
-Result<uint64_t> parseByteSize(const std::string& text, const std::string& what);
-/// Parses an age such as "30d", "12h", "90m", "45s" (a bare number is days).
-Result<double> parseAgeSeconds(const std::string& text, const std::string& what);
 
 }  // namespace strike

@@ -23,7 +23,7 @@ struct PrecomputeSettings {
   int max_modes = 200;
   int64_t max_tets = kDefaultMaxTets;  ///< size cap of the tet mesh (--max-tets), see MeshOptions
   ProgressFn progress;      ///< optional
-  /// Estimate each mode's frequency error (src/scene/error_estimate.cpp) at extra cost;
+  /// Estimate each mode's frequency error (src/precompute/error_estimate.cpp) at extra cost;
   /// does not change the modes, so it is not part of the cache key.
   bool error_estimate = false;
 };

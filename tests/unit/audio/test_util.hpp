@@ -14,10 +14,11 @@
 #include <vector>
 
 #include "strike/audio.hpp"
+#include "strike/constants.hpp"
 
 namespace strike::test {
 
-inline constexpr double kPi = 3.14159265358979323846;
+using strike::kPi;  // test::kPi, as the audio tests spell it
 
 /// A fresh directory under /tmp, removed (with its files) by the destructor.
 class ScratchDir {

@@ -14,7 +14,7 @@
 #include <vector>
 #include <nlohmann/json.hpp>
 
-#include "common/beam_theory.hpp"
+#include "references/beam_theory.hpp"
 #include "common/same_bytes.hpp"
 #include "run_cli.hpp"
 #include "strike/audio.hpp"

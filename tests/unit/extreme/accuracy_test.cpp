@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Validation of the per-mode frequency error estimate (src/scene/error_estimate.cpp) on cases
-// with known answers: the free-free bar (Timoshenko bending, tests/unit/common/beam_theory.hpp),
+// Validation of the per-mode frequency error estimate (src/precompute/error_estimate.cpp) on cases
+// with known answers: the free-free bar (Timoshenko bending, src/references/beam_theory.hpp),
 // the free solid sphere (Lamb 1882, lamb_sphere.hpp), and a free thick plate against finer meshes. "Covered" means the true relative
 // error is at most the estimate.
 #include <gtest/gtest.h>
@@ -9,8 +9,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "common/beam_theory.hpp"
-#include "extreme/lamb_sphere.hpp"
+#include "references/beam_theory.hpp"
+#include "references/lamb_sphere.hpp"
 #include "strike/element_order.hpp"
 #include "strike/mesh.hpp"
 #include "strike/precompute.hpp"

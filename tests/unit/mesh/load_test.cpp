@@ -6,6 +6,7 @@
 #include <string>
 
 #include "mesh/mesh_test_util.hpp"
+#include "strike/constants.hpp"
 #include "strike/mesh.hpp"
 
 namespace strike {
@@ -14,7 +15,6 @@ namespace {
 using test::failsWith;
 using test::hasWarning;
 using test::meshData;
-constexpr double kPi = 3.14159265358979323846;
 
 uint64_t fnv(const std::string& s) {
   uint64_t h = 0xcbf29ce484222325ull;

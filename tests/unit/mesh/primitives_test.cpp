@@ -4,13 +4,13 @@
 #include <cmath>
 
 #include "mesh/mesh_test_util.hpp"
+#include "strike/constants.hpp"
 #include "strike/mesh.hpp"
 
 namespace strike {
 namespace {
 
 using test::failsWith;
-constexpr double kPi = 3.14159265358979323846;
 
 TEST(Primitives, IsPrimitiveSpec) {
   EXPECT_TRUE(isPrimitiveSpec("box:0.3,0.02,0.02"));

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <functional>
 
+#include "strike/constants.hpp"
 #include "strike/fem.hpp"
 #include "strike/modal.hpp"
 
@@ -18,7 +19,6 @@ namespace {
 constexpr double kE = 2.0e11;
 constexpr double kNu = 0.29;
 constexpr double kRho = 7850.0;
-constexpr double kPi = 3.14159265358979323846;
 const Material kSteel{"steel", kE, kNu, kRho, 0.0, 0.0};
 
 struct Solved {

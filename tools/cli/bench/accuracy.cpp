@@ -23,15 +23,14 @@
 #include "bench_studies.hpp"
 #include "commands.hpp"
 #include "output_check.hpp"
-#include "common/beam_theory.hpp"   // tests/unit/common: the Timoshenko free-free bar reference
-#include "extreme/lamb_sphere.hpp"   // tests/unit/extreme: Lamb's free-sphere modes
+#include "references/beam_theory.hpp"  // src/references: the Timoshenko free-free bar reference
+#include "references/lamb_sphere.hpp"  // src/references: Lamb's free-sphere modes
+#include "strike/constants.hpp"
 #include "strike/precompute.hpp"
 #include "strike/synth.hpp"
 
 namespace strike::cli {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

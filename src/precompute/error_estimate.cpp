@@ -13,6 +13,7 @@
 
 #include <sys/resource.h>
 
+#include "strike/constants.hpp"
 #include "strike/fem.hpp"
 #include "exclusive_solve.hpp"
 
@@ -107,7 +108,6 @@ Result<CoarseSolve> solveCoarse(const TetMesh& mesh, const PrecomputeSettings& s
   return out;
 }
 
-constexpr double kPi = 3.14159265358979323846;
 double frequencyOf(double lambda) { return std::sqrt(std::max(lambda, 0.0)) / (2.0 * kPi); }
 
 struct SizedMesh {

@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "strike/format.hpp"
+
 namespace strike {
 
 extern const char* const kBuiltinMaterialsJson;  // generated from assets/materials.json
@@ -15,11 +17,6 @@ namespace {
 std::string lowerCase(std::string text) {
   for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return text;
-}
-std::string formatNumber(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
 }
 }  // namespace
 
@@ -33,7 +30,7 @@ void rayleighFromLossFactor(double loss_factor, double f_low_hz, double f_high_h
 
 Status validateMaterial(const Material& m, const std::string& where) {
   auto bad = [&](const char* field, double value, const char* expected) {
-    return badInput(where + ": " + field + " = " + formatNumber(value) + " (" + expected + ")");
+    return badInput(where + ": " + field + " = " + formatNumber(value, 6) + " (" + expected + ")");
   };
   if (!std::isfinite(m.youngs_pa) || m.youngs_pa <= 0) return bad("youngs_pa", m.youngs_pa, "must be > 0");
   if (!std::isfinite(m.poisson) || m.poisson <= -1.0 || m.poisson >= 0.5)
@@ -98,7 +95,7 @@ Result<MaterialTable> parseMaterialTable(const std::string& json_text, const std
     double loss_factor = 0.0;
     if (number("loss_factor", loss_factor)) {
       if (!(loss_factor >= 0.0) || !std::isfinite(loss_factor))
-        return badInput(where + ".loss_factor = " + formatNumber(loss_factor) + " (must be >= 0)");
+        return badInput(where + ".loss_factor = " + formatNumber(loss_factor, 6) + " (must be >= 0)");
       rayleighFromLossFactor(loss_factor, table.fit_band_low_hz, table.fit_band_high_hz, m.rayleigh_stiffness,
                              m.rayleigh_mass);
     } else if (!number("rayleigh_stiffness", m.rayleigh_stiffness) || !number("rayleigh_mass", m.rayleigh_mass)) {

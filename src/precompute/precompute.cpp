@@ -176,7 +176,7 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
   result.report.operator_applications = modes->operator_applications;
   bank.total_seconds = loaded.meshing_seconds + secondsSince(start);
 
-  // ---- frequency error estimate (src/scene/error_estimate.cpp); reported apart from
+  // ---- frequency error estimate (src/precompute/error_estimate.cpp); reported apart from
   // total_seconds, which stays the cost of the bank itself.
   if (settings.error_estimate) {
     Result<ErrorEstimateReport> estimated =

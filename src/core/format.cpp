@@ -1,0 +1,15 @@
+// SPDX-License-Identifier: MIT
+#include "strike/format.hpp"
+
+#include <sstream>
+
+namespace strike {
+
+std::string formatNumber(double value, int significant_digits) {
+  std::ostringstream out;
+  out.precision(significant_digits);
+  out << value;
+  return out.str();
+}
+
+}  // namespace strike

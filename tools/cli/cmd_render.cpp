@@ -76,8 +76,8 @@ void printSummary(const RenderResult& result, const std::string& output, double 
   // each event once per sounding body it acts on (both bodies when both sound).
   std::fprintf(stderr, "  events      %zu contact points recorded: %zu impacts (closing > 5 cm/s) + %zu resting or sliding\n",
                r.events, r.impact_events, r.sustained_events);
-  std::fprintf(stderr, "  heard       %zu impact pulses, and %zu resting/sliding contacts on sounding bodies making %zu "
-               "changes of load (a steady load is silent; an event counts once per sounding body it touches)\n",
+  std::fprintf(stderr, "  heard       %zu impact pulses and %zu resting/sliding impulses on sounding bodies "
+               "(an event counts once per sounding body it touches), making %zu changes of load (a steady load is silent)\n",
                r.impacts, r.sustained_contacts, r.load_changes);
   std::fprintf(stderr, "  modes       %llu in the banks, %llu out of the audible band, at most %llu ringing at once\n",
                static_cast<unsigned long long>(r.modes_total), static_cast<unsigned long long>(r.modes_out_of_band),

@@ -297,6 +297,29 @@ void ContactProjector::projectImpulseInto(const double point[3], const double im
   }
 }
 
+void ContactProjector::projectOnce(const double point[3], const double impulse[3], double* out) const {
+  const size_t nm = bank_->modeCount();
+  if (!use_rows_ || rows_.modes != nm || !locator_.hasTriangles()) {
+    if (use_rows_ && rows_.modes != nm) std::fill_n(out, nm, 0.0);
+    else locator_.projectImpulseInto(point, impulse, out);
+    return;
+  }
+  uint32_t v[3];
+  double w[3];
+  locator_.nearest(point, v, w);
+  const float* read[3] = {rows_.row(v[0]), rows_.row(v[1]), rows_.row(v[2])};
+  // The same sums in the same order as projectImpulseInto (a missing row projects to zero).
+  for (size_t m = 0; m < nm; ++m) {
+    double s = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const float zero[3] = {0.0f, 0.0f, 0.0f};
+      const float* phi = read[k] ? read[k] + m * 3 : zero;
+      s += w[k] * (phi[0] * impulse[0] + phi[1] * impulse[1] + phi[2] * impulse[2]);
+    }
+    out[m] = s;
+  }
+}
+
 std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]) {
   std::vector<double> g(bank.modeCount(), 0.0);
   projectImpulseAtVertexInto(bank, vertex, impulse, g.data());

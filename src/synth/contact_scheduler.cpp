@@ -108,8 +108,11 @@ void SoundEngine::contact(const EngineContact& c) {
   const std::array<double, 3> impulse = c.world_frame ? v->pose_.toLocalDirection(c.impulse) : c.impulse;
   const std::array<double, 3> world = c.world_frame ? c.point : v->pose_.toWorld(c.point);
   const double now = time();
-  v->projector_.projectImpulseInto(point.data(), impulse.data(), v->modal_.data());
-  if (c.normal_speed_m_s > kImpactSpeed_m_s) {
+  const bool impact = c.normal_speed_m_s > kImpactSpeed_m_s;
+  // A resting body's contacts come back to the same points step after step: remember them.
+  if (impact) v->projector_.projectOnce(point.data(), impulse.data(), v->modal_.data());
+  else v->projector_.projectImpulseInto(point.data(), impulse.data(), v->modal_.data());
+  if (impact) {
     const double t = c.time_s >= 0.0 ? c.time_s : now;
     scheduleImpact(*v, v->modal_.data(), t, hertzDuration(*v, c.partner, c.normal_speed_m_s), PulseShape::HalfSine, world);
   } else {
@@ -219,7 +222,7 @@ void SoundEngine::impact(const EngineImpact& d) {
     world = v->pose_.toWorld({bank.surface_positions[3 * vertex], bank.surface_positions[3 * vertex + 1],
                               bank.surface_positions[3 * vertex + 2]});
   } else {
-    v->projector_.projectImpulseInto(point.data(), impulse.data(), v->modal_.data());
+    v->projector_.projectOnce(point.data(), impulse.data(), v->modal_.data());
   }
   const double duration = d.contact_duration_s < 0.0 ? hertzDuration(*v, d.partner, d.normal_speed_m_s)
                                                      : std::min(d.contact_duration_s, settings_.max_contact_duration_s);

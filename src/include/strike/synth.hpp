@@ -217,6 +217,9 @@ class ContactProjector {
   void useRows(ShapeRows rows);
   const SurfaceLocator& locator() const { return locator_; }
   void projectImpulseInto(const double point[3], const double impulse[3], double* out);
+  /// The same result without remembering the point: for a point that will not come back (an
+  /// impact), where filling the memory's row (9 floats per mode) would cost more than it saves.
+  void projectOnce(const double point[3], const double impulse[3], double* out) const;
 
  private:
   SurfaceLocator locator_;

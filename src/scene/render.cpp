@@ -24,6 +24,7 @@
 #include "strike/scene_checks.hpp"
 #include "strike/synth.hpp"
 #include "cache_lock.hpp"
+#include "playback.hpp"
 #include "pieces_cache.hpp"
 
 namespace strike {
@@ -225,43 +226,6 @@ Status hasAudibleMode(const ModeBank& bank, const SynthSettings& synth, double r
                   bank.modeCount(), bank.frequencyHz(0), bank.frequencyHz(bank.modeCount() - 1), low, high);
   return badInput(std::string("silent: no mode in the audible band (") + why + ")");
 }
-
-/// The built-in sound engine as a SoundOutput.
-class EngineOutput final : public SoundOutput {
- public:
-  explicit EngineOutput(const EngineSettings& settings) : engine_(settings) {}
-  Status addVoice(uint32_t slot, const VoiceDesc& desc, const std::array<double, 3>& position_m,
-                  const std::array<double, 4>& orientation_wxyz, const std::string&) override {
-    VoiceDesc placed = desc;
-    placed.pose.set(position_m.data(), orientation_wxyz.data());
-    voices_.push_back(std::make_unique<Voice>(placed, engine_.settings()));
-    engine_.install(slot, voices_.back().get());
-    return {};
-  }
-  void setListener(const std::array<double, 3>& position_m) override {
-    Pose listener;
-    listener.position_m = position_m;
-    engine_.setListener(listener);
-  }
-  void beginStep(double step_end_s, double step_s) override { engine_.beginStep(step_end_s, step_s); }
-  void setPose(uint32_t slot, const std::array<double, 3>& position_m, const std::array<double, 4>& orientation_wxyz,
-               bool asleep) override {
-    Pose pose;
-    if (pose.set(position_m.data(), orientation_wxyz.data())) engine_.setPose(slot, pose, asleep);
-  }
-  void contact(const EngineContact& contact) override { engine_.contact(contact); }
-  void endStep() override { engine_.endStep(); }
-  Status render(float* mono, size_t frames) override {
-    float* channels[1] = {mono};
-    engine_.render(channels, frames);
-    return {};
-  }
-  EngineStats stats() const override { return engine_.stats(); }
-
- private:
-  SoundEngine engine_;
-  std::vector<std::unique_ptr<Voice>> voices_;
-};
 
 }  // namespace
 
@@ -482,7 +446,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     if (!made) return made.error();
     output = std::move(*made);
   } else {
-    output = std::make_unique<EngineOutput>(engine_settings);
+    output = makeEngineOutput(engine_settings);
   }
   std::vector<bool> has_voice(bodies.size(), false);
   for (size_t index = 0; index < bodies.size(); ++index) {
@@ -510,99 +474,35 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   }
   output->setListener(scene.listener_position_m);
 
-  // The events by physics step (they are in order of time_s, and an impact's time may fall in
-  // the step before the one that solved it).
-  const size_t steps = simulated->substeps;
-  std::vector<size_t> step_first(steps + 1, 0);
-  for (const ContactEvent& event : result.events)
-    ++step_first[std::min<size_t>(steps - 1, static_cast<size_t>(std::llround(event.step_time_s / substep))) + 1];
-  for (size_t k = 0; k < steps; ++k) step_first[k + 1] += step_first[k];
-  std::vector<uint32_t> by_step(result.events.size());
-  {
-    std::vector<size_t> fill(step_first.begin(), step_first.end() - 1);
-    for (size_t e = 0; e < result.events.size(); ++e) {
-      const size_t k = std::min<size_t>(steps - 1, static_cast<size_t>(std::llround(result.events[e].step_time_s / substep)));
-      by_step[fill[k]++] = static_cast<uint32_t>(e);
+  // The other bodies as the Hertz contact time needs them: a sounding body by its voice, the
+  // ground and anything else by its material, size and mass.
+  std::vector<ContactPartner> partners(bodies.size());
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    ContactPartner& partner = partners[i];
+    if (has_voice[i]) {
+      partner.voice = static_cast<uint32_t>(i);  // its material from its bank; its sleep keeps a static body's load
+      continue;
     }
+    partner.youngs_pa = bodies[i].bank.material.youngs_pa;
+    partner.poisson = bodies[i].bank.material.poisson;
+    partner.radius_m = bodies[i].contact_radius_m;
+    partner.mass_kg = bodies[i].object->is_static ? 0.0 : bodies[i].bank.mass_kg;
   }
-  // The other body as the Hertz contact time needs it: a sounding body by its voice, anything
-  // else by its material, size and mass.
-  auto partnerOf = [&](uint32_t other) {
-    ContactPartner partner;
-    if (other == kGroundBody) {
-      partner.youngs_pa = scene.ground_material.youngs_pa;
-      partner.poisson = scene.ground_material.poisson;
-      partner.voice = kNoVoice;
-      return partner;
-    }
-    if (has_voice[other]) {
-      partner.voice = other;  // its material from its bank; its sleep keeps a static body's load
-      return partner;
-    }
-    const Body& body = bodies[other];
-    partner.youngs_pa = body.bank.material.youngs_pa;
-    partner.poisson = body.bank.material.poisson;
-    partner.radius_m = body.contact_radius_m;
-    partner.mass_kg = body.object->is_static ? 0.0 : body.bank.mass_kg;
-    return partner;
-  };
-
-  AudioBuffer& audio = result.audio;
-  audio.sample_rate_hz = rate;
-  audio.channels = 1;
-  audio.samples.assign(static_cast<size_t>(std::llround(duration * rate)), 0.0f);
-  size_t rendered = 0;
-  // Blocks whose end lies a physics step behind the step just fed: nothing later can land in them.
-  auto renderUpTo = [&](size_t frame_end) -> Status {
-    frame_end = std::min(frame_end, audio.samples.size());
-    while (rendered + kRenderBlockFrames <= frame_end || (frame_end == audio.samples.size() && rendered < frame_end)) {
-      const size_t frames = std::min(kRenderBlockFrames, audio.samples.size() - rendered);
-      if (Status ok = output->render(audio.samples.data() + rendered, frames); !ok) return ok;
-      rendered += frames;
-    }
-    return {};
-  };
-  const size_t n = bodies.size();
-  double last_progress = -1.0;
-  for (size_t k = 0; k < steps; ++k) {
-    const double step_end = static_cast<double>(k + 1) * substep;
-    output->beginStep(step_end, substep);
-    for (size_t i = 0; i < n; ++i) {
-      const SimBodyState& state = simulated->states[k * n + i];
-      if (has_voice[i]) output->setPose(static_cast<uint32_t>(i), state.position_m, state.orientation_wxyz, state.asleep);
-    }
-    for (size_t j = step_first[k]; j < step_first[k + 1]; ++j) {
-      const ContactEvent& event = result.events[by_step[j]];
-      for (int side = 0; side < 2; ++side) {
-        const uint32_t index = side == 0 ? event.body_a : event.body_b;
-        const uint32_t other = side == 0 ? event.body_b : event.body_a;
-        if (index == kGroundBody || !has_voice[index]) continue;
-        EngineContact contact;
-        contact.voice = index;
-        contact.point = side == 0 ? event.point_a_mesh : event.point_b_mesh;
-        contact.impulse = side == 0 ? event.impulse_on_a_mesh : event.impulse_on_b_mesh;
-        contact.normal_speed_m_s = event.normal_speed_m_s;
-        contact.time_s = event.time_s;
-        contact.partner = partnerOf(other);
-        output->contact(contact);
-      }
-    }
-    output->endStep();
-    const double safe_s = step_end - substep;  // the next step's contacts start no earlier
-    if (Status ok = renderUpTo(safe_s > 0 ? static_cast<size_t>(std::floor(safe_s * rate)) : 0); !ok) return ok.error();
-    const double fraction = static_cast<double>(rendered) / std::max<size_t>(audio.samples.size(), 1);
-    if (settings.progress && fraction - last_progress >= 0.01) {
-      settings.progress("synthesize", fraction);
-      last_progress = fraction;
-    }
-  }
-  if (Status ok = renderUpTo(audio.samples.size()); !ok) return ok.error();
+  ContactPartner ground;
+  ground.youngs_pa = scene.ground_material.youngs_pa;
+  ground.poisson = scene.ground_material.poisson;
+  result.audio.sample_rate_hz = rate;
+  result.audio.channels = 1;
+  result.audio.samples.assign(static_cast<size_t>(std::llround(duration * rate)), 0.0f);
+  const Playback playback{result.events, simulated->states, simulated->substeps, substep, has_voice, partners, ground};
+  if (Status played = play(playback, *output, result.audio, settings.progress); !played) return played.error();
   const EngineStats engine_stats = output->stats();
   report.impacts = engine_stats.impacts + engine_stats.impacts_inaudible;
   report.sustained_contacts = engine_stats.sustained_contacts;
   report.load_changes = engine_stats.load_changes;
   report.load_holds = engine_stats.load_holds;
   for (std::string& text : output->warnings()) warn(std::move(text));
+  const AudioBuffer& audio = result.audio;
   for (float s : audio.samples) {
     report.peak = std::max(report.peak, static_cast<double>(std::fabs(s)));
     if (std::fabs(s) >= 1.0f) ++report.clipped_samples;

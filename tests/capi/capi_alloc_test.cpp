@@ -158,7 +158,8 @@ TEST(CApiRealtime, TenThousandRendersWithImpactsFromAnotherThreadAllocateNothing
   stop.store(true, std::memory_order_release);
   producer.join();
   EXPECT_EQ(g_counted.load() - before, 0u);
-  strike_stats st;
+  strike_stats st{};
+  st.struct_size = sizeof st;
   ASSERT_EQ(strike_context_get_stats(ctx, &st), STRIKE_OK);
   EXPECT_GT(sent.load(), 1000u);
   EXPECT_GT(st.impacts_scheduled, 500u);

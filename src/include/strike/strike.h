@@ -271,9 +271,10 @@ STRIKE_API strike_status STRIKE_CALL strike_context_get_stats(strike_context con
 STRIKE_API strike_status STRIKE_CALL strike_context_collect(strike_context context);
 
 /**
- * Silences every object (modes, pending pulses, loads), empties the impact and step queues and
- * restarts the context's clock at 0 at the next strike_render(); objects, banks, poses and the
- * listener stay. For a game loading a level or a plugin's transport jumping. [main-thread]
+ * Silences every object (modes, pending pulses, loads), drops the impacts and steps queued
+ * before this call and restarts the context's clock at 0 at the next strike_render(); objects,
+ * banks, poses and the listener stay. Impacts and steps reported after it returns are kept (on
+ * the restarted clock). For a game loading a level or a plugin's transport jumping. [main-thread]
  */
 STRIKE_API strike_status STRIKE_CALL strike_context_reset(strike_context context);
 

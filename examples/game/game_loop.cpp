@@ -4,12 +4,13 @@
 //
 // Usage: strike_game BANK.modes OUT.wav [SECONDS]
 // Four plates of the bank's object are dropped onto a ground plane and onto each other. After
-// every physics substep, new contact points with a real impulse become strike_impact() calls
-// (world-frame point and impulse, relative normal speed for the Hertz contact time, and a sample
-// offset that places them inside the audio block). Object poses follow the bodies every frame.
+// every physics substep the game reports the step through strike_step(): every body's pose and
+// sleep state, and every contact point of Bullet's manifolds, resting ones included (both bodies'
+// sides, world-frame point, normal + friction impulse, approach speed from the bodies' relative
+// velocity). libstrike's contact scheduler decides what is an impact, a steady load or a change.
 //
 // Threads: here everything runs on one thread so the WAV is deterministic. In a game,
-// strike_impact() is called from the physics thread (it is [any-thread] and lock-free) and
+// strike_step() is called from the physics thread (it is [any-thread] and lock-free) and
 // audioCallback() is the audio device's callback, which only calls strike_render().
 #include <btBulletDynamicsCommon.h>
 
@@ -90,6 +91,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   strike_bank_info info;
+  std::memset(&info, 0, sizeof info);
+  info.struct_size = sizeof info;
   strike_bank_get_info(bank, &info);
   const double half[3] = {0.5 * (info.bounds_max_m[0] - info.bounds_min_m[0]),
                           0.5 * (info.bounds_max_m[1] - info.bounds_min_m[1]),
@@ -140,49 +143,73 @@ int main(int argc, char** argv) {
   std::vector<float> left(kBlock), right(kBlock);
   float* out[2] = {left.data(), right.data()};
   double audio_time = 0.0;  // seconds rendered so far
-  uint64_t impacts = 0;
+  uint64_t reported_steps = 0, reported_contacts = 0, reported_states = 0;
+  std::vector<strike_contact> contacts;
+  std::vector<strike_body_state> states(bodies.size());
   const int frames = static_cast<int>(std::ceil(seconds / kFrameDt));
   for (int frame = 0; frame < frames; ++frame) {
     const double frame_start = frame * kFrameDt;
     for (int sub = 0; sub < kSubsteps; ++sub) {
-      world.stepSimulation(kFrameDt / kSubsteps, 0, kFrameDt / kSubsteps);
-      const double t = frame_start + (sub + 1) * kFrameDt / kSubsteps;
+      const double dt = kFrameDt / kSubsteps;
+      world.stepSimulation(dt, 0, dt);
+      const double t = frame_start + (sub + 1) * dt;
+      // One strike_step per physics step: where every body is (asleep = Bullet deactivated it),
+      // and every contact point Bullet solved, resting ones included. libstrike's contact
+      // scheduler decides what is an impact, a steady load (silent) or a change of load.
+      contacts.clear();
       for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
         btPersistentManifold* pm = dispatcher.getManifoldByIndexInternal(m);
         const auto* a = static_cast<const btRigidBody*>(pm->getBody0());
         const auto* b = static_cast<const btRigidBody*>(pm->getBody1());
         for (int c = 0; c < pm->getNumContacts(); ++c) {
           const btManifoldPoint& cp = pm->getContactPoint(c);
-          // Only the step a contact appears (lifetime 1) with a real impulse is an impact; resting
-          // contact would be a stream of STRIKE_PULSE_BOX impacts, left out here.
-          if (cp.getLifeTime() > 1 || cp.getAppliedImpulse() < 1e-4) continue;
+          if (cp.getAppliedImpulse() <= 0.0) continue;  // touching, but no force this step
+          // Approach speed along the normal (B to A): > 5 cm/s is an impact, else part of a load.
           const btVector3 va = a->getVelocityInLocalPoint(cp.getPositionWorldOnA() - a->getCenterOfMassPosition());
           const btVector3 vb = b->getVelocityInLocalPoint(cp.getPositionWorldOnB() - b->getCenterOfMassPosition());
-          const double speed = std::fabs((va - vb).dot(cp.m_normalWorldOnB));
-          // The normal points from B to A: A receives +impulse * n, B receives -impulse * n.
+          const double approach = -(va - vb).dot(cp.m_normalWorldOnB);
+          // The impulse on A over the step: normal plus the two friction directions; B gets -it.
+          const btVector3 j = cp.m_normalWorldOnB * cp.getAppliedImpulse() +
+                              cp.m_lateralFrictionDir1 * cp.m_appliedImpulseLateral1 +
+                              cp.m_lateralFrictionDir2 * cp.m_appliedImpulseLateral2;
           const btRigidBody* sides[2] = {a, b};
           const btVector3 points[2] = {cp.getPositionWorldOnA(), cp.getPositionWorldOnB()};
-          for (int s = 0; s < 2; ++s) {
-            const btRigidBody* body = sides[s];
-            if (body->getInvMass() == 0.0 || body->getUserIndex() < 0) continue;
-            const btVector3 j = cp.m_normalWorldOnB * (s == 0 ? cp.getAppliedImpulse() : -cp.getAppliedImpulse());
-            strike_impact_desc d = strike_impact_desc_default();
-            d.object = bodies[static_cast<size_t>(body->getUserIndex())].sound;
-            d.frame = STRIKE_FRAME_WORLD;
-            for (int i = 0; i < 3; ++i) d.point[i] = points[s][i], d.impulse[i] = j[i];
-            d.normal_speed_m_s = speed > 1e-3 ? speed : 1e-3;
-            d.striker_radius_m = 0.002;  // box corners and edges are sharp
-            d.sample_offset = static_cast<uint32_t>(std::max(0.0, (t - audio_time) * kRate));
-            if (strike_impact(ctx, &d) == STRIKE_OK) ++impacts;
+          for (int side = 0; side < 2; ++side) {
+            const btRigidBody* body = sides[side];
+            const btRigidBody* other = sides[1 - side];
+            if (body->getUserIndex() < 0) continue;  // the ground is not heard
+            strike_contact k = strike_contact_default();
+            k.object = bodies[static_cast<size_t>(body->getUserIndex())].sound;
+            if (other->getUserIndex() >= 0) k.partner = bodies[static_cast<size_t>(other->getUserIndex())].sound;
+            k.frame = STRIKE_FRAME_WORLD;
+            const btVector3 on_body = side == 0 ? j : -j;
+            for (int i = 0; i < 3; ++i) k.point[i] = points[side][i], k.impulse[i] = on_body[i];
+            k.normal_speed_m_s = approach > 0.0 ? approach : 0.0;
+            k.partner_radius_m = other->getUserIndex() < 0 ? 0.0 : 0.002;  // the ground is flat; corners sharp
+            contacts.push_back(k);
           }
         }
       }
-    }
-    // Poses follow the bodies ([main-thread]; applied at the next render).
-    for (Body& b : bodies) {
-      double pos[3], quat[4];
-      poseOf(*b.body, pos, quat);
-      strike_object_set_pose(ctx, b.sound, pos, quat);
+      for (size_t k = 0; k < bodies.size(); ++k) {
+        states[k] = strike_body_state{};
+        states[k].object = bodies[k].sound;
+        poseOf(*bodies[k].body, states[k].position, states[k].orientation);
+        states[k].asleep = bodies[k].body->isActive() ? 0 : 1;
+      }
+      strike_step_desc step = strike_step_desc_default();
+      step.end_time_s = t;
+      step.duration_s = dt;
+      step.states = states.data();
+      step.state_count = static_cast<uint32_t>(states.size());
+      step.contacts = contacts.data();
+      step.contact_count = static_cast<uint32_t>(contacts.size());
+      if (strike_step(ctx, &step) != STRIKE_OK) {
+        std::fprintf(stderr, "strike_step failed (queue full?)\n");
+        return 2;
+      }
+      ++reported_steps;
+      reported_contacts += contacts.size();
+      reported_states += states.size();
     }
     // The "audio callback": pull whole blocks up to the end of this game frame.
     while (audio_time + kBlock / kRate <= frame_start + kFrameDt + 1e-12) {
@@ -193,23 +220,39 @@ int main(int argc, char** argv) {
   }
 
   strike_stats stats;
+  std::memset(&stats, 0, sizeof stats);
+  stats.struct_size = sizeof stats;
   strike_context_get_stats(ctx, &stats);
-  float peak = 0.0f;
-  for (float x : wav) peak = std::max(peak, std::fabs(x));
+  float peak = 0.0f, tail = 0.0f;
+  const size_t tail_from = wav.size() > static_cast<size_t>(2 * 0.25 * kRate) ? wav.size() - static_cast<size_t>(2 * 0.25 * kRate) : 0;
+  for (size_t n = 0; n < wav.size(); ++n) {
+    peak = std::max(peak, std::fabs(wav[n]));
+    if (n >= tail_from) tail = std::max(tail, std::fabs(wav[n]));
+  }
   const double gain = peak > 0 ? 0.5 / peak : 1.0;  // normalize to -6 dBFS
   size_t clipped = 0;
   if (!writeWav(argv[2], wav, static_cast<uint32_t>(kRate), gain, clipped)) {
     std::fprintf(stderr, "%s: cannot write\n", argv[2]);
     return 1;
   }
-  std::printf("%s: %.2f s, %llu impacts queued, %llu scheduled, %llu dropped, peak %.3g full scale = %.3g Pa (normalized x%.3g), %zu clipped\n",
-              argv[2], audio_time, static_cast<unsigned long long>(impacts),
+  std::printf("%s: %.2f s, %llu steps, %llu contacts reported (%llu queued): %llu impacts, %llu sustained, %llu load "
+              "changes, %llu load holds; peak %.3g full scale = %.3g Pa (normalized x%.3g), %zu clipped; last 0.25 s "
+              "%.1f dB re the peak\n",
+              argv[2], audio_time, static_cast<unsigned long long>(stats.steps),
+              static_cast<unsigned long long>(reported_contacts), static_cast<unsigned long long>(stats.contacts_queued),
               static_cast<unsigned long long>(stats.impacts_scheduled),
-              static_cast<unsigned long long>(stats.impacts_dropped_queue_full + stats.impacts_dropped_capacity),
-              static_cast<double>(peak), static_cast<double>(peak) * cfg.output_full_scale_pa, gain, clipped);
+              static_cast<unsigned long long>(stats.sustained_contacts),
+              static_cast<unsigned long long>(stats.load_changes), static_cast<unsigned long long>(stats.load_holds),
+              static_cast<double>(peak), static_cast<double>(peak) * cfg.output_full_scale_pa, gain, clipped,
+              20.0 * std::log10(std::max(static_cast<double>(tail), 1e-30) / std::max(static_cast<double>(peak), 1e-30)));
   for (Body& b : bodies) world.removeRigidBody(b.body.get());
   world.removeRigidBody(&ground);
   strike_bank_destroy(bank);
   strike_context_destroy(ctx);
-  return impacts > 0 && peak > 0.0f ? 0 : 3;
+  // What the test checks: every step and contact arrived (none dropped), the drops struck,
+  // the resting plates were reported as sustained contact, and there was sound.
+  const bool ok = stats.steps == reported_steps && stats.contacts_queued == reported_contacts &&
+                  stats.contacts_dropped_queue_full == 0 && stats.contacts_dropped_stale == 0 &&
+                  stats.impacts_scheduled > 0 && stats.sustained_contacts > 0 && peak > 0.0f && reported_states > 0;
+  return ok ? 0 : 3;
 }

@@ -39,6 +39,7 @@
  * struck object comes within its first few periods), within these bounds. */
 #define STRIKE_LV2_PROBE_MIN_S 0.02
 #define STRIKE_LV2_PROBE_MAX_S 0.25
+#define STRIKE_LV2_SPEED_OF_SOUND_M_S 343.0 /* libstrike's listener model (dry air, 20 C) */
 
 enum { PORT_MIDI_IN = 0, PORT_OUT_L = 1, PORT_OUT_R = 2, PORT_GAIN = 3 };
 
@@ -101,7 +102,9 @@ static LV2_Handle instantiate(const LV2_Descriptor* descriptor, double rate, con
     free(self);
     return NULL;
   }
-  strike_bank_get_info(self->bank, &info);
+  memset(&info, 0, sizeof info);
+  info.struct_size = sizeof info; /* libstrike 0.3: writes no more than this */
+  if (strike_bank_get_info(self->bank, &info) != STRIKE_OK) info.surface_vertex_count = 0;
   self->vertices = info.surface_vertex_count;
   ocfg = strike_object_config_default();
   ocfg.bank = self->bank;
@@ -177,10 +180,27 @@ static double loudest_note_peak(const strike_context_config* cfg, const char* ba
     strike_context_destroy(probe);
     return 0.0;
   }
-  strike_bank_get_info(bank, &info);
+  memset(&info, 0, sizeof info);
+  info.struct_size = sizeof info;
+  if (strike_bank_get_info(bank, &info) != STRIKE_OK) info.surface_vertex_count = 0;
   vertices = info.surface_vertex_count;
   probe_s = info.lowest_frequency_hz > 0 ? 4.0 / info.lowest_frequency_hz : STRIKE_LV2_PROBE_MAX_S;
   probe_s = probe_s < STRIKE_LV2_PROBE_MIN_S ? STRIKE_LV2_PROBE_MIN_S : probe_s > STRIKE_LV2_PROBE_MAX_S ? STRIKE_LV2_PROBE_MAX_S : probe_s;
+  /* Each note is heard distance / 343 m/s after it is struck (libstrike 0.3): add the delay of
+   * the surface point farthest from the listener (at the origin), a corner of the bounds. */
+  {
+    double farthest = 0.0;
+    int corner, k;
+    for (corner = 0; corner < 8; ++corner) {
+      double d2 = 0.0;
+      for (k = 0; k < 3; ++k) {
+        const double x = ocfg.position[k] + ((corner >> k) & 1 ? info.bounds_max_m[k] : info.bounds_min_m[k]);
+        d2 += x * x;
+      }
+      if (d2 > farthest * farthest) farthest = sqrt(d2);
+    }
+    probe_s += farthest / STRIKE_LV2_SPEED_OF_SOUND_M_S;
+  }
   frames = (uint32_t)ceil(probe_s * cfg->sample_rate_hz);
   buffers = (float*)malloc(2u * STRIKE_LV2_MAX_BLOCK * sizeof(float));
   ocfg.bank = bank;

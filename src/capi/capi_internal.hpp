@@ -33,6 +33,10 @@ struct Command {
   float gain;
   Voice* voice;
   Pose pose;
+  /// Reset: the impact and step queues' push counts when it was sent; it drops what came before
+  /// these marks and keeps what came after (reported after strike_context_reset() returned).
+  size_t impacts_mark;
+  size_t steps_mark;
 };
 
 /// One record of a physics step in the step queue: its start, a body state, a contact, its end.

@@ -39,6 +39,10 @@ class BoundedQueue {
     dequeue_.store(0, std::memory_order_relaxed);
   }
   size_t capacity() const { return mask_ + 1; }
+  /// Items claimed by producers so far (any thread): a mark between what came before and after.
+  size_t pushedCount() const { return enqueue_.load(std::memory_order_acquire); }
+  /// Items taken so far (the consumer's thread).
+  size_t poppedCount() const { return dequeue_.load(std::memory_order_relaxed); }
 
   /// Lock-free; false when full.
   bool push(const T& value) {

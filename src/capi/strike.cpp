@@ -394,6 +394,8 @@ STRIKE_API strike_status STRIKE_CALL strike_context_reset(strike_context ctx) {
     collect(ctx);
     Command cmd{};
     cmd.type = CommandType::Reset;
+    cmd.impacts_mark = ctx->impacts.pushedCount();
+    cmd.steps_mark = ctx->steps.pushedCount();
     if (!sendCommand(ctx, cmd)) return fail(ctx, STRIKE_ERR_QUEUE_FULL, "strike_context_reset: command queue full");
     ctx->last_error[0] = '\0';
     return STRIKE_OK;

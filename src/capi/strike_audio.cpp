@@ -45,11 +45,13 @@ void applyCommand(strike_context ctx, const Command& c) {
       break;
     case CommandType::Reset: {
       engine.reset();
+      // Only what was queued before strike_context_reset(): steps and impacts reported after it
+      // returned belong to the restarted clock.
       strike_impact_desc impact;
-      while (ctx->impacts.pop(impact)) {
+      while (ctx->impacts.poppedCount() < c.impacts_mark && ctx->impacts.pop(impact)) {
       }
       StepRecord record;
-      while (ctx->steps.pop(record)) {
+      while (ctx->steps.poppedCount() < c.steps_mark && ctx->steps.pop(record)) {
       }
       break;
     }

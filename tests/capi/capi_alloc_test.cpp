@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
-// strike_render() and strike_impact() must not allocate. This program replaces every global
+// strike_render(), strike_impact() and strike_step() must not allocate, and the allocator callback
+// covers what strike.h says it covers. This program replaces every global
 // operator new and (outside sanitizer builds) glibc's malloc family, counting calls made by a
 // thread while its counting flag is on; 10,000 renders run while another thread sends impacts.
 #include <gtest/gtest.h>
@@ -7,6 +8,8 @@
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
+#include <map>
 #include <new>
 #include <thread>
 #include <vector>
@@ -158,7 +161,8 @@ TEST(CApiRealtime, TenThousandRendersWithImpactsFromAnotherThreadAllocateNothing
   stop.store(true, std::memory_order_release);
   producer.join();
   EXPECT_EQ(g_counted.load() - before, 0u);
-  strike_stats st;
+  strike_stats st{};
+  st.struct_size = sizeof st;
   ASSERT_EQ(strike_context_get_stats(ctx, &st), STRIKE_OK);
   EXPECT_GT(sent.load(), 1000u);
   EXPECT_GT(st.impacts_scheduled, 500u);
@@ -168,6 +172,139 @@ TEST(CApiRealtime, TenThousandRendersWithImpactsFromAnotherThreadAllocateNothing
               static_cast<unsigned long long>(st.impacts_scheduled), static_cast<unsigned long long>(st.modes_culled));
   strike_bank_destroy(bank);
   strike_context_destroy(ctx);
+}
+
+// The allocator callback gets what strike.h says: the context and its queues, slots and engine;
+// each bank handle; each object's record. Each is freed through the callback, and nothing is
+// allocated by it (or by operator new / malloc) while rendering or reporting impacts and steps.
+struct CountingAllocator {
+  std::map<void*, size_t> live;
+  uint64_t allocations = 0, frees = 0;
+  static void* alloc(void* user, size_t size, size_t alignment) {
+    auto* self = static_cast<CountingAllocator*>(user);
+    void* p = std::aligned_alloc(alignment < alignof(std::max_align_t) ? alignof(std::max_align_t) : alignment,
+                                 (size + alignment - 1) / alignment * alignment + alignment);
+    const bool was = t_counting;
+    t_counting = false;  // the map's node is the test's, not libstrike's
+    self->live[p] = size;
+    t_counting = was;
+    ++self->allocations;
+    return p;
+  }
+  static void release(void* user, void* p) {
+    auto* self = static_cast<CountingAllocator*>(user);
+    EXPECT_EQ(self->live.count(p), 1u) << "freed what it did not allocate";
+    self->live.erase(p);
+    ++self->frees;
+    std::free(p);
+  }
+  size_t largest() const {
+    size_t m = 0;
+    for (const auto& kv : live) m = std::max(m, kv.second);
+    return m;
+  }
+  size_t count(size_t at_least) const {
+    size_t n = 0;
+    for (const auto& kv : live) n += kv.second >= at_least ? 1 : 0;
+    return n;
+  }
+};
+
+TEST(CApiAlloc, TheCallbackCoversTheContextBanksAndObjectsAndNothingOnTheAudioPath) {
+  CountingAllocator a;
+  strike_context_config c = strike_context_config_default();
+  c.alloc = CountingAllocator::alloc;
+  c.free = CountingAllocator::release;
+  c.user = &a;
+  c.max_block_frames = 256;
+  c.impact_queue_capacity = 1000;   // rounded up to 1024
+  c.contact_queue_capacity = 3000;  // rounded up to 4096
+  c.max_objects = 5;
+  strike_context ctx = nullptr;
+  ASSERT_EQ(strike_context_create(&c, &ctx), STRIKE_OK);
+  // The context itself, its three queues (impacts, steps, commands), its three slot arrays and
+  // the engine: 8 blocks. The queues hold at least capacity items each.
+  EXPECT_EQ(a.live.size(), 8u);
+  EXPECT_EQ(a.live.count(ctx), 1u) << "the context's own memory";
+  EXPECT_GE(a.count(1024 * sizeof(strike_impact_desc)), 1u) << "the impact queue";
+  EXPECT_GE(a.count(4096 * sizeof(strike_contact) / 2), 1u) << "the step queue (a record per state or contact)";
+  const size_t after_create = a.live.size();
+
+  const std::vector<uint8_t> bytes = strike::encodeBank(strike::test::makeTestBank());
+  strike_bank bank = nullptr;
+  ASSERT_EQ(strike_bank_load_memory(ctx, bytes.data(), bytes.size(), &bank), STRIKE_OK);
+  EXPECT_EQ(a.live.size(), after_create + 1) << "the bank handle";
+  EXPECT_EQ(a.live.count(bank), 1u);
+  strike_object_config oc = strike_object_config_default();
+  oc.bank = bank;
+  oc.position[1] = 1.0;
+  std::vector<strike_object_id> ids(3);
+  for (auto& id : ids) ASSERT_EQ(strike_object_add(ctx, &oc, &id), STRIKE_OK);
+  EXPECT_EQ(a.live.size(), after_create + 1 + ids.size()) << "one record per object";
+
+  // The audio path: impacts, steps and renders allocate nothing, through the callback or not.
+  std::vector<float> l(256), r(256);
+  float* out[2] = {l.data(), r.data()};
+  const uint64_t callback_before = a.allocations, global_before = g_counted.load();
+  t_counting = true;
+  for (int k = 0; k < 200; ++k) {
+    strike_impact_desc d = strike_impact_desc_default();
+    d.object = ids[k % 3];
+    d.impulse[2] = 1e-3;
+    (void)strike_impact(ctx, &d);
+    strike_body_state state{};
+    state.object = ids[(k + 1) % 3];
+    state.orientation[0] = 1.0;
+    state.position[1] = 1.0 + 0.01 * k;
+    state.asleep = k % 5 == 0;
+    strike_contact contacts[2] = {strike_contact_default(), strike_contact_default()};
+    contacts[0].object = ids[(k + 1) % 3];
+    contacts[0].impulse[2] = 0.16 + 0.01 * (k % 7);  // resting, with changes of load
+    contacts[1].object = ids[(k + 2) % 3];
+    contacts[1].impulse[2] = 0.02;
+    contacts[1].normal_speed_m_s = 1.0;  // an impact
+    strike_step_desc step = strike_step_desc_default();
+    step.end_time_s = (k + 1) / 60.0;
+    step.states = &state;
+    step.state_count = 1;
+    step.contacts = contacts;
+    step.contact_count = 2;
+    EXPECT_EQ(strike_step(ctx, &step), STRIKE_OK);
+    ASSERT_EQ(strike_render(ctx, out, 2, 256), STRIKE_OK);
+    strike_stats st{};
+    st.struct_size = sizeof st;
+    EXPECT_EQ(strike_context_get_stats(ctx, &st), STRIKE_OK);
+  }
+  t_counting = false;
+  EXPECT_EQ(a.allocations - callback_before, 0u);
+  EXPECT_EQ(g_counted.load() - global_before, 0u);
+  strike_stats st{};
+  st.struct_size = sizeof st;
+  ASSERT_EQ(strike_context_get_stats(ctx, &st), STRIKE_OK);
+  EXPECT_EQ(st.steps, 200u);
+  EXPECT_GT(st.load_changes, 0u);
+  EXPECT_GT(st.impacts_scheduled, 200u);
+
+  // A removed object's record goes back through the callback once the audio thread let go.
+  const uint64_t frees_before = a.frees;
+  ASSERT_EQ(strike_object_remove(ctx, ids[0]), STRIKE_OK);
+  ASSERT_EQ(strike_render(ctx, out, 2, 256), STRIKE_OK);
+  ASSERT_EQ(strike_context_collect(ctx), STRIKE_OK);
+  EXPECT_EQ(a.frees - frees_before, 1u);
+  EXPECT_EQ(a.live.size(), after_create + 1 + ids.size() - 1);
+  // strike_context_reset allocates nothing either.
+  const uint64_t allocations_before_reset = a.allocations;
+  ASSERT_EQ(strike_context_reset(ctx), STRIKE_OK);
+  ASSERT_EQ(strike_render(ctx, out, 2, 256), STRIKE_OK);
+  EXPECT_EQ(a.allocations, allocations_before_reset);
+  // The bank outlives the context here: the context's blocks and records are all freed, then
+  // the bank handle.
+  strike_context_destroy(ctx);
+  EXPECT_EQ(a.live.size(), 1u);
+  EXPECT_EQ(a.live.count(bank), 1u);
+  strike_bank_destroy(bank);
+  EXPECT_TRUE(a.live.empty());
+  EXPECT_EQ(a.allocations, a.frees);
 }
 
 }  // namespace

@@ -61,6 +61,8 @@ struct Fixture {
   strike_status render(uint32_t frames) { return strike_render(ctx, out, 2, frames); }
   strike_stats stats() {
     strike_stats s;
+    std::memset(&s, 0, sizeof s);
+    s.struct_size = sizeof s;
     EXPECT_EQ(strike_context_get_stats(ctx, &s), STRIKE_OK);
     return s;
   }
@@ -255,28 +257,52 @@ TEST(CApi, TooManyFramesIsAnErrorNotACrash) {
 }
 
 TEST(CApi, ImpactSoundsInTheNextBlockAtItsSampleOffset) {
+  // 0.3: an impact is heard d / 343 m/s after its sample offset, d from the contact point to the
+  // listener. Vertex 4 is the plate's centre, the mesh origin, placed at (0, 1, 0); the listener
+  // is at the origin: d = 1 m, 139.94 samples at 48 kHz.
   strike_context_config c = strike_context_config_default();
   c.max_block_frames = 256;
+  const double delay = 1.0 / 343.0 * c.sample_rate_hz;
+  // The first sample that may be non-zero, and the latest by which sound must have started
+  // (sample 0 of the pulse is its zero-force start; the next ones are not).
+  auto firstSound = [](const std::vector<float>& x, size_t from) {
+    for (size_t n = from; n < x.size(); ++n)
+      if (x[n] != 0.0f) return n;
+    return x.size();
+  };
   Fixture f(c);
   const strike_object_id id = f.add();
   ASSERT_EQ(f.render(256), STRIKE_OK);
   ASSERT_EQ(f.hit(id, 100), STRIKE_OK);
   ASSERT_EQ(f.render(256), STRIKE_OK);
-  for (size_t n = 0; n < 100; ++n) ASSERT_EQ(f.left[n], 0.0f) << n;
+  const size_t first = firstSound(f.left, 0);
+  EXPECT_GE(static_cast<double>(first), std::floor(100 + delay)) << "nothing before the offset plus the delay";
+  EXPECT_LE(static_cast<double>(first), 100 + delay + 2.0);
   float peak = 0.0f;
-  for (size_t n = 100; n < 256; ++n) peak = std::max(peak, std::fabs(f.left[n]));
-  EXPECT_GT(peak, 1e-3f);
+  for (size_t n = first; n < 256; ++n) peak = std::max(peak, std::fabs(f.left[n]));
+  EXPECT_GT(peak, 0.0f);
   EXPECT_EQ(f.stats().impacts_scheduled, 1u);
-  // Offset 0 on a silent context: sound starts within the first samples of the very next block
-  // (latency <= one block; sample 0 itself is the pulse's zero-force start).
+  // Offset 0 on a silent context: sound starts at the delay, within the very next block
+  // (latency <= one block plus the propagation delay).
   Fixture g(c);
   const strike_object_id id2 = g.add();
   ASSERT_EQ(g.hit(id2, 0), STRIKE_OK);
   ASSERT_EQ(g.render(256), STRIKE_OK);
-  size_t first = 256;
-  for (size_t n = 0; n < 256 && first == 256; ++n)
-    if (g.left[n] != 0.0f) first = n;
-  EXPECT_LE(first, 2u);
+  const size_t first0 = firstSound(g.left, 0);
+  EXPECT_GE(static_cast<double>(first0), std::floor(delay));
+  EXPECT_LE(static_cast<double>(first0), delay + 2.0);
+  // The offset is exact: the same impact 100 samples later is the same signal 100 samples later.
+  for (size_t n = first0; n + 100 < 256; ++n) ASSERT_EQ(f.left[n + 100], g.left[n]) << n;
+  // Nearer listener, shorter delay: move the listener 0.5 m towards the object (d = 0.5 m).
+  Fixture h(c);
+  const strike_object_id id3 = h.add();
+  const double p[3] = {0.0, 0.5, 0.0}, q[4] = {1, 0, 0, 0};
+  ASSERT_EQ(strike_listener_set_pose(h.ctx, p, q), STRIKE_OK);
+  ASSERT_EQ(h.hit(id3, 0), STRIKE_OK);
+  ASSERT_EQ(h.render(256), STRIKE_OK);
+  const size_t first_half = firstSound(h.left, 0);
+  EXPECT_GE(static_cast<double>(first_half), std::floor(delay / 2));
+  EXPECT_LE(static_cast<double>(first_half), delay / 2 + 2.0);
 }
 
 TEST(CApi, StereoPanFollowsTheListener) {

@@ -116,8 +116,13 @@ int main(int argc, char** argv) {
   CHECK(log_count == 1);
   free(bytes);
   CHECK(strike_bank_load_file(ctx, "/nonexistent/x.modes", &bank_mem) == STRIKE_ERR_IO);
+  /* Output structs carry their size (0.3): set it before the call. */
+  memset(&info, 0, sizeof info);
+  info.struct_size = sizeof info;
+  info_mem = info;
   CHECK_OK(strike_bank_get_info(bank, &info));
   CHECK_OK(strike_bank_get_info(bank_mem, &info_mem));
+  CHECK(info.struct_size == sizeof info);
   CHECK(info.mode_count == 4 && info_mem.mode_count == 4);
   CHECK(info.surface_vertex_count == 9);
   strike_bank_destroy(bank_mem);
@@ -145,6 +150,8 @@ int main(int argc, char** argv) {
     out[1] = right + n;
     CHECK_OK(strike_render(ctx, out, 2, BLOCK));
   }
+  memset(&stats, 0, sizeof stats);
+  stats.struct_size = sizeof stats;
   CHECK_OK(strike_context_get_stats(ctx, &stats));
   CHECK(stats.impacts_queued == 1 && stats.impacts_scheduled == 1);
   CHECK(stats.frames_rendered == FRAMES);
@@ -165,6 +172,31 @@ int main(int argc, char** argv) {
            20.0 * log10(best / floor_level), f0 * 1.17);
     CHECK(fabs(best_f - f0) <= 1.5);
     CHECK(best > 10.0 * floor_level);
+  }
+
+  /* A physics step (0.3) from C: one contact approaching at 2 m/s is an impact. */
+  {
+    strike_contact contact = strike_contact_default();
+    strike_step_desc step = strike_step_desc_default();
+    strike_stats after;
+    contact.object = obj;
+    contact.impulse[2] = 1e-2;
+    contact.normal_speed_m_s = 2.0;
+    step.end_time_s = (double)FRAMES / fs;
+    step.duration_s = 1.0 / 60.0;
+    step.contacts = &contact;
+    step.contact_count = 1;
+    CHECK_OK(strike_step(ctx, &step));
+    out[0] = left;
+    out[1] = right;
+    CHECK_OK(strike_render(ctx, out, 2, BLOCK));
+    memset(&after, 0, sizeof after);
+    after.struct_size = sizeof after;
+    CHECK_OK(strike_context_get_stats(ctx, &after));
+    CHECK(after.steps == 1 && after.contacts_queued == 1);
+    CHECK(after.impacts_scheduled == stats.impacts_scheduled + 1);
+    step.struct_size = 4; /* from no known version */
+    CHECK(strike_step(ctx, &step) == STRIKE_ERR_INVALID_ARG);
   }
 
   /* Bad use gets status codes. */

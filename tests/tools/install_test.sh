@@ -24,6 +24,19 @@ if [ "$lv2" = 1 ]; then
   done
 fi
 
+# The tool links libstrike (0.3): it must find the installed copy through its RUNPATH
+# ($ORIGIN/../LIBDIR), not the build tree's or one elsewhere on the system.
+uses_own_libstrike() {  # $1: the strike binary, $2: the tree it must load libstrike from
+  local resolved
+  resolved=$(env -u LD_LIBRARY_PATH ldd "$1" | awk '/libstrike\.so/ {print $3}')
+  [ -n "$resolved" ] || return 0  # linked statically: nothing to resolve
+  case "$(readlink -f "$resolved")" in
+    "$(readlink -f "$2")"/*) return 0 ;;
+    *) echo "FAIL: $1 loads libstrike from $resolved, not from $2" >&2; return 1 ;;
+  esac
+}
+uses_own_libstrike "$prefix/bin/strike" "$prefix" || fail "the installed strike does not load its own libstrike"
+
 # The installed tool runs and teaches.
 env -u LD_LIBRARY_PATH "$prefix/bin/strike" --help >"$work/help.txt" || fail "installed strike --help failed"
 grep -q 'usage: strike COMMAND' "$work/help.txt" || fail "installed strike --help does not print its usage"
@@ -71,5 +84,6 @@ env -u LD_LIBRARY_PATH "$work/consumer/build/main" || fail "the find_package bui
 # Relocated: the same tree moved elsewhere still works through pkg-config.
 mv "$prefix" "$work/moved"
 build_with_pkg_config "$work/moved" "$work/main_moved"
+uses_own_libstrike "$work/moved/bin/strike" "$work/moved" || fail "the moved strike does not load its own libstrike"
 env -u LD_LIBRARY_PATH "$work/moved/bin/strike" --version || fail "the moved strike does not run"
 echo "install tree: strike, libstrike, strike.h, CMake package, pkg-config$([ "$lv2" = 1 ] && echo ", LV2 bundle") all work"

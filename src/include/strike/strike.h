@@ -140,11 +140,13 @@ enum { STRIKE_LOG_ERROR = 0, STRIKE_LOG_WARNING = 1, STRIKE_LOG_INFO = 2 };
  *  @param message valid only during the call. */
 typedef void(STRIKE_CALL* strike_log_fn)(void* user, int32_t level, const char* message);
 /** Allocator: size bytes aligned to alignment (a power of two <= 64); NULL on failure.
- *  What it covers: the context and its queues, slots and histogram; each bank handle; each
- *  object's record. What it does not: the storage inside a loaded bank (its modes and shapes)
- *  and inside an object's oscillators, projector and contact state (sized by the bank's modes),
- *  which come from the C++ runtime's operator new, also on the main thread only (bank load,
- *  object add and remove, collect). Nothing is allocated on the audio thread. */
+ *  What it covers: the context and its queues, slots and sound engine; each bank handle; each
+ *  object's record. What it does not: the engine's voice table and budget histogram and the
+ *  list of removed objects awaiting collection (sized at creation by max_objects), the storage
+ *  inside a loaded bank (its modes and shapes) and inside an object's oscillators, projector and
+ *  contact state (sized by the bank's modes), which come from the C++ runtime's operator new,
+ *  also on the main thread only (create, bank load, object add and remove, collect). Nothing is
+ *  allocated on the audio thread, nor by strike_impact() or strike_step(). */
 typedef void*(STRIKE_CALL* strike_alloc_fn)(void* user, size_t size, size_t alignment);
 /** Frees what strike_alloc_fn returned (never called with NULL). */
 typedef void(STRIKE_CALL* strike_free_fn)(void* user, void* pointer);
@@ -271,9 +273,10 @@ STRIKE_API strike_status STRIKE_CALL strike_context_get_stats(strike_context con
 STRIKE_API strike_status STRIKE_CALL strike_context_collect(strike_context context);
 
 /**
- * Silences every object (modes, pending pulses, loads), empties the impact and step queues and
- * restarts the context's clock at 0 at the next strike_render(); objects, banks, poses and the
- * listener stay. For a game loading a level or a plugin's transport jumping. [main-thread]
+ * Silences every object (modes, pending pulses, loads), drops the impacts and steps queued
+ * before this call and restarts the context's clock at 0 at the next strike_render(); objects,
+ * banks, poses and the listener stay. Impacts and steps reported after it returns are kept (on
+ * the restarted clock). For a game loading a level or a plugin's transport jumping. [main-thread]
  */
 STRIKE_API strike_status STRIKE_CALL strike_context_reset(strike_context context);
 

@@ -13,7 +13,8 @@
 namespace {
 
 const char kUsage[] =
-    "strike: rigid-body impact sound synthesis (version " STRIKE_VERSION_STRING ")\n"
+    "strike: rigid-body impact sound synthesis (version " STRIKE_VERSION_STRING
+    ")\n"
     "\n"
     "usage: strike COMMAND [ARGS] [--help]\n"
     "\n"

@@ -28,7 +28,7 @@ namespace {
 
 constexpr double kRate = 48000.0;
 constexpr uint32_t kBlock = 256;
-constexpr int kSubsteps = 4;        // per 60 Hz game frame: 240 Hz physics
+constexpr int kSubsteps = 4;  // per 60 Hz game frame: 240 Hz physics
 constexpr double kFrameDt = 1.0 / 60.0;
 
 // Minimal 16-bit PCM stereo WAV writer (RIFF): no libsndfile needed.
@@ -36,7 +36,9 @@ bool writeWav(const char* path, const std::vector<float>& interleaved, uint32_t 
   std::FILE* f = std::fopen(path, "wb");
   if (!f) return false;
   const uint32_t data_bytes = static_cast<uint32_t>(interleaved.size() * 2);
-  auto u32 = [&](uint32_t v) { for (int i = 0; i < 4; ++i) std::fputc(static_cast<int>((v >> (8 * i)) & 0xff), f); };
+  auto u32 = [&](uint32_t v) {
+    for (int i = 0; i < 4; ++i) std::fputc(static_cast<int>((v >> (8 * i)) & 0xff), f);
+  };
   auto u16 = [&](uint16_t v) { std::fputc(v & 0xff, f), std::fputc(v >> 8, f); };
   std::fwrite("RIFF", 1, 4, f), u32(36 + data_bytes), std::fwrite("WAVEfmt ", 1, 8, f);
   u32(16), u16(1), u16(2), u32(rate), u32(rate * 4), u16(4), u16(16);
@@ -124,7 +126,8 @@ int main(int argc, char** argv) {
     start.setOrigin(btVector3(0.15 * static_cast<double>(k) - 0.2, 0.05 * static_cast<double>(k), 0.3 + 0.25 * k));
     start.setRotation(btQuaternion(btVector3(1, 0.3 * k, 0).normalized(), 0.2 + 0.3 * k));
     b.motion = std::make_unique<btDefaultMotionState>(start);
-    b.body = std::make_unique<btRigidBody>(btRigidBody::btRigidBodyConstructionInfo(mass, b.motion.get(), b.shape.get(), inertia));
+    b.body = std::make_unique<btRigidBody>(
+        btRigidBody::btRigidBodyConstructionInfo(mass, b.motion.get(), b.shape.get(), inertia));
     b.body->setRestitution(0.4);
     b.body->setUserIndex(static_cast<int>(k));
     world.addRigidBody(b.body.get());
@@ -224,7 +227,8 @@ int main(int argc, char** argv) {
   stats.struct_size = sizeof stats;
   strike_context_get_stats(ctx, &stats);
   float peak = 0.0f, tail = 0.0f;
-  const size_t tail_from = wav.size() > static_cast<size_t>(2 * 0.25 * kRate) ? wav.size() - static_cast<size_t>(2 * 0.25 * kRate) : 0;
+  const size_t tail_from =
+      wav.size() > static_cast<size_t>(2 * 0.25 * kRate) ? wav.size() - static_cast<size_t>(2 * 0.25 * kRate) : 0;
   for (size_t n = 0; n < wav.size(); ++n) {
     peak = std::max(peak, std::fabs(wav[n]));
     if (n >= tail_from) tail = std::max(tail, std::fabs(wav[n]));
@@ -235,16 +239,17 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: cannot write\n", argv[2]);
     return 1;
   }
-  std::printf("%s: %.2f s, %llu steps, %llu contacts reported (%llu queued): %llu impacts, %llu sustained, %llu load "
-              "changes, %llu load holds; peak %.3g full scale = %.3g Pa (normalized x%.3g), %zu clipped; last 0.25 s "
-              "%.1f dB re the peak\n",
-              argv[2], audio_time, static_cast<unsigned long long>(stats.steps),
-              static_cast<unsigned long long>(reported_contacts), static_cast<unsigned long long>(stats.contacts_queued),
-              static_cast<unsigned long long>(stats.impacts_scheduled),
-              static_cast<unsigned long long>(stats.sustained_contacts),
-              static_cast<unsigned long long>(stats.load_changes), static_cast<unsigned long long>(stats.load_holds),
-              static_cast<double>(peak), static_cast<double>(peak) * cfg.output_full_scale_pa, gain, clipped,
-              20.0 * std::log10(std::max(static_cast<double>(tail), 1e-30) / std::max(static_cast<double>(peak), 1e-30)));
+  std::printf(
+      "%s: %.2f s, %llu steps, %llu contacts reported (%llu queued): %llu impacts, %llu sustained, %llu load "
+      "changes, %llu load holds; peak %.3g full scale = %.3g Pa (normalized x%.3g), %zu clipped; last 0.25 s "
+      "%.1f dB re the peak\n",
+      argv[2], audio_time, static_cast<unsigned long long>(stats.steps),
+      static_cast<unsigned long long>(reported_contacts), static_cast<unsigned long long>(stats.contacts_queued),
+      static_cast<unsigned long long>(stats.impacts_scheduled),
+      static_cast<unsigned long long>(stats.sustained_contacts), static_cast<unsigned long long>(stats.load_changes),
+      static_cast<unsigned long long>(stats.load_holds), static_cast<double>(peak),
+      static_cast<double>(peak) * cfg.output_full_scale_pa, gain, clipped,
+      20.0 * std::log10(std::max(static_cast<double>(tail), 1e-30) / std::max(static_cast<double>(peak), 1e-30)));
   for (Body& b : bodies) world.removeRigidBody(b.body.get());
   world.removeRigidBody(&ground);
   strike_bank_destroy(bank);

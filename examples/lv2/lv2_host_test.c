@@ -174,8 +174,8 @@ int main(void) {
   }
   ratio_soft = dft(soft, FRAMES, 5200, 48000) / dft(soft, FRAMES, 440, 48000);
   ratio_hard = dft(hard, FRAMES, 5200, 48000) / dft(hard, FRAMES, 440, 48000);
-  printf("5200/440 Hz level: velocity 20 %.1f dB, velocity 127 %.1f dB (harder is brighter)\n",
-         20 * log10(ratio_soft), 20 * log10(ratio_hard));
+  printf("5200/440 Hz level: velocity 20 %.1f dB, velocity 127 %.1f dB (harder is brighter)\n", 20 * log10(ratio_soft),
+         20 * log10(ratio_hard));
   if (!(ratio_hard > ratio_soft * 1.05)) ++failures;
   if (!(dft(hard, FRAMES, 440, 48000) > dft(soft, FRAMES, 440, 48000))) ++failures;
 

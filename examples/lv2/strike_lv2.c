@@ -167,7 +167,8 @@ static void note_on(StrikeLv2* self, uint8_t note, uint8_t velocity, uint32_t fr
 /* Peak output (either channel) of the loudest note at velocity 127, at object gain 1: each note
  * is struck alone on a fresh object in a probe context like the plugin's and rendered for
  * PROBE seconds. Main thread (instantiate) only: it allocates. Returns 0 on failure. */
-static double loudest_note_peak(const strike_context_config* cfg, const char* bank_path, const strike_object_config* ocfg_in) {
+static double loudest_note_peak(const strike_context_config* cfg, const char* bank_path,
+                                const strike_object_config* ocfg_in) {
   strike_context probe;
   strike_bank bank;
   strike_bank_info info;
@@ -185,7 +186,9 @@ static double loudest_note_peak(const strike_context_config* cfg, const char* ba
   if (strike_bank_get_info(bank, &info) != STRIKE_OK) info.surface_vertex_count = 0;
   vertices = info.surface_vertex_count;
   probe_s = info.lowest_frequency_hz > 0 ? 4.0 / info.lowest_frequency_hz : STRIKE_LV2_PROBE_MAX_S;
-  probe_s = probe_s < STRIKE_LV2_PROBE_MIN_S ? STRIKE_LV2_PROBE_MIN_S : probe_s > STRIKE_LV2_PROBE_MAX_S ? STRIKE_LV2_PROBE_MAX_S : probe_s;
+  probe_s = probe_s < STRIKE_LV2_PROBE_MIN_S   ? STRIKE_LV2_PROBE_MIN_S
+            : probe_s > STRIKE_LV2_PROBE_MAX_S ? STRIKE_LV2_PROBE_MAX_S
+                                               : probe_s;
   /* Each note is heard distance / 343 m/s after it is struck (libstrike 0.3): add the delay of
    * the surface point farthest from the listener (at the origin), a corner of the bounds. */
   {

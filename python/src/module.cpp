@@ -53,7 +53,8 @@ py::array_t<double> doubles(const std::vector<double>& values) {
 }
 
 py::array_t<float> samples(const AudioBuffer& audio) {
-  if (audio.channels <= 1) return py::array_t<float>(static_cast<py::ssize_t>(audio.samples.size()), audio.samples.data());
+  if (audio.channels <= 1)
+    return py::array_t<float>(static_cast<py::ssize_t>(audio.samples.size()), audio.samples.data());
   return py::array_t<float>({static_cast<py::ssize_t>(audio.frames()), static_cast<py::ssize_t>(audio.channels)},
                             audio.samples.data());
 }
@@ -90,7 +91,8 @@ std::string pathOf(const py::object& path) {
 using BankPtr = std::shared_ptr<ModeBank>;
 
 BankPtr computeModes(const std::string& mesh, const Material& material, int order, double size_m, double max_freq_hz,
-                     int max_modes, int64_t max_tets, std::optional<bool> error_estimate, std::optional<double> tolerance) {
+                     int max_modes, int64_t max_tets, std::optional<bool> error_estimate,
+                     std::optional<double> tolerance) {
   PrecomputeSettings settings;
   settings.mesh_spec = mesh;
   settings.material = material;
@@ -106,8 +108,10 @@ BankPtr computeModes(const std::string& mesh, const Material& material, int orde
     py::gil_scoped_release released;
     if (tolerance) {
       Result<ToleranceResult> chosen = computeModeBankToTolerance(settings, *tolerance);
-      if (chosen) result.emplace(std::move(chosen->chosen));
-      else result.emplace(chosen.error());
+      if (chosen)
+        result.emplace(std::move(chosen->chosen));
+      else
+        result.emplace(chosen.error());
     } else {
       result.emplace(computeModeBank(settings));
     }
@@ -212,8 +216,8 @@ py::object eventsArray(const RenderResult& r) {
   return array;
 }
 
-PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration, double gain, const std::string& cache_dir,
-                            int64_t max_tets, int64_t max_events) {
+PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration, double gain,
+                            const std::string& cache_dir, int64_t max_tets, int64_t max_events) {
   Scene scene = take(std::move(parsed));
   RenderSettings settings;
   settings.sample_rate_hz = rate;
@@ -249,35 +253,44 @@ PYBIND11_MODULE(_strike, m) {
   using namespace strike;
   m.doc() = "The Strike engine (C++). Use the `strike` package, which wraps and documents it.";
   m.attr("__version__") = STRIKE_VERSION_STRING;
-  m.add_object("InputError", py::reinterpret_steal<py::object>(
-                                 PyErr_NewExceptionWithDoc("strike.InputError",
-                                                           "Bad input: the message names the file, key and value.",
-                                                           PyExc_ValueError, nullptr)));
+  m.add_object("InputError", py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
+                                 "strike.InputError", "Bad input: the message names the file, key and value.",
+                                 PyExc_ValueError, nullptr)));
 
   py::class_<ModeBank, std::shared_ptr<ModeBank>>(m, "Bank")
-      .def_property_readonly("frequencies_hz", [](const ModeBank& b) {
-        std::vector<double> f(b.modeCount());
-        for (size_t i = 0; i < f.size(); ++i) f[i] = b.frequencyHz(i);
-        return doubles(f);
-      })
-      .def_property_readonly("decay_per_s", [](const ModeBank& b) {
-        std::vector<double> d(b.modeCount());
-        for (size_t i = 0; i < d.size(); ++i) d[i] = b.decayPerS(i);
-        return doubles(d);
-      })
+      .def_property_readonly("frequencies_hz",
+                             [](const ModeBank& b) {
+                               std::vector<double> f(b.modeCount());
+                               for (size_t i = 0; i < f.size(); ++i) f[i] = b.frequencyHz(i);
+                               return doubles(f);
+                             })
+      .def_property_readonly("decay_per_s",
+                             [](const ModeBank& b) {
+                               std::vector<double> d(b.modeCount());
+                               for (size_t i = 0; i < d.size(); ++i) d[i] = b.decayPerS(i);
+                               return doubles(d);
+                             })
       .def_property_readonly("eigenvalues", [](const ModeBank& b) { return doubles(b.eigenvalues); })
-      .def_property_readonly("frequency_error_estimate", [](const ModeBank& b) { return doubles(b.frequency_error_estimate); })
-      .def_property_readonly("surface_positions_m", [](const ModeBank& b) {
-        return py::array_t<double>({static_cast<py::ssize_t>(b.surfaceVertexCount()), py::ssize_t(3)}, b.surface_positions.data());
-      })
-      .def_property_readonly("shapes", [](const ModeBank& b) {
-        return py::array_t<float>({static_cast<py::ssize_t>(b.modeCount()), static_cast<py::ssize_t>(b.surfaceVertexCount()),
-                                   py::ssize_t(3)}, b.shapes.data());
-      })
+      .def_property_readonly("frequency_error_estimate",
+                             [](const ModeBank& b) { return doubles(b.frequency_error_estimate); })
+      .def_property_readonly("surface_positions_m",
+                             [](const ModeBank& b) {
+                               return py::array_t<double>(
+                                   {static_cast<py::ssize_t>(b.surfaceVertexCount()), py::ssize_t(3)},
+                                   b.surface_positions.data());
+                             })
+      .def_property_readonly("shapes",
+                             [](const ModeBank& b) {
+                               return py::array_t<float>(
+                                   {static_cast<py::ssize_t>(b.modeCount()),
+                                    static_cast<py::ssize_t>(b.surfaceVertexCount()), py::ssize_t(3)},
+                                   b.shapes.data());
+                             })
       .def_property_readonly("max_freq_hz", [](const ModeBank& b) { return b.max_freq_hz; })
-      .def("similar", [](const ModeBank& b, double scale, const py::dict& material, double max_freq_hz, const std::string& mesh) {
-        return std::make_shared<ModeBank>(take(similarBank(b, scale, materialFrom(material), max_freq_hz, mesh)));
-      })
+      .def("similar",
+           [](const ModeBank& b, double scale, const py::dict& material, double max_freq_hz, const std::string& mesh) {
+             return std::make_shared<ModeBank>(take(similarBank(b, scale, materialFrom(material), max_freq_hz, mesh)));
+           })
       .def_property_readonly("mode_count", &ModeBank::modeCount)
       .def_property_readonly("surface_vertex_count", &ModeBank::surfaceVertexCount)
       .def_property_readonly("mass_kg", [](const ModeBank& b) { return b.mass_kg; })
@@ -286,41 +299,50 @@ PYBIND11_MODULE(_strike, m) {
       .def_property_readonly("mesh_source", [](const ModeBank& b) { return b.mesh_source; })
       .def_property_readonly("mesh_hash", [](const ModeBank& b) { return hex64(b.mesh_hash); })
       .def_property_readonly("material", [](const ModeBank& b) { return materialDict(b.material); })
-      .def_property_readonly("content_hash", [](const ModeBank& b) {
-        const std::vector<uint8_t> bytes = encodeBank(b);
-        return hex64(fnv1a64(bytes.data(), bytes.size()));
-      })
-      .def("save", [](const ModeBank& b, const py::object& path_arg) {
-        const std::string path = pathOf(path_arg);
-        Status status;
-        {
-          py::gil_scoped_release released;
-          status = writeBank(path, b);
-        }
-        check(status);
-      }, py::arg("path"))
-      .def_static("load", [](const py::object& path_arg) {
-        const std::string path = pathOf(path_arg);
-        std::optional<Result<ModeBank>> loaded;
-        {
-          py::gil_scoped_release released;
-          loaded.emplace(readBank(path));
-        }
-        return std::make_shared<ModeBank>(take(std::move(*loaded)));
-      }, py::arg("path"));
+      .def_property_readonly("content_hash",
+                             [](const ModeBank& b) {
+                               const std::vector<uint8_t> bytes = encodeBank(b);
+                               return hex64(fnv1a64(bytes.data(), bytes.size()));
+                             })
+      .def(
+          "save",
+          [](const ModeBank& b, const py::object& path_arg) {
+            const std::string path = pathOf(path_arg);
+            Status status;
+            {
+              py::gil_scoped_release released;
+              status = writeBank(path, b);
+            }
+            check(status);
+          },
+          py::arg("path"))
+      .def_static(
+          "load",
+          [](const py::object& path_arg) {
+            const std::string path = pathOf(path_arg);
+            std::optional<Result<ModeBank>> loaded;
+            {
+              py::gil_scoped_release released;
+              loaded.emplace(readBank(path));
+            }
+            return std::make_shared<ModeBank>(take(std::move(*loaded)));
+          },
+          py::arg("path"));
 
   m.def("material", [](const std::string& name) { return materialDict(take(builtinMaterials().find(name))); });
   m.def("material_names", []() { return builtinMaterials().names(); });
   m.def("can_remesh", &canRemesh);
 
-  m.def("modes", [](const std::string& mesh, const py::dict& material, int order, double size_m, double max_freq_hz,
-                    int max_modes, int64_t max_tets, std::optional<bool> error_estimate, std::optional<double> tolerance) {
-    return computeModes(mesh, materialFrom(material), order, size_m, max_freq_hz, max_modes, max_tets, error_estimate, tolerance);
-  });
+  m.def("modes",
+        [](const std::string& mesh, const py::dict& material, int order, double size_m, double max_freq_hz,
+           int max_modes, int64_t max_tets, std::optional<bool> error_estimate, std::optional<double> tolerance) {
+          return computeModes(mesh, materialFrom(material), order, size_m, max_freq_hz, max_modes, max_tets,
+                              error_estimate, tolerance);
+        });
 
   m.def("hit", [](const ModeBank& bank, std::optional<size_t> vertex, std::optional<std::array<double, 3>> at,
-                  std::optional<std::array<double, 3>> impulse, double duration, double rate, double distance, double gain,
-                  std::optional<double> contact_time, const std::string& striker, double striker_radius) {
+                  std::optional<std::array<double, 3>> impulse, double duration, double rate, double distance,
+                  double gain, std::optional<double> contact_time, const std::string& striker, double striker_radius) {
     HitSettings s;
     s.vertex = vertex;
     s.at_m = at;
@@ -354,21 +376,25 @@ PYBIND11_MODULE(_strike, m) {
       .def_property_readonly("events", [](const PyRenderResult& r) { return eventsArray(r.result); })
       .def_property_readonly("body_names", [](const PyRenderResult& r) { return r.result.body_names; })
       .def_property_readonly("report", &reportDict)
-      .def("save", [](const PyRenderResult& r, const std::string& path, const std::string& format) {
-        const SampleEncoding encoding = encodingNamed(format);
-        Status status;
-        {
-          py::gil_scoped_release released;
-          status = writeAudio(path, r.result.audio, encoding);
-        }
-        check(status);
-      }, py::arg("path"), py::arg("format"))
-      .def("save_events_csv", [](const PyRenderResult& r, const std::string& path) {
-        check(writeEventsCsv(path, r.result));
-      }, py::arg("path"));
+      .def(
+          "save",
+          [](const PyRenderResult& r, const std::string& path, const std::string& format) {
+            const SampleEncoding encoding = encodingNamed(format);
+            Status status;
+            {
+              py::gil_scoped_release released;
+              status = writeAudio(path, r.result.audio, encoding);
+            }
+            check(status);
+          },
+          py::arg("path"), py::arg("format"))
+      .def(
+          "save_events_csv",
+          [](const PyRenderResult& r, const std::string& path) { check(writeEventsCsv(path, r.result)); },
+          py::arg("path"));
 
-  m.def("render_file", [](const std::string& path, double rate, double duration, double gain, const std::string& cache_dir,
-                          int64_t max_tets, int64_t max_events) {
+  m.def("render_file", [](const std::string& path, double rate, double duration, double gain,
+                          const std::string& cache_dir, int64_t max_tets, int64_t max_events) {
     return renderParsed(loadScene(path), rate, duration, gain, cache_dir, max_tets, max_events);
   });
   m.def("render_text", [](const std::string& text, const std::string& path, double rate, double duration, double gain,

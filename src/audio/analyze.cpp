@@ -180,7 +180,7 @@ double decayFromHalfWidth(double half_width_hz, size_t length, double rate_hz, S
 struct Candidate {
   double freq_hz = 0.0;
   double amplitude = 0.0;
-  double half_width_hz = 0.0;  ///< half width at -3 dB, for the first guess of the decay
+  double half_width_hz = 0.0;      ///< half width at -3 dB, for the first guess of the decay
   double skirt_decay_per_s = 0.0;  ///< decay used to model this line's leakage onto others
 };
 
@@ -250,8 +250,9 @@ struct DecayFit {
 /// and the two decays are within a factor of 2 (a near-degenerate pair shares its damping; a
 /// wider spread means the second pole is fitting something else). Then decay and frequency are
 /// the |c_k|^2-weighted means of the two, i.e. the pair's, and amplitude is |c1| + |c2|.
-void refineAsPair(const std::vector<double>& times_s, const std::vector<double>& logs, const std::vector<double>& phases,
-                  size_t m_begin, size_t m_end, double frames_per_s, double freq_hz, DecayFit& fit) {
+void refineAsPair(const std::vector<double>& times_s, const std::vector<double>& logs,
+                  const std::vector<double>& phases, size_t m_begin, size_t m_end, double frames_per_s, double freq_hz,
+                  DecayFit& fit) {
   using C = std::complex<double>;
   const size_t count = m_end - m_begin;
   if (count < 9) return;
@@ -442,7 +443,8 @@ DecayFit fitDecayWithFrame(const Mono& mono, double rate_hz, double freq_hz, dou
     // |Y(0)| = (A / 2) sum_n w(n) e^{-d n / fs} for a line that starts at the onset.
     const double intercept = mean_y + fit.decay_per_s * mean_t;
     double gain = 0.0;
-    for (size_t n = 0; n < frame; ++n) gain += blackmanHarris(n, frame) * std::exp(-fit.decay_per_s * static_cast<double>(n) / rate_hz);
+    for (size_t n = 0; n < frame; ++n)
+      gain += blackmanHarris(n, frame) * std::exp(-fit.decay_per_s * static_cast<double>(n) / rate_hz);
     fit.amplitude = 2.0 * std::exp(intercept) / gain;
   }
   fit.freq_hz = wstt > 0.0 ? freq_hz + wstp / wstt / (2.0 * kPi) : freq_hz;
@@ -493,8 +495,8 @@ DecayFit fitDecay(const Mono& mono, double rate_hz, const Candidate& peak, doubl
 }
 
 struct Line {
-  SpectralPeak peak;       ///< decay_per_s always fitted (analyzeAudio clears it if not wanted)
-  double merge_hz = 0.0;   ///< lines of other segments within this are the same line
+  SpectralPeak peak;      ///< decay_per_s always fitted (analyzeAudio clears it if not wanted)
+  double merge_hz = 0.0;  ///< lines of other segments within this are the same line
 };
 
 /// The genuine spectral lines of one free ring, mono.x from mono.onset on, strongest first:
@@ -614,7 +616,8 @@ std::vector<Line> findLines(const Mono& mono, double rate_hz, const AnalyzeOptio
 /// merge_hz are that line again. Strongest first, at most max_peaks, above floor_db.
 std::vector<SpectralPeak> mergeSegmentLines(std::vector<Line> lines, const AnalyzeOptions& options) {
   std::stable_sort(lines.begin(), lines.end(), [](const Line& a, const Line& b) {
-    return a.peak.level_dbfs != b.peak.level_dbfs ? a.peak.level_dbfs > b.peak.level_dbfs : a.peak.freq_hz < b.peak.freq_hz;
+    return a.peak.level_dbfs != b.peak.level_dbfs ? a.peak.level_dbfs > b.peak.level_dbfs
+                                                  : a.peak.freq_hz < b.peak.freq_hz;
   });
   std::vector<SpectralPeak> peaks;
   if (lines.empty()) return peaks;
@@ -648,7 +651,8 @@ AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& optio
   if (!(mono.peak > 0.0) || length < 16 || options.max_peaks <= 0) return analysis;
 
   const std::vector<size_t> onsets = detail::impactOnsets(mono.x, mono.onset, mono.peak, audio.sample_rate_hz);
-  for (const size_t onset : onsets) analysis.impact_onsets_s.push_back(static_cast<double>(onset) / audio.sample_rate_hz);
+  for (const size_t onset : onsets)
+    analysis.impact_onsets_s.push_back(static_cast<double>(onset) / audio.sample_rate_hz);
   std::vector<Line> lines;
   if (onsets.size() <= 1) {
     lines = findLines(mono, audio.sample_rate_hz, options);
@@ -674,7 +678,8 @@ AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& optio
     };
     std::vector<Segment> segments;
     for (size_t i = 0; i < onsets.size(); ++i) {
-      const size_t end = i + 1 < onsets.size() ? std::max(onsets[i], onsets[i + 1] - std::min(guard, onsets[i + 1])) : mono.x.size();
+      const size_t end =
+          i + 1 < onsets.size() ? std::max(onsets[i], onsets[i + 1] - std::min(guard, onsets[i + 1])) : mono.x.size();
       segments.push_back({std::min(end, onsets[i] + contact), end});
     }
     std::vector<Segment> used;
@@ -687,7 +692,8 @@ AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& optio
     for (const Segment& s : used) {
       if (s.end - s.begin < 16) continue;
       Mono part;
-      part.x.assign(mono.x.begin() + static_cast<std::ptrdiff_t>(s.begin), mono.x.begin() + static_cast<std::ptrdiff_t>(s.end));
+      part.x.assign(mono.x.begin() + static_cast<std::ptrdiff_t>(s.begin),
+                    mono.x.begin() + static_cast<std::ptrdiff_t>(s.end));
       for (const double v : part.x) part.peak = std::max(part.peak, std::fabs(v));
       if (!(part.peak > 0.0)) continue;
       const std::vector<Line> found = findLines(part, audio.sample_rate_hz, options);

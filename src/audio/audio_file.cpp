@@ -13,8 +13,8 @@
 #include <limits>
 
 #include "strike/atomic_file.hpp"  // temporaryPathFor
-#include "strike/interrupt_cleanup.hpp"
 #include "strike/audio.hpp"
+#include "strike/interrupt_cleanup.hpp"
 
 namespace strike {
 namespace {
@@ -26,7 +26,8 @@ std::string lowerExtension(const std::string& path) {
   const size_t dot = path.find_last_of('.');
   if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
   std::string ext = path.substr(dot);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
 
@@ -72,24 +73,33 @@ Status writeAudio(const std::string& path, const AudioBuffer& audio, SampleEncod
                     std::to_string(audio.channels) + "-channel frames");
   const double rate = audio.sample_rate_hz;
   if (!(rate >= 1.0 && rate <= 1e7) || rate != std::floor(rate))
-    return badInput(path + ": error: sample rate " + std::to_string(rate) + " Hz is not a positive whole number of hertz");
+    return badInput(path + ": error: sample rate " + std::to_string(rate) +
+                    " Hz is not a positive whole number of hertz");
   int subtype = 0;
   int bits = 0;
   switch (encoding) {
-    case SampleEncoding::Pcm16: subtype = SF_FORMAT_PCM_16; bits = 16; break;
-    case SampleEncoding::Pcm24: subtype = SF_FORMAT_PCM_24; bits = 24; break;
+    case SampleEncoding::Pcm16:
+      subtype = SF_FORMAT_PCM_16;
+      bits = 16;
+      break;
+    case SampleEncoding::Pcm24:
+      subtype = SF_FORMAT_PCM_24;
+      bits = 24;
+      break;
     case SampleEncoding::Float32: subtype = SF_FORMAT_FLOAT; break;
   }
   if (major == SF_FORMAT_FLAC && encoding == SampleEncoding::Float32)
-    return badInput(path + ": error: FLAC stores integer PCM only; use 16- or 24-bit PCM, or a .wav file for 32-bit float");
+    return badInput(path +
+                    ": error: FLAC stores integer PCM only; use 16- or 24-bit PCM, or a .wav file for 32-bit float");
 
   SF_INFO info{};
   info.samplerate = static_cast<int>(rate);
   info.channels = audio.channels;
   info.format = major | subtype;
   if (!sf_format_check(&info))
-    return badInput(path + ": error: libsndfile cannot write " + std::string(encodingName(encoding)) + " " + ext.substr(1) +
-                    " with " + std::to_string(audio.channels) + " channels at " + std::to_string(info.samplerate) + " Hz");
+    return badInput(path + ": error: libsndfile cannot write " + std::string(encodingName(encoding)) + " " +
+                    ext.substr(1) + " with " + std::to_string(audio.channels) + " channels at " +
+                    std::to_string(info.samplerate) + " Hz");
 
   const std::string temp = temporaryPathFor(path);
   TemporaryRegistration registration(temp);  // removed if SIGINT/SIGTERM arrives mid-write
@@ -166,7 +176,8 @@ Result<AudioBuffer> readAudio(const std::string& path) {
   for (;;) {
     const sf_count_t got = sf_readf_float(file, chunk.data(), kChunkFrames);
     if (got <= 0) break;
-    audio.samples.insert(audio.samples.end(), chunk.begin(), chunk.begin() + static_cast<ptrdiff_t>(got * info.channels));
+    audio.samples.insert(audio.samples.end(), chunk.begin(),
+                         chunk.begin() + static_cast<ptrdiff_t>(got * info.channels));
   }
   const int read_error = sf_error(file);
   if (read_error != SF_ERR_NO_ERROR) {

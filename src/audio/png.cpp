@@ -86,11 +86,11 @@ std::string encodePngRgb(int width, int height, const std::vector<uint8_t>& rgb)
   std::string ihdr;
   putBigEndian32(ihdr, static_cast<uint32_t>(width));
   putBigEndian32(ihdr, static_cast<uint32_t>(height));
-  ihdr.push_back(8);     // bit depth
-  ihdr.push_back(2);     // colour type: truecolour RGB
-  ihdr.push_back(0);     // compression: deflate
-  ihdr.push_back(0);     // filter method 0
-  ihdr.push_back(0);     // no interlace
+  ihdr.push_back(8);  // bit depth
+  ihdr.push_back(2);  // colour type: truecolour RGB
+  ihdr.push_back(0);  // compression: deflate
+  ihdr.push_back(0);  // filter method 0
+  ihdr.push_back(0);  // no interlace
   putChunk(png, "IHDR", ihdr);
   putChunk(png, "IDAT", zlib);
   putChunk(png, "IEND", std::string());

@@ -11,14 +11,13 @@
 #include <limits>
 #include <mutex>
 
-#include "strike/atomic_file.hpp"
 #include "fftw_lock.hpp"
+#include "strike/atomic_file.hpp"
 #include "strike/audio.hpp"
 #include "strike/constants.hpp"
 
 namespace strike {
 namespace {
-
 
 using Rgb = std::array<uint8_t, 3>;
 
@@ -34,15 +33,16 @@ Rgb magma(double v) {
   const double f = x - i;
   Rgb rgb{};
   for (int c = 0; c < 3; ++c)
-    rgb[static_cast<size_t>(c)] = static_cast<uint8_t>(std::lround(255.0 * ((1.0 - f) * kStops[i][c] + f * kStops[i + 1][c])));
+    rgb[static_cast<size_t>(c)] =
+        static_cast<uint8_t>(std::lround(255.0 * ((1.0 - f) * kStops[i][c] + f * kStops[i + 1][c])));
   return rgb;
 }
 
 /// 3x5 pixel glyphs for tick labels; each row is 3 bits, most significant bit on the left.
 const std::array<uint8_t, 5>* glyph(char c) {
-  static const std::array<uint8_t, 5> kDigits[10] = {
-      {7, 5, 5, 5, 7}, {2, 6, 2, 2, 7}, {7, 1, 7, 4, 7}, {7, 1, 7, 1, 7}, {5, 5, 7, 1, 1},
-      {7, 4, 7, 1, 7}, {7, 4, 7, 5, 7}, {7, 1, 1, 1, 1}, {7, 5, 7, 5, 7}, {7, 5, 7, 1, 7}};
+  static const std::array<uint8_t, 5> kDigits[10] = {{7, 5, 5, 5, 7}, {2, 6, 2, 2, 7}, {7, 1, 7, 4, 7}, {7, 1, 7, 1, 7},
+                                                     {5, 5, 7, 1, 1}, {7, 4, 7, 1, 7}, {7, 4, 7, 5, 7}, {7, 1, 1, 1, 1},
+                                                     {7, 5, 7, 5, 7}, {7, 5, 7, 1, 7}};
   static const std::array<uint8_t, 5> kDot = {0, 0, 0, 0, 2};
   static const std::array<uint8_t, 5> kK = {4, 5, 6, 5, 5};
   if (c >= '0' && c <= '9') return &kDigits[c - '0'];
@@ -243,8 +243,8 @@ Status writeSpectrogramPng(const std::string& path, const AudioBuffer& audio, co
       for (int dx = 1; dx <= 3; ++dx) image.set(left - dx, y, ink);
       if (last_label_y - y < 5 * kGlyphScale + 4 || f == 0.0) continue;
       const std::string text = tickLabel(f, true);
-      drawText(image, left - 5 - textWidth(text), std::clamp(y - 5 * kGlyphScale / 2, 0, image.height - 5 * kGlyphScale), text,
-               ink);
+      drawText(image, left - 5 - textWidth(text),
+               std::clamp(y - 5 * kGlyphScale / 2, 0, image.height - 5 * kGlyphScale), text, ink);
       last_label_y = y;
     }
     if (duration_s > 0.0) {
@@ -253,7 +253,8 @@ Status writeSpectrogramPng(const std::string& path, const AudioBuffer& audio, co
         const int x = left + static_cast<int>(std::lround(t / duration_s * (plot_w - 1)));
         for (int dy = 0; dy < 3; ++dy) image.set(x, top + plot_h + dy, ink);
         const std::string text = tickLabel(t, false);
-        drawText(image, std::clamp(x - textWidth(text) / 2, 0, image.width - textWidth(text)), top + plot_h + 5, text, ink);
+        drawText(image, std::clamp(x - textWidth(text) / 2, 0, image.width - textWidth(text)), top + plot_h + 5, text,
+                 ink);
       }
     }
   }

@@ -286,7 +286,9 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank, ShapeEncoding encoding) {
     }
     for (size_t k = 0; k < row.size(); ++k) {
       const float s_m = scale[k / 3];
-      quantized[k] = s_m > 0 ? static_cast<int16_t>(std::clamp<long>(std::lround(double(row[k]) / double(s_m)), -32767, 32767)) : 0;
+      quantized[k] =
+          s_m > 0 ? static_cast<int16_t>(std::clamp<long>(std::lround(double(row[k]) / double(s_m)), -32767, 32767))
+                  : 0;
     }
     w.putArray(quantized);
   }
@@ -335,8 +337,8 @@ struct BankFile::Source {
   uint64_t size = 0;              ///< of the whole file
   const uint8_t* data = nullptr;  ///< its first `resident` bytes
   uint64_t resident = 0;
-  std::string buffer;             ///< owns `data` when read from a file
-  int fd = -1;                    ///< open while bytes after `resident` may be asked for
+  std::string buffer;  ///< owns `data` when read from a file
+  int fd = -1;         ///< open while bytes after `resident` may be asked for
   Source() = default;
   Source(const Source&) = delete;
   Source& operator=(const Source&) = delete;
@@ -384,13 +386,15 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
                     "); recompute it with `strike modes` or update strike");
   const uint32_t expected_header = bank.format_version >= 3 ? kHeaderSizeV3 : kHeaderSize;
   if (header_size != expected_header)
-    return corrupt(source, "header size " + std::to_string(header_size) + ", expected " + std::to_string(expected_header));
+    return corrupt(source,
+                   "header size " + std::to_string(header_size) + ", expected " + std::to_string(expected_header));
   if (src.resident < header_size)
-    return corrupt(source, "file is " + std::to_string(size) + " bytes, shorter than the " + std::to_string(header_size) +
-                               "-byte header (truncated)");
+    return corrupt(source, "file is " + std::to_string(size) + " bytes, shorter than the " +
+                               std::to_string(header_size) + "-byte header (truncated)");
   if (payload_size != size - header_size)
     return corrupt(source, "header says " + std::to_string(payload_size) + " payload bytes, file has " +
-                               std::to_string(size - header_size) + (payload_size > size - header_size ? " (truncated)" : ""));
+                               std::to_string(size - header_size) +
+                               (payload_size > size - header_size ? " (truncated)" : ""));
   const uint64_t head_size = bank.format_version >= 3 ? header.get<uint64_t>() : payload_size;
   if (head_size > payload_size)
     return corrupt(source, "header says the checked head is " + std::to_string(head_size) + " bytes, the payload has " +
@@ -462,14 +466,17 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
       if (vertex_major) {
         file.vertices_per_block_ = r.get<uint32_t>();
         r.get<uint32_t>();  // reserved
-        if (!r.failed() && file.vertices_per_block_ == 0) return corrupt(source, "'" + tag + "' has 0 vertices per block");
-        if (file.vertices_per_block_ > 0) blocks = (uint64_t(mode_vertices) + file.vertices_per_block_ - 1) / file.vertices_per_block_;
+        if (!r.failed() && file.vertices_per_block_ == 0)
+          return corrupt(source, "'" + tag + "' has 0 vertices per block");
+        if (file.vertices_per_block_ > 0)
+          blocks = (uint64_t(mode_vertices) + file.vertices_per_block_ - 1) / file.vertices_per_block_;
       }
       r.getArray(bank.eigenvalues, modes);
       if (int16) {
         r.getArray(file.shape_scale_, modes);
         for (float scale : file.shape_scale_)
-          if (!r.failed() && !(std::isfinite(scale) && scale >= 0.0f)) return corrupt(source, "a shape scale of 'MODQ' is not finite and >= 0");
+          if (!r.failed() && !(std::isfinite(scale) && scale >= 0.0f))
+            return corrupt(source, "a shape scale of 'MODQ' is not finite and >= 0");
       }
       file.int16_shapes_ = int16;
       if (vertex_major) r.getArray(file.block_checksums_, blocks);
@@ -511,7 +518,10 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
   }
   if (!seen_modes || !seen_surface)
     return corrupt(source, std::string("missing the ") +
-                               (seen_modes ? "SURF" : bank.format_version >= 4 ? "MODQ" : bank.format_version == 3 ? "MODV" : "MODE") +
+                               (seen_modes                 ? "SURF"
+                                : bank.format_version >= 4 ? "MODQ"
+                                : bank.format_version == 3 ? "MODV"
+                                                           : "MODE") +
                                " chunk");
   if (mode_vertices != surface_vertices)
     return corrupt(source, "modes are sampled on " + std::to_string(mode_vertices) + " vertices, the surface has " +
@@ -548,8 +558,8 @@ Status BankFile::verifyBlock(size_t block, const uint8_t* bytes, size_t size) co
   if (shapeBlockChecksum(bytes, size, block) == block_checksums_[block]) return {};
   const size_t first = block * vertices_per_block_;
   const size_t last = std::min<size_t>(first + vertices_per_block_, bank_.surfaceVertexCount()) - 1;
-  return corrupt(source_->name, "checksum mismatch in the shapes of surface vertices " + std::to_string(first) + " to " +
-                                    std::to_string(last) + " (the file is damaged)");
+  return corrupt(source_->name, "checksum mismatch in the shapes of surface vertices " + std::to_string(first) +
+                                    " to " + std::to_string(last) + " (the file is damaged)");
 }
 
 Result<ShapeRows> BankFile::readShapeRows(std::vector<uint32_t> vertices) const {
@@ -614,9 +624,11 @@ Result<ModeBank> BankFile::readAll() const {
     std::vector<float> row(modes * 3);
     for (size_t v = 0; v < nv; ++v) {
       decodeRows(bytes.data() + v * row_bytes, 1, row.data());
-      for (size_t m = 0; m < modes; ++m) std::memcpy(bank.shapes.data() + (m * nv + v) * 3, &row[m * 3], 3 * sizeof(float));
+      for (size_t m = 0; m < modes; ++m)
+        std::memcpy(bank.shapes.data() + (m * nv + v) * 3, &row[m * 3], 3 * sizeof(float));
     }
-  } else if (!source_->read(shapes_offset_, bank.shapes.size() * sizeof(float), reinterpret_cast<uint8_t*>(bank.shapes.data()))) {
+  } else if (!source_->read(shapes_offset_, bank.shapes.size() * sizeof(float),
+                            reinterpret_cast<uint8_t*>(bank.shapes.data()))) {
     return corrupt(source_->name, "the file ended inside its mode shapes");
   }
   const std::string problem = bank.checkConsistency();

@@ -24,8 +24,8 @@ std::string ModeBank::checkConsistency(bool shapes_loaded) const {
   if (surface_positions.size() % 3 != 0) return "surface positions are not a multiple of 3";
   if (!shapes_loaded && !shapes.empty()) return "mode shapes are loaded where none were expected";
   if (shapes_loaded && shapes.size() != modes * vertices * 3)
-    return "mode shapes hold " + std::to_string(shapes.size()) + " values, expected " +
-           std::to_string(modes) + " modes x " + std::to_string(vertices) + " vertices x 3";
+    return "mode shapes hold " + std::to_string(shapes.size()) + " values, expected " + std::to_string(modes) +
+           " modes x " + std::to_string(vertices) + " vertices x 3";
   if (!surface_normals.empty() && surface_normals.size() != vertices * 3)
     return "surface normals hold " + std::to_string(surface_normals.size()) + " values, expected " +
            std::to_string(vertices * 3);
@@ -38,10 +38,11 @@ std::string ModeBank::checkConsistency(bool shapes_loaded) const {
       return "surface triangle " + std::to_string(t / 3) + " references vertex " +
              std::to_string(surface_triangles[t]) + ", the surface has " + std::to_string(vertices);
   if (!frequency_error_estimate.empty() && frequency_error_estimate.size() != modes)
-    return "frequency error estimates hold " + std::to_string(frequency_error_estimate.size()) +
-           " values, expected " + std::to_string(modes);
+    return "frequency error estimates hold " + std::to_string(frequency_error_estimate.size()) + " values, expected " +
+           std::to_string(modes);
   if (!radiation_m2.empty() && radiation_m2.size() != modes)
-    return "radiation strengths hold " + std::to_string(radiation_m2.size()) + " values, expected " + std::to_string(modes);
+    return "radiation strengths hold " + std::to_string(radiation_m2.size()) + " values, expected " +
+           std::to_string(modes);
   for (double v : radiation_m2)
     if (!std::isfinite(v) || v < 0) return "a radiation strength is negative or not finite";
   for (size_t i = 0; i < modes; ++i) {

@@ -44,11 +44,11 @@ struct StepRecord {
   enum class Kind : uint32_t { Begin, State, Contact, End } kind;
   strike_object_id object;
   strike_object_id partner;
-  int32_t flag;        ///< State: asleep; Contact: frame
-  double a[3];         ///< State: position; Contact: point
-  double b[4];         ///< State: orientation; Contact: impulse (3)
-  double time_s;       ///< Begin: end of the step; Contact: time
-  double value;        ///< Begin: step length; Contact: normal speed
+  int32_t flag;             ///< State: asleep; Contact: frame
+  double a[3];              ///< State: position; Contact: point
+  double b[4];              ///< State: orientation; Contact: impulse (3)
+  double time_s;            ///< Begin: end of the step; Contact: time
+  double value;             ///< Begin: step length; Contact: normal speed
   double partner_props[4];  ///< Contact: youngs, poisson, radius, mass
 };
 

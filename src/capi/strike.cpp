@@ -75,7 +75,8 @@ std::string rejectedField(const strike_context_config& c) {
     return say("max_pending_impacts_per_object = %u (must be 1 .. 4096)", c.max_pending_impacts_per_object);
   if (!(c.max_contact_duration_s >= 0.0 && c.max_contact_duration_s <= 1.0))
     return say("max_contact_duration_s = %g (must be 0 .. 1)", c.max_contact_duration_s);
-  if (!(c.min_freq_hz >= 0.0) || !std::isfinite(c.min_freq_hz)) return say("min_freq_hz = %g (must be >= 0)", c.min_freq_hz);
+  if (!(c.min_freq_hz >= 0.0) || !std::isfinite(c.min_freq_hz))
+    return say("min_freq_hz = %g (must be >= 0)", c.min_freq_hz);
   if (!(c.max_freq_hz > c.min_freq_hz) || !std::isfinite(c.max_freq_hz))
     return say("max_freq_hz = %g (must be finite and above min_freq_hz)", c.max_freq_hz);
   if (!(c.audibility_threshold >= 0.0) || !std::isfinite(c.audibility_threshold))
@@ -89,7 +90,8 @@ std::string rejectedField(const strike_context_config& c) {
   if (!(c.contact_damping_per_s >= 0.0) || !std::isfinite(c.contact_damping_per_s))
     return say("contact_damping_per_s = %g (must be finite and >= 0)", c.contact_damping_per_s);
   if ((c.alloc == nullptr) != (c.free == nullptr))
-    return say("%s", c.alloc ? "alloc is set but free is NULL (set both or neither)" : "free is set but alloc is NULL (set both or neither)");
+    return say("%s", c.alloc ? "alloc is set but free is NULL (set both or neither)"
+                             : "free is set but alloc is NULL (set both or neither)");
   return {};
 }
 
@@ -100,7 +102,8 @@ void logRejected(const strike_context_config& c, const std::string& why) {
 }
 
 // Main-thread error: kept as last_error and sent to the log callback.
-strike_status fail(strike_context ctx, strike_status status, const char* fmt, ...) __attribute__((format(printf, 3, 4)));
+strike_status fail(strike_context ctx, strike_status status, const char* fmt, ...)
+    __attribute__((format(printf, 3, 4)));
 strike_status fail(strike_context ctx, strike_status status, const char* fmt, ...) {
   if (!ctx) return status;
   va_list args;
@@ -165,7 +168,8 @@ strike_status loadBank(strike_context ctx, const uint8_t* bytes, size_t size, co
   Result<ModeBank> decoded = decodeBank(bytes, size, source);
   if (!decoded) return fail(ctx, STRIKE_ERR_PARSE, "%s", decoded.error().message.c_str());
   const std::string problem = decoded->checkConsistency();
-  if (!problem.empty()) return fail(ctx, STRIKE_ERR_PARSE, "%s: inconsistent mode bank: %s", source.c_str(), problem.c_str());
+  if (!problem.empty())
+    return fail(ctx, STRIKE_ERR_PARSE, "%s: inconsistent mode bank: %s", source.c_str(), problem.c_str());
   auto loaded = std::make_shared<LoadedBank>();
   loaded->bank = std::move(decoded.value());
   loaded->pressure_weights = radiationWeights(loaded->bank, ctx->config.reference_distance_m);
@@ -242,9 +246,10 @@ STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_
   if ((caller >> 16) != STRIKE_VERSION_MAJOR || caller_minor > STRIKE_VERSION_MINOR ||
       (STRIKE_VERSION_MAJOR == 0 && caller_minor != STRIKE_VERSION_MINOR)) {
     char why[160];
-    std::snprintf(why, sizeof why, "api_version = %u.%u.%u (this library is %d.%d.%d: %s)", caller >> 16, caller_minor,
-                  caller & 0xffu, STRIKE_VERSION_MAJOR, STRIKE_VERSION_MINOR, STRIKE_VERSION_PATCH,
-                  STRIKE_VERSION_MAJOR == 0 ? "before 1.0 the minor versions must match" : "the major versions must match");
+    std::snprintf(
+        why, sizeof why, "api_version = %u.%u.%u (this library is %d.%d.%d: %s)", caller >> 16, caller_minor,
+        caller & 0xffu, STRIKE_VERSION_MAJOR, STRIKE_VERSION_MINOR, STRIKE_VERSION_PATCH,
+        STRIKE_VERSION_MAJOR == 0 ? "before 1.0 the minor versions must match" : "the major versions must match");
     logRejected(*config, why);
     return STRIKE_ERR_VERSION;
   }
@@ -464,8 +469,10 @@ STRIKE_API strike_status STRIKE_CALL strike_bank_get_info(strike_bank bank, stri
     const double* p0 = &b.surface_positions[3 * i0];
     const double* p1 = &b.surface_positions[3 * i1];
     const double* p2 = &b.surface_positions[3 * i2];
-    const double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-    const double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2], cz = e1[0] * e2[1] - e1[1] * e2[0];
+    const double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]},
+                 e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    const double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2],
+                 cz = e1[0] * e2[1] - e1[1] * e2[0];
     info.surface_area_m2 += 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
   }
   info.equal_volume_radius_m = b.volume_m3 > 0.0 ? std::cbrt(3.0 * b.volume_m3 / (4.0 * M_PI)) : 0.0;
@@ -485,13 +492,14 @@ STRIKE_API strike_status STRIKE_CALL strike_bank_mode_frequency(strike_bank bank
   return STRIKE_OK;
 }
 
-STRIKE_API strike_status STRIKE_CALL strike_bank_surface_vertex(strike_bank bank, uint32_t vertex, double out_position[3],
-                                                                double out_normal[3]) {
+STRIKE_API strike_status STRIKE_CALL strike_bank_surface_vertex(strike_bank bank, uint32_t vertex,
+                                                                double out_position[3], double out_normal[3]) {
   if (!bank || vertex >= bank->data->bank.surfaceVertexCount()) return STRIKE_ERR_INVALID_ARG;
   const ModeBank& b = bank->data->bank;
   for (int k = 0; k < 3; ++k) {
     if (out_position) out_position[k] = b.surface_positions[3 * vertex + k];
-    if (out_normal) out_normal[k] = b.surface_normals.size() == b.surface_positions.size() ? b.surface_normals[3 * vertex + k] : 0.0;
+    if (out_normal)
+      out_normal[k] = b.surface_normals.size() == b.surface_positions.size() ? b.surface_normals[3 * vertex + k] : 0.0;
   }
   return STRIKE_OK;
 }
@@ -511,7 +519,8 @@ STRIKE_API strike_status STRIKE_CALL strike_object_add(strike_context ctx, const
   if (!ctx) return STRIKE_ERR_INVALID_ARG;
   if (!config || !out) return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: config and out must not be NULL");
   if (config->internal_cookie != kObjectCookie)
-    return fail(ctx, STRIKE_ERR_NOT_INITIALIZED, "strike_object_add: config did not come from strike_object_config_default()");
+    return fail(ctx, STRIKE_ERR_NOT_INITIALIZED,
+                "strike_object_add: config did not come from strike_object_config_default()");
   return guarded(ctx, "strike_object_add", [&]() -> strike_status {
     collect(ctx);
     const strike_object_config& c = *config;
@@ -519,13 +528,17 @@ STRIKE_API strike_status STRIKE_CALL strike_object_add(strike_context ctx, const
       return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: bank is NULL or from another context");
     Pose pose;
     if (!poseFrom(c.position, c.orientation, pose))
-      return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: position/orientation not finite, or orientation is a zero quaternion");
+      return fail(ctx, STRIKE_ERR_INVALID_ARG,
+                  "strike_object_add: position/orientation not finite, or orientation is a zero quaternion");
     if (!(c.gain >= 0.0f) || !std::isfinite(c.gain))
-      return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: gain = %g (must be finite and >= 0)", static_cast<double>(c.gain));
+      return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: gain = %g (must be finite and >= 0)",
+                  static_cast<double>(c.gain));
     if (c.radiation != STRIKE_RADIATION_PRESSURE && c.radiation != STRIKE_RADIATION_UNIT)
-      return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: radiation = %d (must be STRIKE_RADIATION_PRESSURE or _UNIT)", c.radiation);
+      return fail(ctx, STRIKE_ERR_INVALID_ARG,
+                  "strike_object_add: radiation = %d (must be STRIKE_RADIATION_PRESSURE or _UNIT)", c.radiation);
     if (!(c.contact_radius_m >= 0.0) || !std::isfinite(c.contact_radius_m))
-      return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: contact_radius_m = %g (must be >= 0)", c.contact_radius_m);
+      return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: contact_radius_m = %g (must be >= 0)",
+                  c.contact_radius_m);
     uint32_t index = ctx->max_objects;
     for (uint32_t i = 0; i < ctx->max_objects; ++i)
       if (!ctx->main_slots[i].used) {
@@ -577,14 +590,17 @@ STRIKE_API strike_status STRIKE_CALL strike_object_remove(strike_context ctx, st
   return guarded(ctx, "strike_object_remove", [&]() -> strike_status {
     collect(ctx);
     MainSlot* slot = liveSlot(ctx, id);
-    if (!slot) return fail(ctx, STRIKE_ERR_STALE_ID, "strike_object_remove: object {%u, %u} is not alive", id.index, id.generation);
+    if (!slot)
+      return fail(ctx, STRIKE_ERR_STALE_ID, "strike_object_remove: object {%u, %u} is not alive", id.index,
+                  id.generation);
     Command cmd{};
     cmd.type = CommandType::Remove;
     cmd.index = id.index;
     cmd.generation = id.generation;
     ctx->retired.reserve(ctx->retired.size() + 1);  // before the point of no return
     if (!sendCommand(ctx, cmd))
-      return fail(ctx, STRIKE_ERR_QUEUE_FULL, "strike_object_remove: command queue full (is the audio thread rendering?)");
+      return fail(ctx, STRIKE_ERR_QUEUE_FULL,
+                  "strike_object_remove: command queue full (is the audio thread rendering?)");
     ctx->retired.push_back(Retired{slot->voice, ctx->commands_sent});
     ctx->live_generation[id.index].store(0, std::memory_order_release);
     slot->used = false;
@@ -599,12 +615,14 @@ STRIKE_API int32_t STRIKE_CALL strike_object_is_valid(strike_context ctx, strike
   return ctx->live_generation[id.index].load(std::memory_order_acquire) == id.generation ? 1 : 0;
 }
 
-STRIKE_API strike_status STRIKE_CALL strike_object_set_pose(strike_context ctx, strike_object_id id, const double position[3],
-                                                            const double orientation[4]) {
+STRIKE_API strike_status STRIKE_CALL strike_object_set_pose(strike_context ctx, strike_object_id id,
+                                                            const double position[3], const double orientation[4]) {
   if (!ctx) return STRIKE_ERR_INVALID_ARG;
   return guarded(ctx, "strike_object_set_pose", [&]() -> strike_status {
     collect(ctx);
-    if (!liveSlot(ctx, id)) return fail(ctx, STRIKE_ERR_STALE_ID, "strike_object_set_pose: object {%u, %u} is not alive", id.index, id.generation);
+    if (!liveSlot(ctx, id))
+      return fail(ctx, STRIKE_ERR_STALE_ID, "strike_object_set_pose: object {%u, %u} is not alive", id.index,
+                  id.generation);
     Command cmd{};
     cmd.type = CommandType::SetPose;
     cmd.index = id.index;
@@ -620,9 +638,12 @@ STRIKE_API strike_status STRIKE_CALL strike_object_set_gain(strike_context ctx, 
   if (!ctx) return STRIKE_ERR_INVALID_ARG;
   return guarded(ctx, "strike_object_set_gain", [&]() -> strike_status {
     collect(ctx);
-    if (!liveSlot(ctx, id)) return fail(ctx, STRIKE_ERR_STALE_ID, "strike_object_set_gain: object {%u, %u} is not alive", id.index, id.generation);
+    if (!liveSlot(ctx, id))
+      return fail(ctx, STRIKE_ERR_STALE_ID, "strike_object_set_gain: object {%u, %u} is not alive", id.index,
+                  id.generation);
     if (!(gain >= 0.0f) || !std::isfinite(gain))
-      return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_set_gain: gain = %g (must be finite and >= 0)", static_cast<double>(gain));
+      return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_set_gain: gain = %g (must be finite and >= 0)",
+                  static_cast<double>(gain));
     Command cmd{};
     cmd.type = CommandType::SetGain;
     cmd.index = id.index;

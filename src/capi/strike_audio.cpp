@@ -40,9 +40,7 @@ void applyCommand(strike_context ctx, const Command& c) {
     case CommandType::SetGain:
       if (slot.voice && slot.generation == c.generation) engine.setGain(c.index, c.gain);
       break;
-    case CommandType::SetListener:
-      engine.setListener(c.pose);
-      break;
+    case CommandType::SetListener: engine.setListener(c.pose); break;
     case CommandType::Reset: {
       engine.reset();
       // Only what was queued before strike_context_reset(): steps and impacts reported after it
@@ -84,9 +82,7 @@ void applyImpact(strike_context ctx, const strike_impact_desc& d) {
 void applyStepRecord(strike_context ctx, const StepRecord& r) {
   SoundEngine& engine = *ctx->engine;
   switch (r.kind) {
-    case StepRecord::Kind::Begin:
-      engine.beginStep(r.time_s, r.value);
-      break;
+    case StepRecord::Kind::Begin: engine.beginStep(r.time_s, r.value); break;
     case StepRecord::Kind::State: {
       const uint32_t slot = audioSlot(ctx, r.object);
       Pose pose;
@@ -132,7 +128,8 @@ void publishStats(strike_context ctx) {
   k.sustained.store(s.sustained_contacts, std::memory_order_relaxed);
   k.load_changes.store(s.load_changes, std::memory_order_relaxed);
   k.load_holds.store(s.load_holds, std::memory_order_relaxed);
-  k.active_modes.store(static_cast<uint32_t>(std::min<uint64_t>(s.active_modes, UINT32_MAX)), std::memory_order_relaxed);
+  k.active_modes.store(static_cast<uint32_t>(std::min<uint64_t>(s.active_modes, UINT32_MAX)),
+                       std::memory_order_relaxed);
   k.clock_frames.store(static_cast<uint64_t>(std::llround(ctx->engine->time() * ctx->config.sample_rate_hz)),
                        std::memory_order_relaxed);
 }
@@ -163,8 +160,8 @@ STRIKE_API strike_status STRIKE_CALL strike_impact(strike_context ctx, const str
   if (!ctx || !impact) return STRIKE_ERR_INVALID_ARG;
   const strike_impact_desc& d = *impact;
   if (!finite3(d.point) || !finite3(d.impulse) || !std::isfinite(d.normal_speed_m_s) ||
-      !std::isfinite(d.contact_duration_s) || !std::isfinite(d.striker_radius_m) || !std::isfinite(d.striker_youngs_pa) ||
-      !std::isfinite(d.striker_poisson) || !std::isfinite(d.striker_mass_kg) ||
+      !std::isfinite(d.contact_duration_s) || !std::isfinite(d.striker_radius_m) ||
+      !std::isfinite(d.striker_youngs_pa) || !std::isfinite(d.striker_poisson) || !std::isfinite(d.striker_mass_kg) ||
       (d.frame != STRIKE_FRAME_OBJECT && d.frame != STRIKE_FRAME_WORLD) ||
       (d.pulse != STRIKE_PULSE_HALF_SINE && d.pulse != STRIKE_PULSE_BOX) || d.surface_vertex < -1)
     return STRIKE_ERR_INVALID_ARG;
@@ -202,18 +199,22 @@ STRIKE_API strike_status STRIKE_CALL strike_step(strike_context ctx, const strik
   const strike_step_desc& d = *step;
   // 0.3 is the first layout: a newer caller's larger elements are read by their stride.
   if (d.struct_size < sizeof(strike_step_desc) || d.state_size < sizeof(strike_body_state) ||
-      d.contact_size < sizeof(strike_contact) || (d.state_count > 0 && !d.states) || (d.contact_count > 0 && !d.contacts) ||
-      !std::isfinite(d.end_time_s) || !(d.duration_s > 0.0) || !std::isfinite(d.duration_s))
+      d.contact_size < sizeof(strike_contact) || (d.state_count > 0 && !d.states) ||
+      (d.contact_count > 0 && !d.contacts) || !std::isfinite(d.end_time_s) || !(d.duration_s > 0.0) ||
+      !std::isfinite(d.duration_s))
     return STRIKE_ERR_INVALID_ARG;
   auto stateAt = [&](uint32_t i) {
-    return reinterpret_cast<const strike_body_state*>(reinterpret_cast<const char*>(d.states) + size_t(i) * d.state_size);
+    return reinterpret_cast<const strike_body_state*>(reinterpret_cast<const char*>(d.states) +
+                                                      size_t(i) * d.state_size);
   };
   auto contactAt = [&](uint32_t i) {
-    return reinterpret_cast<const strike_contact*>(reinterpret_cast<const char*>(d.contacts) + size_t(i) * d.contact_size);
+    return reinterpret_cast<const strike_contact*>(reinterpret_cast<const char*>(d.contacts) +
+                                                   size_t(i) * d.contact_size);
   };
   for (uint32_t i = 0; i < d.state_count; ++i) {
     const strike_body_state& s = *stateAt(i);
-    if (!finite3(s.position) || !finite3(s.orientation + 1) || !std::isfinite(s.orientation[0])) return STRIKE_ERR_INVALID_ARG;
+    if (!finite3(s.position) || !finite3(s.orientation + 1) || !std::isfinite(s.orientation[0]))
+      return STRIKE_ERR_INVALID_ARG;
   }
   for (uint32_t i = 0; i < d.contact_count; ++i) {
     const strike_contact& c = *contactAt(i);
@@ -270,7 +271,8 @@ STRIKE_API strike_status STRIKE_CALL strike_step(strike_context ctx, const strik
   return STRIKE_OK;
 }
 
-STRIKE_API strike_status STRIKE_CALL strike_render(strike_context ctx, float* const* out, uint32_t channels, uint32_t frames) {
+STRIKE_API strike_status STRIKE_CALL strike_render(strike_context ctx, float* const* out, uint32_t channels,
+                                                   uint32_t frames) {
   if (!ctx || !out) return STRIKE_ERR_INVALID_ARG;
   if (channels != ctx->config.channels) return STRIKE_ERR_INVALID_ARG;
   for (uint32_t c = 0; c < channels; ++c)

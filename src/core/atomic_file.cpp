@@ -14,8 +14,7 @@ namespace strike {
 
 std::string temporaryPathFor(const std::string& path) {
   static std::atomic<unsigned> counter{0};  // distinct names for several writes in one process
-  return path + ".tmp-" + std::to_string(static_cast<long>(getpid())) + "-" +
-         std::to_string(counter.fetch_add(1));
+  return path + ".tmp-" + std::to_string(static_cast<long>(getpid())) + "-" + std::to_string(counter.fetch_add(1));
 }
 
 Status writeFileAtomically(const std::string& path, const void* data, size_t size) {

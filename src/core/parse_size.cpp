@@ -17,11 +17,16 @@ Result<uint64_t> parseByteSize(const std::string& text, const std::string& what)
   if (unit.size() > 1 && unit.back() == 'B') unit.pop_back();  // "MB", "GiB" -> "M", "Gi"
   if (unit.size() == 2 && unit[1] == 'I') unit.pop_back();
   double scale = 0;
-  if (unit.empty()) scale = 1;
-  else if (unit == "K") scale = 1024.0;
-  else if (unit == "M") scale = 1024.0 * 1024;
-  else if (unit == "G") scale = 1024.0 * 1024 * 1024;
-  else if (unit == "T") scale = 1024.0 * 1024 * 1024 * 1024;
+  if (unit.empty())
+    scale = 1;
+  else if (unit == "K")
+    scale = 1024.0;
+  else if (unit == "M")
+    scale = 1024.0 * 1024;
+  else if (unit == "G")
+    scale = 1024.0 * 1024 * 1024;
+  else if (unit == "T")
+    scale = 1024.0 * 1024 * 1024 * 1024;
   if (text.empty() || end == text.c_str() || scale == 0 || !std::isfinite(value) || value < 0 || errno == ERANGE ||
       value * scale > 1.8e19)
     return badInput(what + " = '" + text + "' (expected a size such as 500M, 2G or a number of bytes)");
@@ -34,10 +39,14 @@ Result<double> parseAgeSeconds(const std::string& text, const std::string& what)
   const double value = std::strtod(text.c_str(), &end);
   const std::string unit(end ? end : "");
   double scale = 0;
-  if (unit.empty() || unit == "d") scale = 86400;
-  else if (unit == "h") scale = 3600;
-  else if (unit == "m") scale = 60;
-  else if (unit == "s") scale = 1;
+  if (unit.empty() || unit == "d")
+    scale = 86400;
+  else if (unit == "h")
+    scale = 3600;
+  else if (unit == "m")
+    scale = 60;
+  else if (unit == "s")
+    scale = 1;
   if (text.empty() || end == text.c_str() || scale == 0 || !std::isfinite(value) || value < 0 || errno == ERANGE)
     return badInput(what + " = '" + text + "' (expected an age such as 30d, 12h, 90m or 45s)");
   return value * scale;

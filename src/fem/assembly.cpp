@@ -105,8 +105,8 @@ inline int64_t blockOffset(const Pattern& p, int row_node, int col_node) {
 /// Shape function gradients with respect to (xi, eta, zeta) at barycentric point L, and
 /// shape function values. Tet10 corners N_i = L_i (2 L_i - 1), mid-edge N = 4 L_a L_b.
 constexpr int kTet10Edges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}};
-const Eigen::Vector3d kDL[4] = {Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 0, 0),
-                                Eigen::Vector3d(0, 1, 0), Eigen::Vector3d(0, 0, 1)};
+const Eigen::Vector3d kDL[4] = {Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 1, 0),
+                                Eigen::Vector3d(0, 0, 1)};
 
 void tet10Shape(const std::array<double, 4>& L, double N[10], Eigen::Matrix<double, 3, 10>& dN) {
   for (int i = 0; i < 4; ++i) {
@@ -137,8 +137,8 @@ void addStiffness(const Eigen::Matrix<double, 3, Npe>& g, double w, const Lame& 
                   Eigen::Matrix<double, 3 * Npe, 3 * Npe>& Ke) {
   for (int j = 0; j < Npe; ++j) {
     for (int i = 0; i < Npe; ++i) {
-      Eigen::Matrix3d block = (w * lame.lambda) * g.col(i) * g.col(j).transpose() +
-                              (w * lame.mu) * g.col(j) * g.col(i).transpose();
+      Eigen::Matrix3d block =
+          (w * lame.lambda) * g.col(i) * g.col(j).transpose() + (w * lame.mu) * g.col(j) * g.col(i).transpose();
       block.diagonal().array() += w * lame.mu * g.col(i).dot(g.col(j));
       Ke.template block<3, 3>(3 * i, 3 * j) += block;
     }
@@ -147,8 +147,7 @@ void addStiffness(const Eigen::Matrix<double, 3, Npe>& g, double w, const Lame& 
 
 /// Element stiffness; returns false for a degenerate or inverted element.
 template <int Npe>
-bool elementStiffness(const TetMesh& mesh, int64_t t, const Lame& lame,
-                      Eigen::Matrix<double, 3 * Npe, 3 * Npe>& Ke) {
+bool elementStiffness(const TetMesh& mesh, int64_t t, const Lame& lame, Eigen::Matrix<double, 3 * Npe, 3 * Npe>& Ke) {
   Ke.setZero();
   Eigen::Matrix<double, 3, Npe> x;
   for (int i = 0; i < Npe; ++i) x.col(i) = mesh.nodes.row(mesh.tets(t, i)).transpose();

@@ -59,8 +59,7 @@ Result<TetMesh> makeBox(double lx, double ly, double lz, const MeshOptions& opti
   const int64_t num_nodes = (n[0] + 1) * (n[1] + 1) * (n[2] + 1);
   if (num_nodes > kMaxNodes) {
     std::ostringstream s;
-    s << "box: target edge " << edge_m << " m gives " << num_nodes << " nodes, more than the limit "
-      << kMaxNodes;
+    s << "box: target edge " << edge_m << " m gives " << num_nodes << " nodes, more than the limit " << kMaxNodes;
     return badInput(s.str());
   }
   const int64_t num_tets = 6 * n[0] * n[1] * n[2];
@@ -74,7 +73,9 @@ Result<TetMesh> makeBox(double lx, double ly, double lz, const MeshOptions& opti
   TetMesh mesh;
   mesh.order = 1;
   mesh.nodes.resize(num_nodes, 3);
-  auto node_id = [&](int64_t i, int64_t j, int64_t k) { return static_cast<int>(i + (n[0] + 1) * (j + (n[1] + 1) * k)); };
+  auto node_id = [&](int64_t i, int64_t j, int64_t k) {
+    return static_cast<int>(i + (n[0] + 1) * (j + (n[1] + 1) * k));
+  };
   for (int64_t k = 0; k <= n[2]; ++k) {
     for (int64_t j = 0; j <= n[1]; ++j) {
       for (int64_t i = 0; i <= n[0]; ++i) {

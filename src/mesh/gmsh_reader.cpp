@@ -34,7 +34,8 @@ class GmshParser {
     while (!tok_.atEnd()) {
       const std::string_view section = tok_.next();
       if (section.empty() || section.front() != '$') {
-        return fail("got " + quoteToken(section) + ", expected a section header such as $MeshFormat, $Nodes or $Elements");
+        return fail("got " + quoteToken(section) +
+                    ", expected a section header such as $MeshFormat, $Nodes or $Elements");
       }
       const std::string name(section.substr(1));
       if (name == "MeshFormat") {
@@ -56,7 +57,8 @@ class GmshParser {
     }
     if (!have_format) return badInput(path_ + ": error: no $MeshFormat section, expected a Gmsh .msh file");
     if (tets_.empty()) {
-      return badInput(path_ + ": error: no tetrahedra (element type 4 or 11) found, expected a volume mesh "
+      return badInput(path_ +
+                      ": error: no tetrahedra (element type 4 or 11) found, expected a volume mesh "
                       "(was only the surface meshed? in Gmsh use Mesh > 3D)");
     }
     TetMesh mesh;
@@ -80,7 +82,8 @@ class GmshParser {
   Status readInt(int64_t& value, const char* what, bool same_line) {
     const std::string_view t = same_line ? tok_.nextOnLine() : tok_.next();
     if (t.empty()) return fail(std::string("missing ") + what + (same_line ? " on this line" : " (truncated file?)"));
-    if (!detail::parseInt64(t, value)) return fail(std::string(what) + " is " + quoteToken(t) + ", expected an integer");
+    if (!detail::parseInt64(t, value))
+      return fail(std::string(what) + " is " + quoteToken(t) + ", expected an integer");
     return {};
   }
 
@@ -88,7 +91,8 @@ class GmshParser {
     const std::string_view t = tok_.nextOnLine();
     if (t.empty()) return fail("missing node coordinate, expected x y z");
     if (!detail::parseDouble(t, value)) return fail("node coordinate " + quoteToken(t) + " is not a number");
-    if (!std::isfinite(value)) return fail("node coordinate is " + formatNumber(value, 17) + ", expected a finite number");
+    if (!std::isfinite(value))
+      return fail("node coordinate is " + formatNumber(value, 17) + ", expected a finite number");
     return {};
   }
 
@@ -109,12 +113,14 @@ class GmshParser {
     } else if (v == "4.1") {
       version_ = 4;
     } else {
-      return fail("mesh format version " + quoteToken(v) + ", expected 2.2 or 4.1 (re-export with Gmsh's -format msh22 or msh41)");
+      return fail("mesh format version " + quoteToken(v) +
+                  ", expected 2.2 or 4.1 (re-export with Gmsh's -format msh22 or msh41)");
     }
     int64_t file_type = 0, data_size = 0;
     if (Status s = readInt(file_type, "file type", true); !s) return s;
     if (Status s = readInt(data_size, "data size", true); !s) return s;
-    if (file_type != 0) return fail("file type " + std::to_string(file_type) + " (binary), expected 0 (ASCII); save the mesh as ASCII");
+    if (file_type != 0)
+      return fail("file type " + std::to_string(file_type) + " (binary), expected 0 (ASCII); save the mesh as ASCII");
     return {};
   }
 
@@ -185,10 +191,13 @@ class GmshParser {
       }
       for (int64_t tag : tags) {
         double xyz[3];
-        if (tok_.atEnd()) return fail("end of file in the coordinates of node " + std::to_string(tag) + " (truncated file)");
+        if (tok_.atEnd())
+          return fail("end of file in the coordinates of node " + std::to_string(tag) + " (truncated file)");
         const std::string_view first = tok_.next();
-        if (!detail::parseDouble(first, xyz[0])) return fail("node coordinate " + quoteToken(first) + " is not a number");
-        if (!std::isfinite(xyz[0])) return fail("node coordinate is " + formatNumber(xyz[0], 17) + ", expected a finite number");
+        if (!detail::parseDouble(first, xyz[0]))
+          return fail("node coordinate " + quoteToken(first) + " is not a number");
+        if (!std::isfinite(xyz[0]))
+          return fail("node coordinate is " + formatNumber(xyz[0], 17) + ", expected a finite number");
         for (int c = 1; c < 3; ++c) {
           if (Status s = readCoord(xyz[c]); !s) return s;
         }
@@ -197,7 +206,8 @@ class GmshParser {
       }
     }
     if (static_cast<int64_t>(xyz_.size() / 3) != n) {
-      return fail("$Nodes header says " + std::to_string(n) + " nodes, the blocks hold " + std::to_string(xyz_.size() / 3));
+      return fail("$Nodes header says " + std::to_string(n) + " nodes, the blocks hold " +
+                  std::to_string(xyz_.size() / 3));
     }
     return {};
   }
@@ -206,7 +216,8 @@ class GmshParser {
   Status readTet(int64_t element_tag, int nodes_per_tet) {
     if (tet_nodes_ != 0 && tet_nodes_ != nodes_per_tet) {
       return fail("element " + std::to_string(element_tag) + " is a " + (nodes_per_tet == 10 ? "Tet10" : "Tet4") +
-                  " but earlier tets are " + (tet_nodes_ == 10 ? "Tet10" : "Tet4") + ", expected one element order per mesh");
+                  " but earlier tets are " + (tet_nodes_ == 10 ? "Tet10" : "Tet4") +
+                  ", expected one element order per mesh");
     }
     tet_nodes_ = nodes_per_tet;
     for (int k = 0; k < nodes_per_tet; ++k) {
@@ -238,7 +249,8 @@ class GmshParser {
         continue;
       }
       if (Status s = readInt(num_tags, "element tag count", true); !s) return s;
-      if (num_tags < 0 || num_tags > 1000) return fail("element tag count " + std::to_string(num_tags) + ", expected 0..1000");
+      if (num_tags < 0 || num_tags > 1000)
+        return fail("element tag count " + std::to_string(num_tags) + ", expected 0..1000");
       for (int64_t k = 0; k < num_tags; ++k) {
         int64_t ignored = 0;
         if (Status s = readInt(ignored, "element tag", true); !s) return s;

@@ -61,19 +61,21 @@ Result<std::vector<double>> parsePrimitive(const std::string& spec, std::string&
     if (!std::isfinite(v) || !(v > 0.0)) {
       std::ostringstream s;
       s << v;
-      return badInput("primitive \"" + spec + "\": " + names[i] + " = " + s.str() + " (must be a finite length in metres > 0), expected " + form);
+      return badInput("primitive \"" + spec + "\": " + names[i] + " = " + s.str() +
+                      " (must be a finite length in metres > 0), expected " + form);
     }
     values.push_back(v);
   }
   return values;
 }
 
-void keepFileOrder(TetMesh& mesh, const MeshOptions& options, const std::string& path, std::vector<MeshWarning>& warnings) {
+void keepFileOrder(TetMesh& mesh, const MeshOptions& options, const std::string& path,
+                   std::vector<MeshWarning>& warnings) {
   if (mesh.order == 1 && options.order == 2) {
     mesh = promoteToTet10(mesh);
   } else if (mesh.order == 2 && options.order == 1) {
     warnings.push_back({path + ": warning: the file has quadratic (Tet10) elements; keeping order 2 (order 1 was "
-                        "requested, but dropping the mid-edge nodes would discard the file's geometry)"});
+                               "requested, but dropping the mid-edge nodes would discard the file's geometry)"});
   }
 }
 
@@ -99,7 +101,8 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
     const int64_t tets = static_cast<int64_t>(loaded.mesh.tets.rows());
     if (tets > options.max_tets)
       return badInput(spec + ": error: mesh has " + std::to_string(tets) + " tets, more than the cap of " +
-                      std::to_string(options.max_tets) + " (--max-tets); raise it with --max-tets N or use a coarser mesh");
+                      std::to_string(options.max_tets) +
+                      " (--max-tets); raise it with --max-tets N or use a coarser mesh");
     loaded.meshing_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return std::move(loaded);
   };
@@ -129,10 +132,11 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
   namespace fs = std::filesystem;
   const std::string ext = detail::lowerExtension(spec);
   std::error_code ec;
-  const bool is_tetgen = ext == ".node" || ext == ".ele" ||
-                         (ext.empty() && !fs::exists(spec, ec) && fs::exists(spec + ".node", ec));
+  const bool is_tetgen =
+      ext == ".node" || ext == ".ele" || (ext.empty() && !fs::exists(spec, ec) && fs::exists(spec + ".node", ec));
   if (!is_tetgen) {
-    if (!fs::exists(spec, ec)) return badInput(spec + ": error: mesh file not found (and not a primitive such as box:LX,LY,LZ)");
+    if (!fs::exists(spec, ec))
+      return badInput(spec + ": error: mesh file not found (and not a primitive such as box:LX,LY,LZ)");
     if (fs::is_directory(spec, ec)) return badInput(spec + ": error: is a directory, expected a mesh file");
   }
   if (ext == ".obj" || ext == ".stl" || ext == ".ply") {

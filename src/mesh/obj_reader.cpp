@@ -33,7 +33,8 @@ Result<SurfaceMesh> parseObj(const std::string& text, const std::string& path, s
       double xyz[3];
       for (int c = 0; c < 3; ++c) {
         const std::string_view t = tok.nextOnLine();
-        if (t.empty()) return badInput(at(path, line) + "vertex has " + std::to_string(c) + " coordinates, expected 3 (v x y z)");
+        if (t.empty())
+          return badInput(at(path, line) + "vertex has " + std::to_string(c) + " coordinates, expected 3 (v x y z)");
         if (!detail::parseDouble(t, xyz[c])) {
           return badInput(at(path, line) + "vertex coordinate " + quoteToken(t) + " is not a number");
         }
@@ -52,8 +53,8 @@ Result<SurfaceMesh> parseObj(const std::string& text, const std::string& path, s
         const std::string_view index_text = t.substr(0, t.find('/'));
         int64_t index = 0;
         if (!detail::parseInt64(index_text, index) || index == 0) {
-          return badInput(at(path, line) + "face " + std::to_string(num_faces) + " has vertex reference " + quoteToken(t) +
-                          ", expected a non-zero integer (1-based, or negative to count back)");
+          return badInput(at(path, line) + "face " + std::to_string(num_faces) + " has vertex reference " +
+                          quoteToken(t) + ", expected a non-zero integer (1-based, or negative to count back)");
         }
         const int64_t resolved = index > 0 ? index - 1 : nv + index;
         if (resolved < 0 || resolved >= nv) {
@@ -63,17 +64,19 @@ Result<SurfaceMesh> parseObj(const std::string& text, const std::string& path, s
         polygon.push_back(static_cast<int>(resolved));
       }
       if (polygon.size() < 3) {
-        return badInput(at(path, line) + "face " + std::to_string(num_faces) + " has " + std::to_string(polygon.size()) +
-                        " vertices, expected at least 3");
+        return badInput(at(path, line) + "face " + std::to_string(num_faces) + " has " +
+                        std::to_string(polygon.size()) + " vertices, expected at least 3");
       }
       // Fan triangulation keeps the polygon's winding, so orientation is preserved.
-      for (size_t k = 1; k + 1 < polygon.size(); ++k) soup.tri.insert(soup.tri.end(), {polygon[0], polygon[k], polygon[k + 1]});
+      for (size_t k = 1; k + 1 < polygon.size(); ++k)
+        soup.tri.insert(soup.tri.end(), {polygon[0], polygon[k], polygon[k + 1]});
     } else {
       // vt, vn, g, o, s, usemtl, mtllib, l, p, ...: not geometry we need.
       tok.skipLine();
     }
   }
-  if (soup.tri.empty()) return badInput(path + ": error: no faces (f records) found, expected a closed triangle surface");
+  if (soup.tri.empty())
+    return badInput(path + ": error: no faces (f records) found, expected a closed triangle surface");
   return finishSurface(std::move(soup), path, true, warnings);
 }
 

@@ -88,12 +88,42 @@ class BinaryCursor {
     switch (type) {
       case PlyType::Int8: value = static_cast<int8_t>(b[0]); break;
       case PlyType::UInt8: value = b[0]; break;
-      case PlyType::Int16: { int16_t v; std::memcpy(&v, b, 2); value = v; break; }
-      case PlyType::UInt16: { uint16_t v; std::memcpy(&v, b, 2); value = v; break; }
-      case PlyType::Int32: { int32_t v; std::memcpy(&v, b, 4); value = v; break; }
-      case PlyType::UInt32: { uint32_t v; std::memcpy(&v, b, 4); value = v; break; }
-      case PlyType::Float32: { float v; std::memcpy(&v, b, 4); value = v; break; }
-      case PlyType::Float64: { double v; std::memcpy(&v, b, 8); value = v; break; }
+      case PlyType::Int16: {
+        int16_t v;
+        std::memcpy(&v, b, 2);
+        value = v;
+        break;
+      }
+      case PlyType::UInt16: {
+        uint16_t v;
+        std::memcpy(&v, b, 2);
+        value = v;
+        break;
+      }
+      case PlyType::Int32: {
+        int32_t v;
+        std::memcpy(&v, b, 4);
+        value = v;
+        break;
+      }
+      case PlyType::UInt32: {
+        uint32_t v;
+        std::memcpy(&v, b, 4);
+        value = v;
+        break;
+      }
+      case PlyType::Float32: {
+        float v;
+        std::memcpy(&v, b, 4);
+        value = v;
+        break;
+      }
+      case PlyType::Float64: {
+        double v;
+        std::memcpy(&v, b, 8);
+        value = v;
+        break;
+      }
       case PlyType::Invalid: return false;
     }
     return true;
@@ -136,9 +166,12 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
     if (key == "format") {
       std::string f, version;
       ls >> f >> version;
-      if (f == "ascii") format = PlyFormat::Ascii;
-      else if (f == "binary_little_endian") format = PlyFormat::BinaryLe;
-      else if (f == "binary_big_endian") format = PlyFormat::BinaryBe;
+      if (f == "ascii")
+        format = PlyFormat::Ascii;
+      else if (f == "binary_little_endian")
+        format = PlyFormat::BinaryLe;
+      else if (f == "binary_big_endian")
+        format = PlyFormat::BinaryBe;
       else {
         return badInput(at(path, line) + "format " + quoteToken(f) +
                         ", expected ascii, binary_little_endian or binary_big_endian");
@@ -149,7 +182,8 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
       std::string count_text;
       ls >> e.name >> count_text;
       if (e.name.empty() || !detail::parseInt64(count_text, e.count) || e.count < 0) {
-        return badInput(at(path, line) + "element count " + quoteToken(count_text) + ", expected a non-negative integer");
+        return badInput(at(path, line) + "element count " + quoteToken(count_text) +
+                        ", expected a non-negative integer");
       }
       e.header_line = line;
       elements.push_back(std::move(e));
@@ -165,8 +199,8 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
         p.count_type = plyType(count_type);
         p.type = plyType(item_type);
         if (p.count_type == PlyType::Invalid || !plyIsInteger(p.count_type) || p.type == PlyType::Invalid) {
-          return badInput(at(path, line) + "list property types " + quoteToken(count_type) + " " + quoteToken(item_type) +
-                          ", expected an integer count type and a scalar item type");
+          return badInput(at(path, line) + "list property types " + quoteToken(count_type) + " " +
+                          quoteToken(item_type) + ", expected an integer count type and a scalar item type");
         }
       } else {
         p.type = plyType(type_name);
@@ -224,7 +258,8 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
     min_bytes = std::max<size_t>(min_bytes, 1);
     if (static_cast<uint64_t>(e.count) > body_bytes / min_bytes) {
       return badInput(at(path, e.header_line) + "element " + e.name + " count " + std::to_string(e.count) +
-                      " cannot fit in the " + std::to_string(body_bytes) + " bytes after the header (truncated or corrupt file)");
+                      " cannot fit in the " + std::to_string(body_bytes) +
+                      " bytes after the header (truncated or corrupt file)");
     }
   }
 
@@ -289,10 +324,11 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
           double count_value = 0;
           if (Status s = readValue(p.count_type, count_value, e, i); !s) return s.error();
           // Each item takes at least one byte (binary) or two (ASCII): bounded by the file.
-          const double max_items = static_cast<double>(format == PlyFormat::Ascii ? tok.remainingBytes() / 2 + 1
-                                                                                  : cursor.remaining() / plySize(p.type));
+          const double max_items = static_cast<double>(
+              format == PlyFormat::Ascii ? tok.remainingBytes() / 2 + 1 : cursor.remaining() / plySize(p.type));
           if (!(count_value >= 0) || count_value != std::floor(count_value) || count_value > max_items) {
-            return badInput(location() + e.name + " " + std::to_string(i) + " list " + p.name + " has count " + formatNumber(count_value, 17) +
+            return badInput(location() + e.name + " " + std::to_string(i) + " list " + p.name + " has count " +
+                            formatNumber(count_value, 17) +
                             ", expected a non-negative integer that fits in the rest of the file (truncated file?)");
           }
           const int64_t count = static_cast<int64_t>(count_value);
@@ -303,8 +339,9 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
             if (static_cast<int>(k) == index_prop) {
               const int64_t limit = vertices_done ? num_vertices_read : kMaxVertices;
               if (item != std::floor(item) || item < 0 || item >= static_cast<double>(limit)) {
-                return badInput(location() + "face " + std::to_string(i) + " references vertex " + formatNumber(item, 17) + ", the file has " +
-                                std::to_string(vertex_element->count) + " vertices (0-based indices)");
+                return badInput(location() + "face " + std::to_string(i) + " references vertex " +
+                                formatNumber(item, 17) + ", the file has " + std::to_string(vertex_element->count) +
+                                " vertices (0-based indices)");
               }
               polygon.push_back(static_cast<int64_t>(item));
             }
@@ -326,8 +363,8 @@ Result<SurfaceMesh> parsePly(const std::string& bytes, const std::string& path, 
             for (int c = 0; c < 3; ++c) {
               if (static_cast<int>(k) == xyz_prop[c]) {
                 if (!std::isfinite(value)) {
-                  return badInput(location() + "vertex " + std::to_string(i) + " coordinate " + p.name + " is " + formatNumber(value, 17) +
-                                  ", expected a finite number");
+                  return badInput(location() + "vertex " + std::to_string(i) + " coordinate " + p.name + " is " +
+                                  formatNumber(value, 17) + ", expected a finite number");
                 }
                 xyz[c] = value;
               }

@@ -25,8 +25,8 @@ constexpr int kMaxSegments = 20000;
 
 Status checkLength(const char* what, const char* name, double value, bool allow_zero) {
   if (!std::isfinite(value) || value < 0.0 || (!allow_zero && value == 0.0)) {
-    return badInput(std::string(what) + ": " + name + " = " + formatNumber(value, 9) + " (must be a finite length in metres " +
-                    (allow_zero ? ">= 0" : "> 0") + ")");
+    return badInput(std::string(what) + ": " + name + " = " + formatNumber(value, 9) +
+                    " (must be a finite length in metres " + (allow_zero ? ">= 0" : "> 0") + ")");
   }
   return {};
 }
@@ -53,18 +53,19 @@ Result<SurfaceMesh> makeSphereSurface(double radius, double target_edge_m) {
   // Geodesic sphere: each icosahedron face split into k^2 triangles (class I, frequency k),
   // then projected. Any k is allowed, so the edge length can follow the target closely.
   const double phi = (1.0 + std::sqrt(5.0)) / 2.0;
-  const double ico[12][3] = {{-1, phi, 0}, {1, phi, 0}, {-1, -phi, 0}, {1, -phi, 0}, {0, -1, phi}, {0, 1, phi},
-                             {0, -1, -phi}, {0, 1, -phi}, {phi, 0, -1}, {phi, 0, 1}, {-phi, 0, -1}, {-phi, 0, 1}};
-  const int faces[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+  const double ico[12][3] = {{-1, phi, 0},  {1, phi, 0},  {-1, -phi, 0}, {1, -phi, 0}, {0, -1, phi},  {0, 1, phi},
+                             {0, -1, -phi}, {0, 1, -phi}, {phi, 0, -1},  {phi, 0, 1},  {-phi, 0, -1}, {-phi, 0, 1}};
+  const int faces[20][3] = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
                             {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
                             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   const double ico_edge = 2.0 / std::sqrt(phi * phi + 1.0);  // on the unit sphere: 1.0515
-  int k = 7;  // default: 980 triangles, edge ~ r / 6.7
+  int k = 7;                                                 // default: 980 triangles, edge ~ r / 6.7
   if (target_edge_m > 0.0) {
     const double want = std::ceil(ico_edge * radius / target_edge_m);
     if (!(want <= kMaxSubdivision)) {
-      return badInput("sphere: target edge " + formatNumber(target_edge_m, 9) + " m is too small for radius " + formatNumber(radius, 9) +
-                      " m (more than " + std::to_string(20 * kMaxSubdivision * kMaxSubdivision) + " triangles)");
+      return badInput("sphere: target edge " + formatNumber(target_edge_m, 9) + " m is too small for radius " +
+                      formatNumber(radius, 9) + " m (more than " +
+                      std::to_string(20 * kMaxSubdivision * kMaxSubdivision) + " triangles)");
     }
     k = std::max(2, static_cast<int>(want));
   }
@@ -95,12 +96,18 @@ Result<SurfaceMesh> makeSphereSurface(double radius, double target_edge_m) {
     for (int i = 0; i <= k; ++i) {
       for (int j = 0; i + j <= k; ++j) {
         int id;
-        if (i == 0 && j == 0) id = f[0];
-        else if (i == k) id = f[1];
-        else if (j == k) id = f[2];
-        else if (j == 0) id = edgePoint(f[0], f[1], i);
-        else if (i == 0) id = edgePoint(f[0], f[2], j);
-        else if (i + j == k) id = edgePoint(f[1], f[2], j);
+        if (i == 0 && j == 0)
+          id = f[0];
+        else if (i == k)
+          id = f[1];
+        else if (j == k)
+          id = f[2];
+        else if (j == 0)
+          id = edgePoint(f[0], f[1], i);
+        else if (i == 0)
+          id = edgePoint(f[0], f[2], j);
+        else if (i + j == k)
+          id = edgePoint(f[1], f[2], j);
         else {
           const Eigen::Vector3d& p0 = verts[static_cast<size_t>(f[0])];
           const Eigen::Vector3d& p1 = verts[static_cast<size_t>(f[1])];
@@ -123,7 +130,8 @@ Result<SurfaceMesh> makeSphereSurface(double radius, double target_edge_m) {
   mesh.V.resize(static_cast<Eigen::Index>(verts.size()), 3);
   for (size_t i = 0; i < verts.size(); ++i) mesh.V.row(static_cast<Eigen::Index>(i)) = verts[i].transpose();
   mesh.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
-  for (size_t t = 0; t < tris.size(); ++t) mesh.F.row(static_cast<Eigen::Index>(t)) << tris[t][0], tris[t][1], tris[t][2];
+  for (size_t t = 0; t < tris.size(); ++t)
+    mesh.F.row(static_cast<Eigen::Index>(t)) << tris[t][0], tris[t][1], tris[t][2];
   // The icosahedron faces above are counter-clockwise from outside; check rather than trust.
   double volume = signedVolume(mesh.V, mesh.F);
   if (volume < 0) {
@@ -148,7 +156,8 @@ Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double tar
   if (target_edge_m > 0.0) {
     const double want = std::ceil(2.0 * kPi * radius / target_edge_m);
     if (!(want <= kMaxSegments)) {
-      return badInput("cylinder: target edge " + formatNumber(target_edge_m, 9) + " m is too small for radius " + formatNumber(radius, 9) + " m");
+      return badInput("cylinder: target edge " + formatNumber(target_edge_m, 9) + " m is too small for radius " +
+                      formatNumber(radius, 9) + " m");
     }
     n = std::max(8, static_cast<int>(want));
   }
@@ -157,8 +166,8 @@ Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double tar
   const double rows_want = std::round(height / edge);
   const double rings_want = std::round(radius / (2.0 * kPi * radius / n));
   if (!(rows_want <= kMaxSegments) || !(rings_want <= kMaxSegments)) {
-    return badInput("cylinder: R = " + formatNumber(radius, 9) + ", H = " + formatNumber(height, 9) + " with edge " + formatNumber(edge, 9) +
-                    " m gives too many triangles");
+    return badInput("cylinder: R = " + formatNumber(radius, 9) + ", H = " + formatNumber(height, 9) + " with edge " +
+                    formatNumber(edge, 9) + " m gives too many triangles");
   }
   const int rows = std::max(1, static_cast<int>(rows_want));
   const int rings = std::max(1, static_cast<int>(rings_want));
@@ -211,13 +220,17 @@ Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double tar
         if (advance_outer) {
           const int o1 = prev[(io + 1) % no];
           // Counter-clockwise seen from +z is (o0, o1, i0); the bottom cap is seen from -z.
-          if (top) tris.push_back({o0, o1, i0});
-          else tris.push_back({o0, i0, o1});
+          if (top)
+            tris.push_back({o0, o1, i0});
+          else
+            tris.push_back({o0, i0, o1});
           ++io;
         } else {
           const int i1 = inner[(ii + 1) % ni];
-          if (top) tris.push_back({o0, i1, i0});
-          else tris.push_back({o0, i0, i1});
+          if (top)
+            tris.push_back({o0, i1, i0});
+          else
+            tris.push_back({o0, i0, i1});
           ++ii;
         }
       }
@@ -227,8 +240,10 @@ Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double tar
     const int centre = static_cast<int>(verts.size()) - 1;
     for (size_t i = 0; i < prev.size(); ++i) {
       const int a = prev[i], b = prev[(i + 1) % prev.size()];
-      if (top) tris.push_back({a, b, centre});
-      else tris.push_back({a, centre, b});
+      if (top)
+        tris.push_back({a, b, centre});
+      else
+        tris.push_back({a, centre, b});
     }
   };
   cap(side.back(), 0.5 * height, true);
@@ -238,7 +253,8 @@ Result<SurfaceMesh> makeCylinderSurface(double radius, double height, double tar
   mesh.V.resize(static_cast<Eigen::Index>(verts.size()), 3);
   for (size_t i = 0; i < verts.size(); ++i) mesh.V.row(static_cast<Eigen::Index>(i)) = verts[i].transpose();
   mesh.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
-  for (size_t t = 0; t < tris.size(); ++t) mesh.F.row(static_cast<Eigen::Index>(t)) << tris[t][0], tris[t][1], tris[t][2];
+  for (size_t t = 0; t < tris.size(); ++t)
+    mesh.F.row(static_cast<Eigen::Index>(t)) << tris[t][0], tris[t][1], tris[t][2];
   return mesh;
 }
 

@@ -31,7 +31,8 @@ float readFloatLe(const unsigned char* p) {
   return f;
 }
 
-Result<SurfaceMesh> parseBinaryStl(const std::string& bytes, const std::string& path, std::vector<MeshWarning>* warnings) {
+Result<SurfaceMesh> parseBinaryStl(const std::string& bytes, const std::string& path,
+                                   std::vector<MeshWarning>* warnings) {
   const auto* p = reinterpret_cast<const unsigned char*>(bytes.data());
   const uint64_t n = static_cast<uint64_t>(p[80]) | (static_cast<uint64_t>(p[81]) << 8) |
                      (static_cast<uint64_t>(p[82]) << 16) | (static_cast<uint64_t>(p[83]) << 24);
@@ -43,8 +44,9 @@ Result<SurfaceMesh> parseBinaryStl(const std::string& bytes, const std::string& 
     for (int k = 0; k < 9; ++k) {
       const double c = readFloatLe(p + offset + 4 * static_cast<uint64_t>(k));
       if (!std::isfinite(c)) {
-        return badInput(path + ": byte " + std::to_string(offset + 4 * static_cast<uint64_t>(k)) + ": error: triangle " +
-                        std::to_string(t) + " coordinate is " + formatNumber(c, 17) + ", expected a finite number");
+        return badInput(path + ": byte " + std::to_string(offset + 4 * static_cast<uint64_t>(k)) +
+                        ": error: triangle " + std::to_string(t) + " coordinate is " + formatNumber(c, 17) +
+                        ", expected a finite number");
       }
       soup.xyz.push_back(c);
     }
@@ -55,7 +57,8 @@ Result<SurfaceMesh> parseBinaryStl(const std::string& bytes, const std::string& 
   return finishSurface(std::move(soup), path, false, warnings);
 }
 
-Result<SurfaceMesh> parseAsciiStl(const std::string& text, const std::string& path, std::vector<MeshWarning>* warnings) {
+Result<SurfaceMesh> parseAsciiStl(const std::string& text, const std::string& path,
+                                  std::vector<MeshWarning>* warnings) {
   detail::Tokenizer tok(text, false);
   Soup soup;
   auto expect = [&](std::string_view word) -> Status {
@@ -74,7 +77,8 @@ Result<SurfaceMesh> parseAsciiStl(const std::string& text, const std::string& pa
       continue;
     }
     if (key != "facet") {
-      return badInput(at(path, tok.line()) + "got " + quoteToken(key) + ", expected \"facet\", \"solid\" or \"endsolid\"");
+      return badInput(at(path, tok.line()) + "got " + quoteToken(key) +
+                      ", expected \"facet\", \"solid\" or \"endsolid\"");
     }
     tok.skipLine();  // "normal nx ny nz": recomputed from the vertices where needed
     if (Status s = expect("outer"); !s) return s.error();
@@ -108,7 +112,8 @@ Result<SurfaceMesh> parseAsciiStl(const std::string& text, const std::string& pa
     const int base = static_cast<int>(soup.xyz.size() / 3) - 3;
     soup.tri.insert(soup.tri.end(), {base, base + 1, base + 2});
     ++facet;
-    if (facet > kMaxVertices / 3) return badInput(at(path, tok.line()) + "more than " + std::to_string(kMaxVertices / 3) + " facets");
+    if (facet > kMaxVertices / 3)
+      return badInput(at(path, tok.line()) + "more than " + std::to_string(kMaxVertices / 3) + " facets");
   }
   if (soup.tri.empty()) return badInput(path + ": error: ASCII STL with no facets, expected a closed triangle surface");
   return finishSurface(std::move(soup), path, false, warnings);
@@ -132,7 +137,8 @@ Result<SurfaceMesh> readStl(const std::string& path, std::vector<MeshWarning>* w
   // attribute word, the zero bytes of 0.0f and 1.0f), text never does.
   const size_t first = b.find_first_not_of(" \t\r\n");
   const bool is_text = b.find('\0') == std::string::npos;
-  if (first != std::string::npos && b.compare(first, 5, "solid") == 0 && is_text) return parseAsciiStl(b, path, warnings);
+  if (first != std::string::npos && b.compare(first, 5, "solid") == 0 && is_text)
+    return parseAsciiStl(b, path, warnings);
   if (b.size() < 84) {
     return badInput(path + ": error: file is " + std::to_string(b.size()) +
                     " bytes: too short for a binary STL (84-byte header) and does not start with \"solid\"");
@@ -140,8 +146,9 @@ Result<SurfaceMesh> readStl(const std::string& path, std::vector<MeshWarning>* w
   const auto* p = reinterpret_cast<const unsigned char*>(b.data());
   const uint64_t n = static_cast<uint64_t>(p[80]) | (static_cast<uint64_t>(p[81]) << 8) |
                      (static_cast<uint64_t>(p[82]) << 16) | (static_cast<uint64_t>(p[83]) << 24);
-  return badInput(path + ": byte 80: error: binary STL header says " + std::to_string(n) + " triangles, so the file should be " +
-                  std::to_string(84 + 50 * n) + " bytes (84 + 50 n), but it is " + std::to_string(b.size()) +
+  return badInput(path + ": byte 80: error: binary STL header says " + std::to_string(n) +
+                  " triangles, so the file should be " + std::to_string(84 + 50 * n) +
+                  " bytes (84 + 50 n), but it is " + std::to_string(b.size()) +
                   " bytes (truncated or not an STL file)");
 }
 

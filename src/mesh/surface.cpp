@@ -31,8 +31,7 @@ Eigen::MatrixXi extractSurface(const Eigen::MatrixXi& tets) {
   faces.reserve(static_cast<size_t>(4 * num_tets));
   for (int64_t t = 0; t < num_tets; ++t) {
     for (int f = 0; f < 4; ++f) {
-      std::array<int, 3> key = {tets(t, kTetFaces[f][0]), tets(t, kTetFaces[f][1]),
-                                tets(t, kTetFaces[f][2])};
+      std::array<int, 3> key = {tets(t, kTetFaces[f][0]), tets(t, kTetFaces[f][1]), tets(t, kTetFaces[f][2])};
       std::sort(key.begin(), key.end());
       faces.push_back({key, 4 * t + f});
     }

@@ -19,7 +19,8 @@ Result<SurfaceMesh> readSurfaceMesh(const std::string& path, std::vector<MeshWar
   if (ext == ".obj") return readObj(path, warnings);
   if (ext == ".stl") return readStl(path, warnings);
   if (ext == ".ply") return readPly(path, warnings);
-  return badInput(path + ": error: unknown surface mesh extension " + detail::quoteToken(ext) + ", expected .obj, .stl or .ply");
+  return badInput(path + ": error: unknown surface mesh extension " + detail::quoteToken(ext) +
+                  ", expected .obj, .stl or .ply");
 }
 
 }  // namespace strike

@@ -36,9 +36,8 @@ TetMesh promoteToTet10(const TetMesh& tet4) {
       slots.push_back({a * num_corner_nodes + b, 6 * t + e});
     }
   }
-  std::sort(slots.begin(), slots.end(), [](const EdgeSlot& x, const EdgeSlot& y) {
-    return x.key != y.key ? x.key < y.key : x.slot < y.slot;
-  });
+  std::sort(slots.begin(), slots.end(),
+            [](const EdgeSlot& x, const EdgeSlot& y) { return x.key != y.key ? x.key < y.key : x.slot < y.slot; });
 
   TetMesh out;
   out.order = 2;

@@ -75,11 +75,13 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
     return badInput(source + ": error: element order " + std::to_string(options.order) + ", expected 1 or 2");
   }
   if (!std::isfinite(options.target_edge_m) || options.target_edge_m < 0.0) {
-    return badInput(source + ": error: target edge length " + formatNumber(options.target_edge_m, 6) + " m, expected >= 0 (0 = automatic)");
+    return badInput(source + ": error: target edge length " + formatNumber(options.target_edge_m, 6) +
+                    " m, expected >= 0 (0 = automatic)");
   }
   // Below ~1.1 TetGen's refinement may never terminate; above ~10 the bound does nothing.
   if (!(options.radius_edge_ratio >= 1.1 && options.radius_edge_ratio <= 10.0)) {
-    return badInput(source + ": error: radius-edge ratio " + formatNumber(options.radius_edge_ratio, 6) + ", expected 1.1 .. 10");
+    return badInput(source + ": error: radius-edge ratio " + formatNumber(options.radius_edge_ratio, 6) +
+                    ", expected 1.1 .. 10");
   }
   if (Status s = checkClosedSurface(surface, source); !s) return s.error();
 
@@ -92,7 +94,8 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
   volume = std::abs(volume);  // TetGen does not care about the winding
   const double extent = (surface.V.colwise().maxCoeff() - surface.V.colwise().minCoeff()).norm();
   if (!(volume > 1e-12 * extent * extent * extent)) {
-    return badInput(source + ": error: the closed surface encloses volume " + formatNumber(volume, 6) + " m^3, expected a solid");
+    return badInput(source + ": error: the closed surface encloses volume " + formatNumber(volume, 6) +
+                    " m^3, expected a solid");
   }
   const double regular_tet = 1.0 / (6.0 * std::sqrt(2.0));  // volume of a regular tet of edge 1
   double max_volume = 0.0;
@@ -103,9 +106,9 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
   }
   const double max_tets = static_cast<double>(options.max_tets);
   if (volume / max_volume > max_tets) {
-    return badInput(source + ": error: target edge " + formatNumber(options.target_edge_m, 6) + " m would give more than " +
-                    formatNumber(max_tets, 6) + " tets (the --max-tets cap) for volume " + formatNumber(volume, 6) +
-                    " m^3; use a larger --size, or raise the cap with --max-tets N");
+    return badInput(source + ": error: target edge " + formatNumber(options.target_edge_m, 6) +
+                    " m would give more than " + formatNumber(max_tets, 6) + " tets (the --max-tets cap) for volume " +
+                    formatNumber(volume, 6) + " m^3; use a larger --size, or raise the cap with --max-tets N");
   }
 
   tetgenio in, out;
@@ -161,12 +164,12 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
       for (int c = 0; c < 3; ++c) {
         const int v = diagnosis.trifacelist[c] - diagnosis.firstnumber;
         if (v < 0 || v >= in.numberofpoints) continue;
-        where += (c ? ", " : "") + std::to_string(v) + " (" + formatNumber(in.pointlist[3 * v], 6) + ", " + formatNumber(in.pointlist[3 * v + 1], 6) +
-                 ", " + formatNumber(in.pointlist[3 * v + 2], 6) + ")";
+        where += (c ? ", " : "") + std::to_string(v) + " (" + formatNumber(in.pointlist[3 * v], 6) + ", " +
+                 formatNumber(in.pointlist[3 * v + 1], 6) + ", " + formatNumber(in.pointlist[3 * v + 2], 6) + ")";
       }
       return badInput(source + ": error: the surface intersects itself: TetGen found " +
-                      std::to_string(diagnosis.numberoftrifaces) + " intersecting triangles, the first with vertices " + where +
-                      "; expected a closed surface without self-intersections");
+                      std::to_string(diagnosis.numberoftrifaces) + " intersecting triangles, the first with vertices " +
+                      where + "; expected a closed surface without self-intersections");
     }
   }
   try {
@@ -185,7 +188,8 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
 
   if (out.numberoftetrahedra <= 0 || out.numberofcorners != 4 || out.numberofpoints <= 0) {
     return badInput(source + ": error: TetGen produced " + std::to_string(out.numberoftetrahedra) +
-                    " tetrahedra from a closed surface of " + std::to_string(surface.F.rows()) + " triangles (-" + shown + ")");
+                    " tetrahedra from a closed surface of " + std::to_string(surface.F.rows()) + " triangles (-" +
+                    shown + ")");
   }
   TetMesh mesh;
   mesh.order = 1;

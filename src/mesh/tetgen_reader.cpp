@@ -40,7 +40,8 @@ struct Reader {
   Status readInt(int64_t& value, const char* what, bool same_line) {
     const std::string_view t = same_line ? tok.nextOnLine() : tok.next();
     if (t.empty()) return fail(std::string("missing ") + what + (same_line ? " on this line" : " (truncated file?)"));
-    if (!detail::parseInt64(t, value)) return fail(std::string(what) + " is " + quoteToken(t) + ", expected an integer");
+    if (!detail::parseInt64(t, value))
+      return fail(std::string(what) + " is " + quoteToken(t) + ", expected an integer");
     return {};
   }
 
@@ -51,7 +52,8 @@ struct Reader {
       value = 0;
       return {};
     }
-    if (!detail::parseInt64(t, value)) return fail(std::string(what) + " is " + quoteToken(t) + ", expected an integer");
+    if (!detail::parseInt64(t, value))
+      return fail(std::string(what) + " is " + quoteToken(t) + ", expected an integer");
     return {};
   }
 
@@ -94,8 +96,10 @@ Result<TetMesh> readTetgen(const std::string& path, std::vector<MeshWarning>* /*
     if (Status s = r.readOptionalInt(num_attr, "attribute count"); !s) return s.error();
     if (Status s = r.readOptionalInt(num_markers, "boundary marker flag"); !s) return s.error();
     if (dim != 3) return r.fail("dimension " + std::to_string(dim) + ", expected 3");
-    if (num_attr < 0 || num_attr > 1000) return r.fail("attribute count " + std::to_string(num_attr) + ", expected 0..1000");
-    if (num_markers != 0 && num_markers != 1) return r.fail("boundary marker flag " + std::to_string(num_markers) + ", expected 0 or 1");
+    if (num_attr < 0 || num_attr > 1000)
+      return r.fail("attribute count " + std::to_string(num_attr) + ", expected 0..1000");
+    if (num_markers != 0 && num_markers != 1)
+      return r.fail("boundary marker flag " + std::to_string(num_markers) + ", expected 0 or 1");
     if (Status s = r.checkCount(n, 8, "node"); !s) return s.error();
     if (n == 0) return r.fail("node count 0, expected at least 4 nodes");
     mesh.nodes.resize(n, 3);
@@ -113,9 +117,13 @@ Result<TetMesh> readTetgen(const std::string& path, std::vector<MeshWarning>* /*
       for (int c = 0; c < 3; ++c) {
         const std::string_view t = r.tok.nextOnLine();
         double x = 0;
-        if (t.empty()) return r.fail("node " + std::to_string(index) + " has " + std::to_string(c) + " coordinates, expected 3");
-        if (!detail::parseDouble(t, x)) return r.fail("node " + std::to_string(index) + " coordinate " + quoteToken(t) + " is not a number");
-        if (!std::isfinite(x)) return r.fail("node " + std::to_string(index) + " coordinate is " + formatNumber(x, 17) + ", expected a finite number");
+        if (t.empty())
+          return r.fail("node " + std::to_string(index) + " has " + std::to_string(c) + " coordinates, expected 3");
+        if (!detail::parseDouble(t, x))
+          return r.fail("node " + std::to_string(index) + " coordinate " + quoteToken(t) + " is not a number");
+        if (!std::isfinite(x))
+          return r.fail("node " + std::to_string(index) + " coordinate is " + formatNumber(x, 17) +
+                        ", expected a finite number");
         mesh.nodes(i, c) = x;
       }
       r.tok.skipLine();  // attributes and boundary marker

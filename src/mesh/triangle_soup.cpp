@@ -8,8 +8,7 @@
 
 namespace strike::detail {
 
-SurfaceMesh finishSurface(Soup soup, const std::string& path, bool warn_on_weld,
-                          std::vector<MeshWarning>* warnings) {
+SurfaceMesh finishSurface(Soup soup, const std::string& path, bool warn_on_weld, std::vector<MeshWarning>* warnings) {
   const size_t nv = soup.xyz.size() / 3;
   for (double& c : soup.xyz) c += 0.0;  // -0.0 -> +0.0, so that they weld
   std::vector<int> order(nv);
@@ -68,20 +67,21 @@ SurfaceMesh finishSurface(Soup soup, const std::string& path, bool warn_on_weld,
   }
   mesh.F.resize(static_cast<Eigen::Index>(kept_tris.size() / 3), 3);
   for (size_t t = 0; t < kept_tris.size() / 3; ++t) {
-    for (int c = 0; c < 3; ++c) mesh.F(static_cast<Eigen::Index>(t), c) = new_id[static_cast<size_t>(kept_tris[3 * t + static_cast<size_t>(c)])];
+    for (int c = 0; c < 3; ++c)
+      mesh.F(static_cast<Eigen::Index>(t), c) = new_id[static_cast<size_t>(kept_tris[3 * t + static_cast<size_t>(c)])];
   }
   if (warnings) {
     if (merged > 0 && warn_on_weld) {
-      warnings->push_back({path + ": warning: merged " + std::to_string(merged) +
-                           " duplicate vertices (exactly equal coordinates)"});
+      warnings->push_back(
+          {path + ": warning: merged " + std::to_string(merged) + " duplicate vertices (exactly equal coordinates)"});
     }
     if (collapsed > 0) {
-      warnings->push_back({path + ": warning: dropped " + std::to_string(collapsed) +
-                           " degenerate triangles (a repeated vertex)"});
+      warnings->push_back(
+          {path + ": warning: dropped " + std::to_string(collapsed) + " degenerate triangles (a repeated vertex)"});
     }
     if (dropped_vertices > 0) {
-      warnings->push_back({path + ": warning: dropped " + std::to_string(dropped_vertices) +
-                           " vertices that no triangle uses"});
+      warnings->push_back(
+          {path + ": warning: dropped " + std::to_string(dropped_vertices) + " vertices that no triangle uses"});
     }
   }
   return mesh;

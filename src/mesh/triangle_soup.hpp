@@ -30,8 +30,7 @@ struct Soup {
 // open the surface), drops triangles that collapse, and drops unreferenced vertices, which
 // TetGen would otherwise treat as Steiner points. Output vertices keep first-appearance order
 // so that the result is deterministic.
-SurfaceMesh finishSurface(Soup soup, const std::string& path, bool warn_on_weld,
-                          std::vector<MeshWarning>* warnings);
+SurfaceMesh finishSurface(Soup soup, const std::string& path, bool warn_on_weld, std::vector<MeshWarning>* warnings);
 
 /// "WHERE WHAT is VALUE, expected a finite number" (BadInput).
 Error nonFinite(const std::string& where, const char* what, double value);

@@ -38,7 +38,8 @@ Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<M
     return internalError(prefix(source) + "element order " + std::to_string(mesh.order) + ", expected 1 or 2");
   }
   if (mesh.tets.rows() == 0) {
-    return badInput(prefix(source) + "the mesh has no tetrahedra (0 tets), expected a solid volume mesh; "
+    return badInput(prefix(source) +
+                    "the mesh has no tetrahedra (0 tets), expected a solid volume mesh; "
                     "an empty result would give zero modes");
   }
   if (mesh.tets.cols() != nodes_per_tet || mesh.nodes.cols() != 3) {
@@ -50,8 +51,9 @@ Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<M
   for (Eigen::Index i = 0; i < num_nodes; ++i) {
     for (int c = 0; c < 3; ++c) {
       if (!std::isfinite(mesh.nodes(i, c))) {
-        return badInput(prefix(source) + "node " + std::to_string(i) + " coordinate " + std::string(1, static_cast<char>('x' + c)) +
-                        " is " + formatNumber(mesh.nodes(i, c), 9) + ", expected a finite number");
+        return badInput(prefix(source) + "node " + std::to_string(i) + " coordinate " +
+                        std::string(1, static_cast<char>('x' + c)) + " is " + formatNumber(mesh.nodes(i, c), 9) +
+                        ", expected a finite number");
       }
     }
   }
@@ -83,8 +85,9 @@ Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<M
       for (int k = 0; k < 4; ++k) {
         nodes += (k ? ", " : "") + std::to_string(mesh.tets(t, k)) + " " + point(mesh.nodes, mesh.tets(t, k));
       }
-      return badInput(prefix(source) + "tet " + std::to_string(t) + " is degenerate: volume " + formatNumber(volume, 9) +
-                      " m^3 with mean edge " + formatNumber(mean_edge, 9) + " m (flat or collapsed); nodes " + nodes);
+      return badInput(prefix(source) + "tet " + std::to_string(t) + " is degenerate: volume " +
+                      formatNumber(volume, 9) + " m^3 with mean edge " + formatNumber(mean_edge, 9) +
+                      " m (flat or collapsed); nodes " + nodes);
     }
     if (volume < 0) {
       // Swapping corners 1 and 2 flips the orientation; the mid-edge nodes follow their edges:
@@ -118,9 +121,9 @@ Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<M
     std::sort(faces.begin(), faces.end());
     for (size_t i = 0; i + 2 < faces.size(); ++i) {
       if (std::equal(faces[i].begin(), faces[i].begin() + 3, faces[i + 2].begin())) {
-        return badInput(prefix(source) + "face (" + std::to_string(faces[i][0]) + ", " + std::to_string(faces[i][1]) + ", " +
-                        std::to_string(faces[i][2]) + ") is shared by tets " + std::to_string(faces[i][3]) + ", " +
-                        std::to_string(faces[i + 1][3]) + " and " + std::to_string(faces[i + 2][3]) +
+        return badInput(prefix(source) + "face (" + std::to_string(faces[i][0]) + ", " + std::to_string(faces[i][1]) +
+                        ", " + std::to_string(faces[i][2]) + ") is shared by tets " + std::to_string(faces[i][3]) +
+                        ", " + std::to_string(faces[i + 1][3]) + " and " + std::to_string(faces[i + 2][3]) +
                         ", expected at most 2 (overlapping or duplicated tets)");
       }
     }
@@ -167,8 +170,8 @@ Status checkClosedSurface(const SurfaceMesh& surface, const std::string& source)
   for (Eigen::Index i = 0; i < nv; ++i) {
     for (int c = 0; c < 3; ++c) {
       if (!std::isfinite(surface.V(i, c))) {
-        return badInput(prefix(source) + "vertex " + std::to_string(i) + " coordinate is " + formatNumber(surface.V(i, c), 9) +
-                        ", expected a finite number");
+        return badInput(prefix(source) + "vertex " + std::to_string(i) + " coordinate is " +
+                        formatNumber(surface.V(i, c), 9) + ", expected a finite number");
       }
     }
   }

@@ -33,8 +33,8 @@ std::string arpackMessage(const char* routine, a_int info) {
 
 /// One ARPACK run for `nev` eigenpairs of OP deflated against `found`; appends the converged
 /// pairs to `found`. Returns the number appended.
-Result<int> lanczosChunk(Context& ctx, Found& found, int nev, double tol, uint64_t seed,
-                         double progress_base, double progress_span) {
+Result<int> lanczosChunk(Context& ctx, Found& found, int nev, double tol, uint64_t seed, double progress_base,
+                         double progress_span) {
   const a_int n = static_cast<a_int>(ctx.K.rows());
   const int locked = static_cast<int>(found.lambdas.size());
   const a_int max_ncv = n - locked;
@@ -50,9 +50,9 @@ Result<int> lanczosChunk(Context& ctx, Found& found, int nev, double tol, uint64
   std::vector<double> workl(static_cast<size_t>(lworkl));
   a_int iparam[11] = {};
   a_int ipntr[11] = {};
-  iparam[0] = 1;      // exact shifts
-  iparam[2] = 300;    // max restarts
-  iparam[6] = 3;      // shift-invert mode
+  iparam[0] = 1;    // exact shifts
+  iparam[2] = 300;  // max restarts
+  iparam[6] = 3;    // shift-invert mode
 
   // Deterministic start vector (ARPACK's own random start depends on how often it was called
   // before in this process), projected away from the modes already found.
@@ -71,8 +71,8 @@ Result<int> lanczosChunk(Context& ctx, Found& found, int nev, double tol, uint64
   const int expected_applications = static_cast<int>(ncv + 2 * (ncv - nev));
   int chunk_applications = 0;
   while (true) {
-    dsaupd_c(&ido, "G", n, "LM", nev, tol, resid.data(), ncv, v.data(), n, iparam, ipntr,
-             workd.data(), workl.data(), lworkl, &info);
+    dsaupd_c(&ido, "G", n, "LM", nev, tol, resid.data(), ncv, v.data(), n, iparam, ipntr, workd.data(), workl.data(),
+             lworkl, &info);
     if (ido == -1 || ido == 1) {
       const double* x = workd.data() + ipntr[0] - 1;
       double* y = workd.data() + ipntr[1] - 1;
@@ -109,8 +109,8 @@ Result<int> lanczosChunk(Context& ctx, Found& found, int nev, double tol, uint64
   std::vector<double> d(static_cast<size_t>(nev));
   Eigen::MatrixXd z(n, nev);
   a_int einfo = 0;
-  dseupd_c(1, "A", select.data(), d.data(), z.data(), n, ctx.sigma, "G", n, "LM", nev, tol,
-           resid.data(), ncv, v.data(), n, iparam, ipntr, workd.data(), workl.data(), lworkl, &einfo);
+  dseupd_c(1, "A", select.data(), d.data(), z.data(), n, ctx.sigma, "G", n, "LM", nev, tol, resid.data(), ncv, v.data(),
+           n, iparam, ipntr, workd.data(), workl.data(), lworkl, &einfo);
   if (einfo != 0) return internalError(arpackMessage("dseupd", einfo));
   const int got = static_cast<int>(std::min<a_int>(iparam[4], nev));
   const int total = locked + got;

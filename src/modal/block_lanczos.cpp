@@ -106,7 +106,8 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   Eigen::MatrixXd MW;
   symmetricTimesBlock(ctx.M, W, MW);
   Eigen::MatrixXd R;
-  if (!orthonormalize(W, MW, R)) return internalError("eigensolver: block Lanczos could not start (degenerate start block)");
+  if (!orthonormalize(W, MW, R))
+    return internalError("eigensolver: block Lanczos could not start (degenerate start block)");
   Q.leftCols(b) = W;
   MQ.leftCols(b) = MW;
 

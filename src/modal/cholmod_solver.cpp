@@ -51,12 +51,13 @@ Status CholmodSolver::factorize(const SpMat& A) {
   common_.method[0].ordering = CHOLMOD_METIS;
   common_.postorder = 1;
   factor_ = cholmod_analyze(&view, &common_);
-  if (factor_ == nullptr) return internalError("eigensolver: CHOLMOD analysis failed (status " + std::to_string(common_.status) + ")");
+  if (factor_ == nullptr)
+    return internalError("eigensolver: CHOLMOD analysis failed (status " + std::to_string(common_.status) + ")");
   const int ok = cholmod_factorize(&view, factor_, &common_);
   if (common_.status == CHOLMOD_NOT_POSDEF || factor_->minor < factor_->n) {
     std::ostringstream s;
-    s << "eigensolver: K - sigma M is not positive definite (pivot " << factor_->minor << " of "
-      << factor_->n << "): the mass matrix is singular or the mesh has degenerate or inverted elements";
+    s << "eigensolver: K - sigma M is not positive definite (pivot " << factor_->minor << " of " << factor_->n
+      << "): the mass matrix is singular or the mesh has degenerate or inverted elements";
     return internalError(s.str());
   }
   if (!ok || common_.status < CHOLMOD_OK) {
@@ -83,8 +84,8 @@ bool CholmodSolver::solve(const double* b, double* x, int ncols, TwoParts* parts
   return ok[0] && ok[1];
 }
 
-bool CholmodSolver::solveColumns(const double* b, double* x, int ncols, cholmod_common& common,
-                                 cholmod_dense*& x_work, cholmod_dense*& y_work, cholmod_dense*& e_work) {
+bool CholmodSolver::solveColumns(const double* b, double* x, int ncols, cholmod_common& common, cholmod_dense*& x_work,
+                                 cholmod_dense*& y_work, cholmod_dense*& e_work) {
   cholmod_dense rhs{};
   rhs.nrow = factor_->n;
   rhs.ncol = static_cast<size_t>(ncols);

@@ -124,9 +124,11 @@ Result<ModalResult> solveDense(const SpMat& K, const SpMat& M, ModalResult out, 
                                Eigen::MatrixXd& vectors) {
   const Eigen::MatrixXd Kd(K);
   const Eigen::MatrixXd Md(M);
-  if (Eigen::LLT<Eigen::MatrixXd>(Md).info() != Eigen::Success) return internalError("eigensolver: the mass matrix is not positive definite");
+  if (Eigen::LLT<Eigen::MatrixXd>(Md).info() != Eigen::Success)
+    return internalError("eigensolver: the mass matrix is not positive definite");
   Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Kd, Md);
-  if (es.info() != Eigen::Success) return internalError("eigensolver: dense generalized eigen-solve failed (is M positive definite?)");
+  if (es.info() != Eigen::Success)
+    return internalError("eigensolver: dense generalized eigen-solve failed (is M positive definite?)");
   lambdas = es.eigenvalues();
   vectors = es.eigenvectors();
   return out;
@@ -136,21 +138,24 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   const Eigen::Index n = K.rows();
   if (n == 0 || K.cols() != n || M.rows() != n || M.cols() != n) {
     std::ostringstream s;
-    s << "eigensolver: K (" << K.rows() << "x" << K.cols() << ") and M (" << M.rows() << "x"
-      << M.cols() << ") must be square, non-empty and of the same size";
+    s << "eigensolver: K (" << K.rows() << "x" << K.cols() << ") and M (" << M.rows() << "x" << M.cols()
+      << ") must be square, non-empty and of the same size";
     return badInput(s.str());
   }
-  if (!(settings.max_freq_hz > 0.0)) return badInput("eigensolver: max_freq_hz must be > 0, got " + std::to_string(settings.max_freq_hz));
-  if (settings.max_modes <= 0) return badInput("eigensolver: max_modes must be > 0, got " + std::to_string(settings.max_modes));
-  if (!(settings.rigid_freq_hz >= 0.0)) return badInput("eigensolver: rigid_freq_hz must be >= 0, got " + std::to_string(settings.rigid_freq_hz));
+  if (!(settings.max_freq_hz > 0.0))
+    return badInput("eigensolver: max_freq_hz must be > 0, got " + std::to_string(settings.max_freq_hz));
+  if (settings.max_modes <= 0)
+    return badInput("eigensolver: max_modes must be > 0, got " + std::to_string(settings.max_modes));
+  if (!(settings.rigid_freq_hz >= 0.0))
+    return badInput("eigensolver: rigid_freq_hz must be >= 0, got " + std::to_string(settings.rigid_freq_hz));
 
   for (Eigen::Index i = 0; i < n; ++i) {
     const double m_ii = M.coeff(i, i);
     const double k_ii = K.coeff(i, i);
     if (!(m_ii > 0.0) || !std::isfinite(m_ii) || !std::isfinite(k_ii)) {
       std::ostringstream s;
-      s << "eigensolver: the mass matrix must be positive definite and K, M finite; degree of freedom "
-        << i << " has M = " << m_ii << ", K = " << k_ii << " (is the density positive and the mesh valid?)";
+      s << "eigensolver: the mass matrix must be positive definite and K, M finite; degree of freedom " << i
+        << " has M = " << m_ii << ", K = " << k_ii << " (is the density positive and the mesh valid?)";
       return internalError(s.str());
     }
   }
@@ -180,7 +185,8 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   // block stage and the refinement when the machine has two cores or more, with the work cut
   // in the same two parts whether it takes part or not.
   const BlasThreadsScope one_blas_thread(1);
-  const bool block_stage = n > 600 && settings.method != ModalMethod::ArpackOnly && settings.max_modes + 7 > kArpackModes;
+  const bool block_stage =
+      n > 600 && settings.method != ModalMethod::ArpackOnly && settings.max_modes + 7 > kArpackModes;
   TwoParts parts(block_stage && settings.threads >= 2 && std::thread::hardware_concurrency() >= 2,
                  std::chrono::microseconds(settings.helper_delay_us));
   if (n <= 600) {
@@ -225,8 +231,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     bool done = false;
     const bool block_only = !arpack_only && wanted_total > kArpackModes;
     for (int round = 0; round < 64 && !done && !block_only; ++round) {
-      auto got = lanczosChunk(ctx, found, chunk, 1e-10, 0x5eed0000ULL + static_cast<uint64_t>(round),
-                              0.0, 1.0);
+      auto got = lanczosChunk(ctx, found, chunk, 1e-10, 0x5eed0000ULL + static_cast<uint64_t>(round), 0.0, 1.0);
       if (!got) return got.error();
       if (*got > 0) ++rounds_with_modes;
       int elastic_below = 0;
@@ -243,15 +248,16 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
       status({}, elastic_below, top);
       // A free body has 6 rigid modes: when the block stage starts from scratch it finds them too.
       const int rigid_found = static_cast<int>(std::count_if(found.lambdas.begin(), found.lambdas.end(),
-                                                              [&](double l) { return std::abs(l) <= lambda_zero; }));
+                                                             [&](double l) { return std::abs(l) <= lambda_zero; }));
       const int needed = settings.max_modes + 1 - elastic_below + std::max(0, 6 - rigid_found);
       const Eigen::Index room = n - static_cast<Eigen::Index>(found.lambdas.size()) - 1;
       const int block_pref = settings.block_size > 0 ? settings.block_size : kBlockSize;
       const int block = static_cast<int>(std::min<Eigen::Index>(room / 3, block_pref));
       if (block < 1) break;
-      const int max_basis = static_cast<int>(std::min<Eigen::Index>(room, std::max(kBasisFactor * needed, 4 * block) + 2 * block));
-      auto got = blockLanczos(ctx, found, block, needed, needed + block, max_basis, kBlockTol, 0xb10c0000ULL + static_cast<uint64_t>(round),
-                              [&](const std::vector<double>& extra) {
+      const int max_basis =
+          static_cast<int>(std::min<Eigen::Index>(room, std::max(kBasisFactor * needed, 4 * block) + 2 * block));
+      auto got = blockLanczos(ctx, found, block, needed, needed + block, max_basis, kBlockTol,
+                              0xb10c0000ULL + static_cast<uint64_t>(round), [&](const std::vector<double>& extra) {
                                 int e = 0;
                                 double t = 0.0;
                                 return status(extra, e, t);
@@ -314,11 +320,12 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
       // ordered: the eigenvalues are their Rayleigh quotients (as accurate as a Rayleigh-Ritz
       // step, both second order in the residual), with no p x p products or rotations of the
       // n x p blocks (measured 0.6 s of 1.0 s at 86k DOF).
-      out.eigenvalues = X.cwiseProduct(KX).colwise().sum().transpose().cwiseQuotient(
-          X.cwiseProduct(MX).colwise().sum().transpose());
+      out.eigenvalues =
+          X.cwiseProduct(KX).colwise().sum().transpose().cwiseQuotient(X.cwiseProduct(MX).colwise().sum().transpose());
       std::vector<Eigen::Index> rank(static_cast<size_t>(p));
       for (Eigen::Index k = 0; k < p; ++k) rank[static_cast<size_t>(k)] = k;
-      std::stable_sort(rank.begin(), rank.end(), [&](Eigen::Index a, Eigen::Index c) { return out.eigenvalues[a] < out.eigenvalues[c]; });
+      std::stable_sort(rank.begin(), rank.end(),
+                       [&](Eigen::Index a, Eigen::Index c) { return out.eigenvalues[a] < out.eigenvalues[c]; });
       bool sorted = true;
       for (Eigen::Index k = 0; k < p; ++k) sorted = sorted && rank[static_cast<size_t>(k)] == k;
       if (sorted) {
@@ -344,7 +351,8 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
       Kr = 0.5 * (Kr + Kr.transpose()).eval();
       Mr = 0.5 * (Mr + Mr.transpose()).eval();
       Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> rr(Kr, Mr);
-      if (rr.info() != Eigen::Success) return internalError("eigensolver: Rayleigh-Ritz failed: the computed modes are not independent");
+      if (rr.info() != Eigen::Success)
+        return internalError("eigensolver: Rayleigh-Ritz failed: the computed modes are not independent");
       const Eigen::MatrixXd& Q = rr.eigenvectors();
       out.eigenvalues = rr.eigenvalues();
       out.shapes.noalias() = X * Q;

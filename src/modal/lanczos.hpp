@@ -21,9 +21,7 @@ namespace strike::detail {
 using SpMat = Eigen::SparseMatrix<double>;
 using Clock = std::chrono::steady_clock;
 
-inline double secondsSince(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+inline double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// Y = A X for a SYMMETRIC sparse A and a block X, optionally in two fixed halves of rows over
 /// two threads (symmetric_times_block.cpp).
@@ -33,8 +31,8 @@ void symmetricTimesBlock(const SpMat& A, const Eigen::Ref<const Eigen::MatrixXd>
 /// Eigenpairs found so far (M-orthonormal columns), used to deflate later Lanczos chunks.
 struct Found {
   std::vector<double> lambdas;
-  Eigen::MatrixXd vectors;   // n x k
-  Eigen::MatrixXd m_vectors; // M * vectors
+  Eigen::MatrixXd vectors;    // n x k
+  Eigen::MatrixXd m_vectors;  // M * vectors
 };
 
 /// What a Lanczos stage works on (the operator's parts and settings) and its tallies.
@@ -56,8 +54,8 @@ struct Context {
 
 /// One ARPACK run for `nev` eigenpairs of OP deflated against `found`; appends the converged
 /// pairs to `found`. Returns the number appended (arpack_lanczos.cpp).
-Result<int> lanczosChunk(Context& ctx, Found& found, int nev, double tol, uint64_t seed,
-                         double progress_base, double progress_span);
+Result<int> lanczosChunk(Context& ctx, Found& found, int nev, double tol, uint64_t seed, double progress_base,
+                         double progress_span);
 
 /// Block shift-invert Lanczos on OP deflated against `found`; appends the converged pairs to
 /// `found`, stops when `enough(lambdas_converged_in_order)`. Returns the number appended

@@ -27,8 +27,8 @@ OrderChoice chooseElementOrder(const TetMesh& mesh) {
   const bool thin = choice.wall_m < kThinWallFraction * choice.extent_m;
   choice.order = thin ? 2 : 1;
   char text[200];
-  std::snprintf(text, sizeof text, "wall %.3g mm (2 V / A) is %s %.0f%% of the %.3g mm extent: %s",
-                1e3 * choice.wall_m, thin ? "under" : "at least", 100.0 * kThinWallFraction, 1e3 * choice.extent_m,
+  std::snprintf(text, sizeof text, "wall %.3g mm (2 V / A) is %s %.0f%% of the %.3g mm extent: %s", 1e3 * choice.wall_m,
+                thin ? "under" : "at least", 100.0 * kThinWallFraction, 1e3 * choice.extent_m,
                 thin ? "thin, Tet4 would lock in bending" : "a solid, Tet4 does not lock");
   choice.reason = text;
   return choice;

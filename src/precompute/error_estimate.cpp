@@ -13,9 +13,9 @@
 
 #include <sys/resource.h>
 
+#include "exclusive_solve.hpp"
 #include "strike/constants.hpp"
 #include "strike/fem.hpp"
-#include "exclusive_solve.hpp"
 
 namespace strike {
 namespace {
@@ -46,7 +46,8 @@ double meshVolume(const TetMesh& mesh) {
 
 /// Edge of a regular tet with the mesh's mean tet volume (V_regular = a^3 / (6 sqrt 2)).
 double meanEdge(const TetMesh& mesh) {
-  return std::cbrt(6.0 * std::sqrt(2.0) * meshVolume(mesh) / static_cast<double>(std::max<Eigen::Index>(1, mesh.tets.rows())));
+  return std::cbrt(6.0 * std::sqrt(2.0) * meshVolume(mesh) /
+                   static_cast<double>(std::max<Eigen::Index>(1, mesh.tets.rows())));
 }
 
 /// The Tet4 mesh on the corner nodes of a Tet10 mesh (nodes renumbered in order of first use).
@@ -145,10 +146,14 @@ Result<SizedMesh> meshWithTetRatio(const std::string& spec, double scale, int or
       }
       if (distance < std::log(1.25)) break;
     }
-    if (ratio < want) too_large = edge;  // coarser than wanted: make the edge smaller
-    else too_small = edge;
-    if (too_small > 0.0 && too_large > 0.0) edge = std::sqrt(too_small * too_large);
-    else edge = ratio < want ? edge / 1.15 : edge * 1.15;
+    if (ratio < want)
+      too_large = edge;  // coarser than wanted: make the edge smaller
+    else
+      too_small = edge;
+    if (too_small > 0.0 && too_large > 0.0)
+      edge = std::sqrt(too_small * too_large);
+    else
+      edge = ratio < want ? edge / 1.15 : edge * 1.15;
   }
   return best;
 }
@@ -185,14 +190,16 @@ Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, co
     // Aim at twice the fine mesh's edge (for a box the primitive rounds to whole cells). TetGen's
     // tets are smaller than its volume bound, so when the count ratio says h grew by less than
     // 1.6x, ask again 1.6x coarser (at most twice more).
-    options.target_edge_m = 2.0 * (settings.target_edge_m > 0 ? settings.target_edge_m : meanEdge(fine) / std::cbrt(std::sqrt(2.0)));
+    options.target_edge_m =
+        2.0 * (settings.target_edge_m > 0 ? settings.target_edge_m : meanEdge(fine) / std::cbrt(std::sqrt(2.0)));
     Result<LoadedMesh> coarse_mesh = badInput("not meshed");
     const bool is_box = settings.mesh_spec.rfind("box:", 0) == 0;
     long coarse_min_cells = 2;
     for (int attempt = 0; attempt < 3; ++attempt, options.target_edge_m *= 1.6) {
       coarse_mesh = loadTetMesh(settings.mesh_spec, options);
       if (!coarse_mesh) return coarse_mesh.error();
-      report.ratio = std::cbrt(static_cast<double>(fine.tets.rows()) / static_cast<double>(coarse_mesh->mesh.tets.rows()));
+      report.ratio =
+          std::cbrt(static_cast<double>(fine.tets.rows()) / static_cast<double>(coarse_mesh->mesh.tets.rows()));
       // A box rounds each side to whole cells, so a plate or bar can coarsen in its length but
       // keep its one or two layers through the thickness, and the difference then misses the
       // error across it: the free thick plate 10 x 10 x 1 Tet10 (vs 5 x 5 x 1) estimated 0.45%
@@ -218,7 +225,8 @@ Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, co
       // the frequency error, is O(h^2) whatever the order (Strang & Fix 1973, sec. 4.4,
       // "variational crimes"): then p = 2. Measured on the Tet10 sphere: p = 4 under-estimated
       // 8 of 27 modes by up to 2.7x; p = 2 covers them (tests/unit/extreme/accuracy_test.cpp).
-      const bool refaceted = settings.mesh_spec.rfind("sphere:", 0) == 0 || settings.mesh_spec.rfind("cylinder:", 0) == 0;
+      const bool refaceted =
+          settings.mesh_spec.rfind("sphere:", 0) == 0 || settings.mesh_spec.rfind("cylinder:", 0) == 0;
       const double p = fine.order == 2 && !refaceted ? 4.0 : 2.0;
       divisor = (std::pow(report.ratio, p) - 1.0) / kRichardsonSafety;
       report.method = "richardson";
@@ -249,14 +257,16 @@ Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, co
                                                static_cast<double>(fine.tets.rows()), 1.2 * fine_edge, 1.7, 4.0, 2.5);
     // A finer solve past kMaxFinerEstimateDofs would cost more memory than the bank is worth
     // estimating (~10 KB per DOF: 500k DOF ~ 5 GB); then the pessimistic bound below.
-    const bool affordable = finer && 3 * finer->loaded.mesh.nodes.rows() <= static_cast<Eigen::Index>(kMaxFinerEstimateDofs);
+    const bool affordable =
+        finer && 3 * finer->loaded.mesh.nodes.rows() <= static_cast<Eigen::Index>(kMaxFinerEstimateDofs);
     if (finer && !affordable)
       report.note = "a finer mesh for the estimate would have " + std::to_string(3 * finer->loaded.mesh.nodes.rows()) +
                     " DOF, more than " + std::to_string(kMaxFinerEstimateDofs);
     if (affordable) {
       Result<CoarseSolve> solved = solveCoarse(finer->loaded.mesh, settings, modes, fine_max_hz);
       if (!solved) return solved.error();
-      const double r = std::cbrt(static_cast<double>(finer->loaded.mesh.tets.rows()) / static_cast<double>(fine.tets.rows()));
+      const double r =
+          std::cbrt(static_cast<double>(finer->loaded.mesh.tets.rows()) / static_cast<double>(fine.tets.rows()));
       const double rp = r * r;
       estimate.resize(modes);
       for (size_t i = 0; i < modes; ++i) {
@@ -285,7 +295,8 @@ Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, co
       coarse = solved->eigenvalues;
       report.coarse_dofs = solved->dofs;
       report.method = "tet4-corner";
-      report.note = (report.note.empty() ? "" : report.note + "; ") + "Tet4 vs Tet10 on the same mesh: a pessimistic bound";
+      report.note =
+          (report.note.empty() ? "" : report.note + "; ") + "Tet4 vs Tet10 on the same mesh: a pessimistic bound";
       report.ratio = 0.0;
     } else {
       report.note = (report.note.empty() ? std::string("a Tet4 tet file cannot be coarsened") : report.note) +
@@ -344,7 +355,8 @@ std::string gigabytes(double bytes) {
 
 }  // namespace
 
-Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& settings, const ToleranceOptions& options) {
+Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& settings,
+                                                   const ToleranceOptions& options) {
   const double tolerance = options.tolerance;
   if (!(tolerance > 0 && tolerance < 1))
     return badInput("--tolerance = " + std::to_string(tolerance) + " (must be between 0 and 100%)");
@@ -406,7 +418,8 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     }
     std::string over;
     if (options.max_bytes > 0 && forecast_bytes > options.max_bytes)
-      over = "its forecast memory " + gigabytes(forecast_bytes) + " exceeds --max-memory " + gigabytes(options.max_bytes);
+      over =
+          "its forecast memory " + gigabytes(forecast_bytes) + " exceeds --max-memory " + gigabytes(options.max_bytes);
     else if (options.max_seconds > 0 && forecast_s > 0 && elapsed + forecast_s > options.max_seconds) {
       std::snprintf(line, sizeof line, "%.1f s spent + %.1f s forecast exceeds --max-seconds %g", elapsed, forecast_s,
                     options.max_seconds);
@@ -414,9 +427,11 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     }
     if (!over.empty()) {
       if (out.trials.empty())
-        return badInput("--tolerance: the first step (" + std::to_string(dofs) + " DOF) does not fit the budget: " + over);
+        return badInput("--tolerance: the first step (" + std::to_string(dofs) +
+                        " DOF) does not fit the budget: " + over);
       out.stopped_by_budget = true;
-      out.stop_reason = "stopped before step " + std::to_string(step + 1) + " (" + std::to_string(dofs) + " DOF): " + over;
+      out.stop_reason =
+          "stopped before step " + std::to_string(step + 1) + " (" + std::to_string(dofs) + " DOF): " + over;
       say(out.stop_reason);
       break;
     }
@@ -455,8 +470,9 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     const double wanted = std::isfinite(t.max_estimate) ? std::pow(1.3 * t.max_estimate / tolerance, 3.0 / p) : 3.0;
     const double want = std::clamp(wanted, 1.5, kMaxDofGrowthPerStep);
     const double edge_now = t.target_edge_m;
-    Result<SizedMesh> finer = meshWithTetRatio(settings.mesh_spec, settings.mesh_scale, 2, settings.max_tets, static_cast<double>(loaded.mesh.tets.rows()),
-                                               edge_now / std::cbrt(want), 1.3, kMaxDofGrowthPerStep, want);
+    Result<SizedMesh> finer = meshWithTetRatio(settings.mesh_spec, settings.mesh_scale, 2, settings.max_tets,
+                                               static_cast<double>(loaded.mesh.tets.rows()), edge_now / std::cbrt(want),
+                                               1.3, kMaxDofGrowthPerStep, want);
     if (!finer) {
       out.stop_reason = "stopped after step " + std::to_string(step + 1) + ": " + finer.error().message;
       say(out.stop_reason);

@@ -11,8 +11,8 @@
 
 namespace strike {
 
-inline Result<ModalResult> solveModesExclusive(const Eigen::SparseMatrix<double>& K, const Eigen::SparseMatrix<double>& M,
-                                               const ModalSettings& settings) {
+inline Result<ModalResult> solveModesExclusive(const Eigen::SparseMatrix<double>& K,
+                                               const Eigen::SparseMatrix<double>& M, const ModalSettings& settings) {
   // Process-wide on purpose: it guards ARPACK's process-wide state.
   static std::mutex arpack_state;
   std::lock_guard<std::mutex> lock(arpack_state);

@@ -35,10 +35,12 @@ Status validateMaterial(const Material& m, const std::string& where) {
   if (!std::isfinite(m.youngs_pa) || m.youngs_pa <= 0) return bad("youngs_pa", m.youngs_pa, "must be > 0");
   if (!std::isfinite(m.poisson) || m.poisson <= -1.0 || m.poisson >= 0.5)
     return bad("poisson", m.poisson, "must be in (-1, 0.5)");
-  if (!std::isfinite(m.density_kg_m3) || m.density_kg_m3 <= 0) return bad("density_kg_m3", m.density_kg_m3, "must be > 0");
+  if (!std::isfinite(m.density_kg_m3) || m.density_kg_m3 <= 0)
+    return bad("density_kg_m3", m.density_kg_m3, "must be > 0");
   if (!std::isfinite(m.rayleigh_stiffness) || m.rayleigh_stiffness < 0)
     return bad("rayleigh_stiffness", m.rayleigh_stiffness, "must be >= 0");
-  if (!std::isfinite(m.rayleigh_mass) || m.rayleigh_mass < 0) return bad("rayleigh_mass", m.rayleigh_mass, "must be >= 0");
+  if (!std::isfinite(m.rayleigh_mass) || m.rayleigh_mass < 0)
+    return bad("rayleigh_mass", m.rayleigh_mass, "must be >= 0");
   return {};
 }
 
@@ -103,10 +105,11 @@ Result<MaterialTable> parseMaterialTable(const std::string& json_text, const std
     }
     for (const auto& field : entry.items()) {
       const std::string& key = field.key();
-      static const char* const kKnown[] = {"youngs_pa", "poisson", "density_kg_m3", "loss_factor",
-                                           "rayleigh_stiffness", "rayleigh_mass", "source",
-                                           "restitution", "friction"};
-      if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return key == k; }) == std::end(kKnown))
+      static const char* const kKnown[] = {
+          "youngs_pa",     "poisson", "density_kg_m3", "loss_factor", "rayleigh_stiffness",
+          "rayleigh_mass", "source",  "restitution",   "friction"};
+      if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return key == k; }) ==
+          std::end(kKnown))
         return badInput(where + ": unknown key '" + key + "'");
     }
     Status valid = validateMaterial(m, where);
@@ -118,7 +121,8 @@ Result<MaterialTable> parseMaterialTable(const std::string& json_text, const std
     if (entry.contains("friction") && (!number("friction", contact.friction) || !(contact.friction >= 0)))
       return badInput(where + ".friction must be a number >= 0");
     table.contact[m.name] = contact;
-    if (entry.contains("source") && entry["source"].is_string()) table.sources[m.name] = entry["source"].get<std::string>();
+    if (entry.contains("source") && entry["source"].is_string())
+      table.sources[m.name] = entry["source"].get<std::string>();
     table.materials[m.name] = m;
   }
   if (table.materials.empty()) return badInput(source + ": error: no materials");

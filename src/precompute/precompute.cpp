@@ -5,12 +5,12 @@
 #include <chrono>
 #include <map>
 
+#include "exclusive_solve.hpp"
 #include "strike/element_order.hpp"
 #include "strike/error_estimate.hpp"
 #include "strike/fem.hpp"
 #include "strike/materials.hpp"
 #include "strike/synth.hpp"
-#include "exclusive_solve.hpp"
 
 namespace strike {
 namespace {
@@ -72,9 +72,12 @@ Status checkSettings(const PrecomputeSettings& settings) {
   if (!valid) return valid;
   if (settings.order != 1 && settings.order != 2)
     return badInput("--order = " + std::to_string(settings.order) + " (must be 1 or 2)");
-  if (!(settings.max_freq_hz > 0)) return badInput("--max-freq = " + std::to_string(settings.max_freq_hz) + " (must be > 0)");
-  if (settings.max_modes < 1) return badInput("--max-modes = " + std::to_string(settings.max_modes) + " (must be >= 1)");
-  if (!(settings.target_edge_m >= 0)) return badInput("--size = " + std::to_string(settings.target_edge_m) + " (must be > 0)");
+  if (!(settings.max_freq_hz > 0))
+    return badInput("--max-freq = " + std::to_string(settings.max_freq_hz) + " (must be > 0)");
+  if (settings.max_modes < 1)
+    return badInput("--max-modes = " + std::to_string(settings.max_modes) + " (must be >= 1)");
+  if (!(settings.target_edge_m >= 0))
+    return badInput("--size = " + std::to_string(settings.target_edge_m) + " (must be > 0)");
   return {};
 }
 
@@ -104,10 +107,11 @@ void fillProvenance(const LoadedMesh& loaded, const PrecomputeSettings& settings
 uint64_t bankCacheKey(uint64_t mesh_hash, const PrecomputeSettings& settings) {
   // Bit-exact inputs: the key changes whenever any input to the precompute changes.
   const Material& m = settings.material;
-  const double numbers[] = {m.youngs_pa, m.poisson, m.density_kg_m3, m.rayleigh_stiffness, m.rayleigh_mass,
-                            settings.target_edge_m, settings.max_freq_hz};
-  const uint64_t integers[] = {mesh_hash, static_cast<uint64_t>(settings.order), static_cast<uint64_t>(settings.max_modes),
-                               kBankFormatVersion};
+  const double numbers[] = {m.youngs_pa,          m.poisson,       m.density_kg_m3,
+                            m.rayleigh_stiffness, m.rayleigh_mass, settings.target_edge_m,
+                            settings.max_freq_hz};
+  const uint64_t integers[] = {mesh_hash, static_cast<uint64_t>(settings.order),
+                               static_cast<uint64_t>(settings.max_modes), kBankFormatVersion};
   uint64_t key = fnv1a64(numbers, sizeof numbers);
   key = fnv1a64(integers, sizeof integers, key);
   // Only a scaled mesh hashes its scale, so banks cached before "units" existed keep their keys.
@@ -196,8 +200,8 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
     const OrderChoice choice = chooseElementOrder(mesh);
     if (choice.order == 2)
       result.report.warnings.push_back({"thin shape (" + choice.reason +
-                                         "): Tet4 frequencies come out far too high (a mug with 4 mm walls: 108%); "
-                                         "use order 2 (scene \"order\": 2, strike modes --order 2)"});
+                                        "): Tet4 frequencies come out far too high (a mug with 4 mm walls: 108%); "
+                                        "use order 2 (scene \"order\": 2, strike modes --order 2)"});
   }
 
   const std::string problem = bank.checkConsistency();

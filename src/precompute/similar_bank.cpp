@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "strike/similar_bank.hpp"
 
-#include <cmath>
 #include <charconv>
+#include <cmath>
 #include <string>
 
 #include "strike/synth.hpp"
@@ -21,8 +21,8 @@ Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Materia
     return badInput("material poisson = " + text(material.poisson) + " differs from the solved bank's " +
                     text(solved.material.poisson) + ": the mode shapes are not similar; solve it");
   if (!(material.youngs_pa > 0 && material.density_kg_m3 > 0))
-    return badInput("material youngs_pa = " + text(material.youngs_pa) + ", density_kg_m3 = " +
-                    text(material.density_kg_m3) + " (must be > 0)");
+    return badInput("material youngs_pa = " + text(material.youngs_pa) +
+                    ", density_kg_m3 = " + text(material.density_kg_m3) + " (must be > 0)");
   if (solved.shapes.size() != solved.modeCount() * solved.surfaceVertexCount() * 3)
     return badInput("the solved bank's shapes are not loaded");
   const double density_ratio = material.density_kg_m3 / solved.material.density_kg_m3;
@@ -34,7 +34,8 @@ Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Materia
   // max_modes, a mode above its last one may be missing: the new cut-off must not reach past it.
   const double omega_max = 2.0 * M_PI * max_freq_hz;
   size_t keep = 0;
-  while (keep < solved.modeCount() && keep < solved.max_modes && solved.eigenvalues[keep] * lambda_factor <= omega_max * omega_max)
+  while (keep < solved.modeCount() && keep < solved.max_modes &&
+         solved.eigenvalues[keep] * lambda_factor <= omega_max * omega_max)
     ++keep;
   const bool capped = solved.modeCount() >= solved.max_modes;
   const double solved_band_lambda = std::pow(2.0 * M_PI * solved.max_freq_hz, 2) * lambda_factor;

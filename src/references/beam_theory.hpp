@@ -64,7 +64,10 @@ inline std::vector<double> timoshenkoFreeFreeHz(const BarProperties& bar, int co
       double lo = previous_b, hi = b;
       for (int i = 0; i < 100; ++i) {
         const double mid = 0.5 * (lo + hi);
-        if ((equation(mid) > 0) == (equation(lo) > 0)) lo = mid; else hi = mid;
+        if ((equation(mid) > 0) == (equation(lo) > 0))
+          lo = mid;
+        else
+          hi = mid;
       }
       frequencies.push_back(0.5 * (lo + hi) * scale / (2.0 * M_PI));
     }

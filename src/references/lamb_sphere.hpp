@@ -50,7 +50,12 @@ inline std::vector<double> scanRoots(const std::function<double(double)>& f, dou
       double a = x0, b = x1, fa = f0;
       for (int i = 0; i < 80; ++i) {
         const double m = 0.5 * (a + b), fm = f(m);
-        if ((fa < 0) != (fm < 0)) b = m; else { a = m; fa = fm; }
+        if ((fa < 0) != (fm < 0))
+          b = m;
+        else {
+          a = m;
+          fa = fm;
+        }
       }
       roots.push_back(0.5 * (a + b));
     }

@@ -61,7 +61,8 @@ Result<std::vector<CacheEntry>> listCache(const std::string& dir) {
 
 void touchCacheEntry(const std::string& path) { (void)::utimensat(AT_FDCWD, path.c_str(), nullptr, 0); }
 
-Result<PruneReport> pruneCache(const std::string& dir, uint64_t max_bytes, double max_age_s, std::time_t now, bool dry_run) {
+Result<PruneReport> pruneCache(const std::string& dir, uint64_t max_bytes, double max_age_s, std::time_t now,
+                               bool dry_run) {
   Result<std::vector<CacheEntry>> listed = listCache(dir);
   if (!listed) return listed.error();
   PruneReport report;

@@ -31,7 +31,8 @@ CacheEntryLock::CacheEntryLock(const std::string& path) {
 void CacheEntryLock::release() {
   if (fd_ < 0) return;
   // Remove the file only while the name is still ours (not a newer lock file of another render).
-  struct stat mine {}, named {};
+  struct stat mine {
+  }, named{};
   if (::fstat(fd_, &mine) == 0 && ::stat(path_.c_str(), &named) == 0 && mine.st_dev == named.st_dev &&
       mine.st_ino == named.st_ino)
     ::unlink(path_.c_str());
@@ -44,7 +45,8 @@ void CacheEntryLock::release() {
 CacheEntryLock::~CacheEntryLock() { release(); }
 
 CacheEntryLock::CacheEntryLock(CacheEntryLock&& other) noexcept
-    : fd_(std::exchange(other.fd_, -1)), path_(std::move(other.path_)),
+    : fd_(std::exchange(other.fd_, -1)),
+      path_(std::move(other.path_)),
       temporary_slot_(std::exchange(other.temporary_slot_, -1)) {}
 
 CacheEntryLock& CacheEntryLock::operator=(CacheEntryLock&& other) noexcept {

@@ -115,12 +115,14 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
   for (int a = 0; a < 3; ++a) listener.position_m[a] = bank.centre_m[a] + settings.distance_m * side[a] / side_length;
   engine.setListener(listener);
   const double contact_time_s = settings.contact_time_s ? *settings.contact_time_s
-                                : speed > 0.0 ? engine.contactDuration(0, striker_sphere, speed)
-                                              : 0.0;
+                                : speed > 0.0           ? engine.contactDuration(0, striker_sphere, speed)
+                                                        : 0.0;
   EngineImpact impact;
   impact.voice = 0;
-  if (settings.at_m) impact.point = {requested[0], requested[1], requested[2]};
-  else impact.surface_vertex = static_cast<int32_t>(vertex);
+  if (settings.at_m)
+    impact.point = {requested[0], requested[1], requested[2]};
+  else
+    impact.surface_vertex = static_cast<int32_t>(vertex);
   impact.impulse = {impulse[0], impulse[1], impulse[2]};
   impact.contact_duration_s = contact_time_s;
   impact.time_s = 0.0;

@@ -91,7 +91,8 @@ Status play(const Playback& p, SoundOutput& output, AudioBuffer& audio, const Pr
     output.beginStep(step_end, substep);
     for (size_t i = 0; i < n; ++i) {
       const SimBodyState& state = p.states[k * n + i];
-      if (p.has_voice[i]) output.setPose(static_cast<uint32_t>(i), state.position_m, state.orientation_wxyz, state.asleep);
+      if (p.has_voice[i])
+        output.setPose(static_cast<uint32_t>(i), state.position_m, state.orientation_wxyz, state.asleep);
     }
     for (size_t j = step_first[k]; j < step_first[k + 1]; ++j) {
       const ContactEvent& event = events[by_step[j]];

@@ -16,11 +16,11 @@ namespace strike {
 
 /// What the simulation recorded, and who the bodies are to the sound engine.
 struct Playback {
-  const std::vector<ContactEvent>& events;   ///< in order of time_s
-  const std::vector<SimBodyState>& states;   ///< states[k * bodies + i] after substep k
+  const std::vector<ContactEvent>& events;  ///< in order of time_s
+  const std::vector<SimBodyState>& states;  ///< states[k * bodies + i] after substep k
   uint64_t substeps = 0;
   double substep_s = 1e-3;
-  const std::vector<bool>& has_voice;        ///< per body: added to the output (it sounds)
+  const std::vector<bool>& has_voice;           ///< per body: added to the output (it sounds)
   const std::vector<ContactPartner>& partners;  ///< per body, as the other side of a contact
   ContactPartner ground;
 };

@@ -16,16 +16,16 @@
 #include <memory>
 #include <optional>
 
+#include "cache_lock.hpp"
+#include "pieces_cache.hpp"
+#include "playback.hpp"
 #include "strike/atomic_file.hpp"
-#include "strike/bank_cache.hpp"
 #include "strike/bank.hpp"
+#include "strike/bank_cache.hpp"
 #include "strike/materials.hpp"
 #include "strike/precompute.hpp"
 #include "strike/scene_checks.hpp"
 #include "strike/synth.hpp"
-#include "cache_lock.hpp"
-#include "playback.hpp"
-#include "pieces_cache.hpp"
 
 namespace strike {
 namespace {
@@ -46,17 +46,17 @@ struct Body {
   PrecomputeSettings precompute;
   uint64_t cache_key = 0;
   uint64_t mesh_hash = 0;
-  ModeBank bank;                     ///< full bank, or mass and surface only until phase 2
+  ModeBank bank;  ///< full bank, or mass and surface only until phase 2
   bool has_modes = false;
-  std::optional<BankFile> file;      ///< a cached or given bank: its shapes are read in phase 2
-                                     ///< at the vertices the contacts touch
-  bool from_cache = false;           ///< counted in report.banks_cached
-  std::optional<LoadedMesh> mesh;    ///< kept when the modes may still need computing
+  std::optional<BankFile> file;    ///< a cached or given bank: its shapes are read in phase 2
+                                   ///< at the vertices the contacts touch
+  bool from_cache = false;         ///< counted in report.banks_cached
+  std::optional<LoadedMesh> mesh;  ///< kept when the modes may still need computing
   double max_velocity_change_m_s = 0.0;
-  bool sounded = false;              ///< struck audibly: gets a bank and an oscillator
-  bool silent = false;               ///< ...but no mode in the synthesized band
-  std::optional<ShapeRows> rows;     ///< shapes read at the struck vertices only (readStruckShapes)
-  double contact_radius_m = 0.0;     ///< radius of the sphere of equal volume, for Hertz
+  bool sounded = false;           ///< struck audibly: gets a bank and an oscillator
+  bool silent = false;            ///< ...but no mode in the synthesized band
+  std::optional<ShapeRows> rows;  ///< shapes read at the struck vertices only (readStruckShapes)
+  double contact_radius_m = 0.0;  ///< radius of the sphere of equal volume, for Hertz
 };
 
 std::string hex(uint64_t value) {
@@ -219,7 +219,8 @@ Status hasAudibleMode(const ModeBank& bank, const SynthSettings& synth, double r
   }
   char why[256];
   if (bank.modeCount() == 0)
-    std::snprintf(why, sizeof why, "its bank has no elastic mode below its cut-off of %.0f Hz: too small or too stiff to ring",
+    std::snprintf(why, sizeof why,
+                  "its bank has no elastic mode below its cut-off of %.0f Hz: too small or too stiff to ring",
                   bank.max_freq_hz);
   else
     std::snprintf(why, sizeof why, "its %zu modes lie at %.1f to %.1f Hz, outside the synthesized band %.0f to %.0f Hz",
@@ -229,7 +230,8 @@ Status hasAudibleMode(const ModeBank& bank, const SynthSettings& synth, double r
 
 }  // namespace
 
-EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& settings, double rate_hz, double max_freq_hz) {
+EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& settings, double rate_hz,
+                                    double max_freq_hz) {
   EngineSettings engine;
   engine.synth.sample_rate_hz = rate_hz;
   engine.synth.max_freq_hz = std::min(20000.0, max_freq_hz);
@@ -305,7 +307,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   sim.gravity_m_s2 = scene.gravity_m_s2;
   sim.substep_s = substep;
   sim.max_events = settings.max_events;
-  sim.record_states = true;  // the sound engine follows each body as it moves
+  sim.record_states = true;                 // the sound engine follows each body as it moves
   sim.impact_speed_m_s = kImpactSpeed_m_s;  // impacts are timed within the step (ContactEvent::time_s)
   sim.ground = scene.has_ground;
   sim.ground_height_m = scene.ground_height_m;
@@ -333,17 +335,19 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       char note[160];
       if (simulated->pieces_computed[i]) {
         report.pieces_seconds += simulated->pieces_seconds[i];
-        const bool cached = surface_hashes[i] != 0 &&
-            writePieces(piecesPath(settings.cache_dir, surface_hashes[i]), surface_hashes[i], simulated->convex_pieces_m[i]);
+        const bool cached = surface_hashes[i] != 0 && writePieces(piecesPath(settings.cache_dir, surface_hashes[i]),
+                                                                  surface_hashes[i], simulated->convex_pieces_m[i]);
         std::snprintf(note, sizeof note, "%s: %zu convex pieces (computed in %.2f s%s)", name.c_str(),
                       simulated->collision_pieces[i], simulated->pieces_seconds[i], cached ? ", cached" : "");
       } else {
-        std::snprintf(note, sizeof note, "%s: %zu convex pieces (from the cache)", name.c_str(), simulated->collision_pieces[i]);
+        std::snprintf(note, sizeof note, "%s: %zu convex pieces (from the cache)", name.c_str(),
+                      simulated->collision_pieces[i]);
       }
       report.collision_notes.push_back(note);
     } else if (used == SimBodyDesc::Shape::Concave && !scene.objects[i].is_static) {
-      report.collision_notes.push_back(name + ": exact mesh (GImpact, " + std::to_string(sim_bodies[i].surface_triangles.size() / 3) +
-                                       " triangles): slow to simulate; \"shape\": \"pieces\" (the default) is ~5-20x faster");
+      report.collision_notes.push_back(
+          name + ": exact mesh (GImpact, " + std::to_string(sim_bodies[i].surface_triangles.size() / 3) +
+          " triangles): slow to simulate; \"shape\": \"pieces\" (the default) is ~5-20x faster");
     }
   }
   result.events = std::move(simulated->events);
@@ -526,12 +530,11 @@ Status writeEventsCsv(const std::string& path, const RenderResult& result) {
   auto name = [&](uint32_t index) { return index == kGroundBody ? std::string("ground") : result.body_names[index]; };
   char line[512];
   for (const ContactEvent& e : result.events) {
-    std::snprintf(line, sizeof line,
-                  ",%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n",
-                  e.new_contact ? 1 : 0, e.normal_speed_m_s, e.normal_impulse_n_s, e.friction_impulse_n_s,
-                  e.point_world[0], e.point_world[1], e.point_world[2], e.normal_world[0], e.normal_world[1],
-                  e.normal_world[2], e.point_a_mesh[0], e.point_a_mesh[1], e.point_a_mesh[2], e.point_b_mesh[0],
-                  e.point_b_mesh[1], e.point_b_mesh[2], e.step_time_s);
+    std::snprintf(
+        line, sizeof line, ",%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n",
+        e.new_contact ? 1 : 0, e.normal_speed_m_s, e.normal_impulse_n_s, e.friction_impulse_n_s, e.point_world[0],
+        e.point_world[1], e.point_world[2], e.normal_world[0], e.normal_world[1], e.normal_world[2], e.point_a_mesh[0],
+        e.point_a_mesh[1], e.point_a_mesh[2], e.point_b_mesh[0], e.point_b_mesh[1], e.point_b_mesh[2], e.step_time_s);
     char time[64];
     std::snprintf(time, sizeof time, "%.9g,", e.time_s);
     csv += time + name(e.body_a) + "," + name(e.body_b) + line;

@@ -14,7 +14,9 @@ using Vec = std::array<double, 3>;
 
 Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
 double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec cross(const Vec& a, const Vec& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
+Vec cross(const Vec& a, const Vec& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
 double length(const Vec& a) { return std::sqrt(dot(a, a)); }
 
 /// Rotates v by the unit quaternion q = (w, x, y, z).
@@ -30,7 +32,10 @@ Vec rotate(const std::array<double, 4>& q, const Vec& v) {
 double distanceSquaredToTriangle(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
   const Vec ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
   const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  auto dist2 = [&](const Vec& q) { const Vec d = sub(p, q); return dot(d, d); };
+  auto dist2 = [&](const Vec& q) {
+    const Vec d = sub(p, q);
+    return dot(d, d);
+  };
   if (d1 <= 0 && d2 <= 0) return dist2(a);
   const Vec bp = sub(p, b);
   const double d3 = dot(ab, bp), d4 = dot(ac, bp);
@@ -155,23 +160,28 @@ std::vector<std::string> checkStartingPlacement(const Scene& scene, const std::v
     const bool mesh_file = !object.mesh.empty() && object.bank.empty() && object.mesh.find(':') == std::string::npos;
     const bool too_heavy = !body.is_static && body.mass_kg > limits.max_dynamic_mass_kg;
     if (largest > limits.max_extent_m || too_heavy) {
-      std::string hint = mesh_file && object.units == "m" ? "; if the mesh file is in millimetres, add \"units\": \"mm\" to the object"
-                                                          : "; check the mesh's units and the material's density";
+      std::string hint = mesh_file && object.units == "m"
+                             ? "; if the mesh file is in millimetres, add \"units\": \"mm\" to the object"
+                             : "; check the mesh's units and the material's density";
       warnings.push_back(who + format("%.3g x %.3g x %.3g m, ", extent[0], extent[1], extent[2]) +
                          format("%.3g kg (%.3g tonnes): implausibly ", body.mass_kg, body.mass_kg / 1000.0) +
                          (largest > limits.max_extent_m ? "large" : "heavy") + " for a sounding object" + hint);
     } else if (largest < limits.min_extent_m) {
-      warnings.push_back(who + format("%.3g x %.3g x %.3g mm: implausibly small for a sounding object", extent[0] * 1e3,
-                                      extent[1] * 1e3, extent[2] * 1e3) +
-                         (mesh_file ? "; check its \"units\" (a mesh file is read in metres unless \"units\" says otherwise)" : ""));
+      warnings.push_back(
+          who +
+          format("%.3g x %.3g x %.3g mm: implausibly small for a sounding object", extent[0] * 1e3, extent[1] * 1e3,
+                 extent[2] * 1e3) +
+          (mesh_file ? "; check its \"units\" (a mesh file is read in metres unless \"units\" says otherwise)" : ""));
     }
     // Inside the ground: Bullet pushes it out at once, and the push sounds like a blow.
     if (scene.has_ground && !body.is_static) {
       const double depth = scene.ground_height_m - w.low[2];
       if (depth > limits.overlap_tolerance_m)
-        warnings.push_back(who + format("starts %.3g mm inside the ground (its lowest point is at z = %.4g m, the ground at z = %.4g m); "
-                                        "it will be thrown out with a bang",
-                                        depth * 1e3, w.low[2], scene.ground_height_m));
+        warnings.push_back(
+            who +
+            format("starts %.3g mm inside the ground (its lowest point is at z = %.4g m, the ground at z = %.4g m); "
+                   "it will be thrown out with a bang",
+                   depth * 1e3, w.low[2], scene.ground_height_m));
     }
   }
   // Inside each other: boxes first, then vertices inside the other's closed surface.
@@ -182,7 +192,8 @@ std::vector<std::string> checkStartingPlacement(const Scene& scene, const std::v
       if (a.positions.empty() || b.positions.empty()) continue;
       bool boxes_meet = true;
       for (int k = 0; k < 3; ++k)
-        boxes_meet = boxes_meet && a.low[k] < b.high[k] - limits.overlap_tolerance_m && b.low[k] < a.high[k] - limits.overlap_tolerance_m;
+        boxes_meet = boxes_meet && a.low[k] < b.high[k] - limits.overlap_tolerance_m &&
+                     b.low[k] < a.high[k] - limits.overlap_tolerance_m;
       if (!boxes_meet) continue;
       const double depth = std::max(deepestVertexInside(a, b, bodies[j], limits.max_vertices_tested),
                                     deepestVertexInside(b, a, bodies[i], limits.max_vertices_tested));

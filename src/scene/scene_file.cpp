@@ -16,7 +16,7 @@ namespace {
 
 using nlohmann::json;
 
-constexpr int kMaxNestingDepth = 64;           // a scene is shallow; deeper input is hostile
+constexpr int kMaxNestingDepth = 64;  // a scene is shallow; deeper input is hostile
 constexpr uint64_t kMaxSceneBytes = 64ull << 20;
 constexpr size_t kMaxObjects = 10000;
 
@@ -39,8 +39,10 @@ std::string show(const json& value) {
 std::string lineColumn(const std::string& text, size_t offset) {
   size_t line = 1, column = 1;
   for (size_t i = 0; i < offset && i < text.size(); ++i) {
-    if (text[i] == '\n') ++line, column = 1;
-    else ++column;
+    if (text[i] == '\n')
+      ++line, column = 1;
+    else
+      ++column;
   }
   return std::to_string(line) + ":" + std::to_string(column);
 }
@@ -52,9 +54,12 @@ std::optional<size_t> tooDeepAt(const std::string& text) {
   for (size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     if (in_string) {
-      if (escaped) escaped = false;
-      else if (c == '\\') escaped = true;
-      else if (c == '"') in_string = false;
+      if (escaped)
+        escaped = false;
+      else if (c == '\\')
+        escaped = true;
+      else if (c == '"')
+        in_string = false;
     } else if (c == '"') {
       in_string = true;
     } else if (c == '{' || c == '[') {
@@ -124,7 +129,8 @@ Result<Material> material(const json& value, const Where& where) {
   Material m;
   m.name = value.contains("name") && value["name"].is_string() ? value["name"].get<std::string>() : "custom";
   for (const char* key : {"youngs_pa", "poisson", "density_kg_m3"})
-    if (!value.contains(key)) return where.at(key).error("missing (a material needs youngs_pa, poisson, density_kg_m3)");
+    if (!value.contains(key))
+      return where.at(key).error("missing (a material needs youngs_pa, poisson, density_kg_m3)");
   struct Field {
     const char* key;
     double* out;
@@ -183,7 +189,8 @@ Result<ContactPairSpec> contactPair(const json& value, const Where& where, const
       return where.at("objects").index(k).error("no object named \"" + name + "\"");
     (k == 0 ? pair.object_a : pair.object_b) = name;
   }
-  if (pair.object_a == pair.object_b) return where.at("objects").error("names one object twice: " + show(value["objects"]));
+  if (pair.object_a == pair.object_b)
+    return where.at("objects").error("names one object twice: " + show(value["objects"]));
   if (!value.contains("restitution") && !value.contains("friction"))
     return where.error("needs \"restitution\" or \"friction\" (or both)");
   Status coefficients = contactCoefficients(value, where, pair.restitution, pair.friction);
@@ -226,17 +233,22 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
     if (!m) return m.error();
     o.material = *m;
   } else if (o.bank.empty()) {
-    return where.error("needs \"material\" (a name like \"steel\" or an object with youngs_pa, poisson, density_kg_m3)");
+    return where.error(
+        "needs \"material\" (a name like \"steel\" or an object with youngs_pa, poisson, density_kg_m3)");
   }
   if (value.contains("units")) {
     // A mesh exported in millimetres read as metres is 1000x too large (issue 15: a 264,000-tonne
     // mug); the file's unit is declared here instead of rescaling the file.
     Result<std::string> units = text(value["units"], where.at("units"));
     if (!units) return units.error();
-    if (*units == "m") o.mesh_scale = 1.0;
-    else if (*units == "cm") o.mesh_scale = 0.01;
-    else if (*units == "mm") o.mesh_scale = 0.001;
-    else return where.at("units").error("expected \"m\", \"cm\" or \"mm\", got " + show(value["units"]));
+    if (*units == "m")
+      o.mesh_scale = 1.0;
+    else if (*units == "cm")
+      o.mesh_scale = 0.01;
+    else if (*units == "mm")
+      o.mesh_scale = 0.001;
+    else
+      return where.at("units").error("expected \"m\", \"cm\" or \"mm\", got " + show(value["units"]));
     if (!value.contains("mesh") || isPrimitiveSpec(value["mesh"].get<std::string>()))
       return where.at("units").error("applies to a mesh file only (primitives and banks are in metres), got " +
                                      show(value["units"]));
@@ -254,20 +266,23 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
     o.size_m = *size;
   }
   if (value.contains("static")) {
-    if (!value["static"].is_boolean()) return where.at("static").error("expected true or false, got " + show(value["static"]));
+    if (!value["static"].is_boolean())
+      return where.at("static").error("expected true or false, got " + show(value["static"]));
     o.is_static = value["static"].get<bool>();
   }
   if (value.contains("shape")) {
     Result<std::string> shape = text(value["shape"], where.at("shape"));
     if (!shape) return shape.error();
     if (*shape != "auto" && *shape != "convex" && *shape != "concave" && *shape != "pieces")
-      return where.at("shape").error("expected \"auto\", \"convex\", \"pieces\" or \"concave\", got " + show(value["shape"]));
+      return where.at("shape").error("expected \"auto\", \"convex\", \"pieces\" or \"concave\", got " +
+                                     show(value["shape"]));
     o.shape = *shape;
   }
   struct Vec3Field {
     const char* key;
     std::array<double, 3>* out;
-  } vectors[] = {{"position", &o.position_m}, {"velocity", &o.velocity_m_s}, {"angular_velocity", &o.angular_velocity_rad_s}};
+  } vectors[] = {
+      {"position", &o.position_m}, {"velocity", &o.velocity_m_s}, {"angular_velocity", &o.angular_velocity_rad_s}};
   for (const Vec3Field& f : vectors) {
     if (!value.contains(f.key)) continue;
     Result<std::array<double, 3>> v = vector<3>(value[f.key], where.at(f.key));
@@ -279,8 +294,9 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
     if (!q) return q.error();
     const double norm = std::sqrt((*q)[0] * (*q)[0] + (*q)[1] * (*q)[1] + (*q)[2] * (*q)[2] + (*q)[3] * (*q)[3]);
     if (std::fabs(norm - 1.0) > 1e-3)
-      return where.at("orientation").error("expected a unit quaternion [w, x, y, z], got " + show(value["orientation"]) +
-                                           " (norm " + std::to_string(norm) + ")");
+      return where.at("orientation")
+          .error("expected a unit quaternion [w, x, y, z], got " + show(value["orientation"]) + " (norm " +
+                 std::to_string(norm) + ")");
     for (int i = 0; i < 4; ++i) o.orientation_wxyz[i] = (*q)[i] / norm;
   }
   Status coefficients = contactCoefficients(value, where, o.restitution, o.friction);
@@ -293,8 +309,8 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
 const std::vector<SceneKeyTable>& sceneKeyTables() {
   static const std::vector<SceneKeyTable> tables = {
       {"top level",
-       {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes", "contact_damping",
-        "contacts"}},
+       {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes",
+        "contact_damping", "contacts"}},
       {"listener", {"position"}},
       {"contacts[]", {"objects", "restitution", "friction"}},
       {"ground", {"material", "height", "restitution", "friction"}},
@@ -318,10 +334,11 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
       const json unused = json::parse(json_text);
       (void)unused;
     } catch (const json::parse_error& e) {
-      return badInput(path + ":" + lineColumn(json_text, e.byte > 0 ? e.byte - 1 : 0) + ": error: invalid JSON: " +
-                      std::string(e.what()).substr(std::string(e.what()).find(':') + 2));
+      return badInput(path + ":" + lineColumn(json_text, e.byte > 0 ? e.byte - 1 : 0) +
+                      ": error: invalid JSON: " + std::string(e.what()).substr(std::string(e.what()).find(':') + 2));
     } catch (const json::exception& e) {  // e.g. a number too large for a double
-      return badInput(path + ": error: invalid JSON: " + std::string(e.what()).substr(std::string(e.what()).find(']') + 2));
+      return badInput(path +
+                      ": error: invalid JSON: " + std::string(e.what()).substr(std::string(e.what()).find(']') + 2));
     }
     return badInput(path + ": error: invalid JSON");
   }
@@ -333,13 +350,15 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
   if (doc.contains("sample_rate")) {
     Result<double> rate = number(doc["sample_rate"], root.at("sample_rate"));
     if (!rate) return rate.error();
-    if (*rate < 8000 || *rate > 384000) return root.at("sample_rate").error("must be 8000 to 384000 Hz, got " + show(doc["sample_rate"]));
+    if (*rate < 8000 || *rate > 384000)
+      return root.at("sample_rate").error("must be 8000 to 384000 Hz, got " + show(doc["sample_rate"]));
     scene.sample_rate_hz = *rate;
   }
   if (doc.contains("duration")) {
     Result<double> duration = number(doc["duration"], root.at("duration"));
     if (!duration) return duration.error();
-    if (*duration <= 0 || *duration > 3600) return root.at("duration").error("must be in (0, 3600] s, got " + show(doc["duration"]));
+    if (*duration <= 0 || *duration > 3600)
+      return root.at("duration").error("must be in (0, 3600] s, got " + show(doc["duration"]));
     scene.duration_s = *duration;
   }
   if (doc.contains("gravity")) {
@@ -360,7 +379,8 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
     scene.contact_damping_per_s = *c;
   }
   if (doc.contains("max_modes")) {
-    if (!doc["max_modes"].is_number_integer() || doc["max_modes"].get<long long>() < 1 || doc["max_modes"].get<long long>() > 100000)
+    if (!doc["max_modes"].is_number_integer() || doc["max_modes"].get<long long>() < 1 ||
+        doc["max_modes"].get<long long>() > 100000)
       return root.at("max_modes").error("expected a whole number 1 to 100000, got " + show(doc["max_modes"]));
     scene.max_modes = doc["max_modes"].get<int>();
   }
@@ -402,7 +422,8 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
   if (!objects.is_array()) return root.at("objects").error("expected a list, got " + show(objects));
   if (objects.empty()) return root.at("objects").error("the list is empty: nothing to hear");
   if (objects.size() > kMaxObjects)
-    return root.at("objects").error(std::to_string(objects.size()) + " objects, more than the limit of " + std::to_string(kMaxObjects));
+    return root.at("objects").error(std::to_string(objects.size()) + " objects, more than the limit of " +
+                                    std::to_string(kMaxObjects));
   std::set<std::string> names;
   for (size_t i = 0; i < objects.size(); ++i) {
     Result<SceneObject> o = object(objects[i], root.at("objects").index(i), path);

@@ -24,12 +24,11 @@ std::string bodyLabel(const SimBodyDesc& body, size_t index) {
 namespace {
 
 template <size_t N>
-Status checkFinite(const std::array<double, N>& values, const SimBodyDesc& body, size_t index,
-                   const char* field) {
+Status checkFinite(const std::array<double, N>& values, const SimBodyDesc& body, size_t index, const char* field) {
   for (size_t k = 0; k < N; ++k) {
     if (!std::isfinite(values[k])) {
-      return badInput(bodyLabel(body, index) + ": " + field + "[" + std::to_string(k) +
-                      "] = " + fmt(values[k]) + " (must be finite)");
+      return badInput(bodyLabel(body, index) + ": " + field + "[" + std::to_string(k) + "] = " + fmt(values[k]) +
+                      " (must be finite)");
     }
   }
   return {};
@@ -90,8 +89,8 @@ Status checkSettings(const SimSettings& settings) {
 Status checkBody(const SimBodyDesc& body, size_t index, btQuaternion& orientation) {
   const std::string label = bodyLabel(body, index);
   if (body.surface_positions.empty() || body.surface_triangles.empty()) {
-    return badInput(label + ": empty geometry (" + std::to_string(body.surface_positions.size() / 3) +
-                    " vertices, " + std::to_string(body.surface_triangles.size() / 3) + " triangles)");
+    return badInput(label + ": empty geometry (" + std::to_string(body.surface_positions.size() / 3) + " vertices, " +
+                    std::to_string(body.surface_triangles.size() / 3) + " triangles)");
   }
   if (body.surface_positions.size() % 3 != 0 || body.surface_triangles.size() % 3 != 0) {
     return badInput(label + ": surface_positions has " + std::to_string(body.surface_positions.size()) +
@@ -140,13 +139,12 @@ Status checkBody(const SimBodyDesc& body, size_t index, btQuaternion& orientatio
   if (Status s = checkFinite(body.inertia_kg_m2, body, index, "inertia_kg_m2"); !s) return s;
   const auto& inertia = body.inertia_kg_m2;
   const double trace = inertia[0] + inertia[4] + inertia[8];
-  const double asymmetry = std::max({std::abs(inertia[1] - inertia[3]), std::abs(inertia[2] - inertia[6]),
-                                     std::abs(inertia[5] - inertia[7])});
+  const double asymmetry = std::max(
+      {std::abs(inertia[1] - inertia[3]), std::abs(inertia[2] - inertia[6]), std::abs(inertia[5] - inertia[7])});
   if (!(trace > 0.0) || asymmetry > 1e-6 * trace) {
-    return badInput(label + ": inertia_kg_m2 = [" + fmt(inertia[0]) + ", " + fmt(inertia[1]) + ", " +
-                    fmt(inertia[2]) + "; " + fmt(inertia[3]) + ", " + fmt(inertia[4]) + ", " + fmt(inertia[5]) +
-                    "; " + fmt(inertia[6]) + ", " + fmt(inertia[7]) + ", " + fmt(inertia[8]) +
-                    "] (must be symmetric with a positive trace)");
+    return badInput(label + ": inertia_kg_m2 = [" + fmt(inertia[0]) + ", " + fmt(inertia[1]) + ", " + fmt(inertia[2]) +
+                    "; " + fmt(inertia[3]) + ", " + fmt(inertia[4]) + ", " + fmt(inertia[5]) + "; " + fmt(inertia[6]) +
+                    ", " + fmt(inertia[7]) + ", " + fmt(inertia[8]) + "] (must be symmetric with a positive trace)");
   }
   return {};
 }

@@ -115,8 +115,7 @@ void Simulation::postTick() {
         } else {
           const BodyState& b = *bodies_[size_t(index[k])];
           meshes[k] = b.mesh_from_body(locals[k]);
-          *mesh_impulses[k] =
-              fromBt(b.mesh_from_body.getBasis() * (b.pre_transform.getBasis().transpose() * impulse));
+          *mesh_impulses[k] = fromBt(b.mesh_from_body.getBasis() * (b.pre_transform.getBasis().transpose() * impulse));
           point_velocity[k] = b.pre_linear + b.pre_angular.cross(point_world - b.pre_transform.getOrigin());
         }
         *mesh_points[k] = fromBt(meshes[k]);
@@ -137,7 +136,8 @@ void Simulation::postTick() {
           offset = std::clamp(offset, -settings_.substep_s, settings_.substep_s);
           ev.time_s = time_s + offset;
           // And placed where they met: both points moved along their paths (see meetingOffset).
-          const btVector3 path_velocity_sum = point_velocity[0] + point_velocity[1] +
+          const btVector3 path_velocity_sum =
+              point_velocity[0] + point_velocity[1] +
               0.5 * settings_.substep_s * (freeAcceleration(objects[0]) + freeAcceleration(objects[1]));
           ev.point_world = fromBt(point_world + 0.5 * offset * path_velocity_sum);
         }

@@ -22,7 +22,7 @@ struct ConvexPieces {
   /// Per piece, the hull's points (x, y, z, ...), in the surface's frame.
   std::vector<std::vector<double>> hull_points;
   std::vector<double> hull_volume_m3;  ///< per piece
-  double worst_concavity_m = 0.0;  ///< the deepest vertex inside its piece's hull
+  double worst_concavity_m = 0.0;      ///< the deepest vertex inside its piece's hull
 };
 
 /// Splits the surface's triangles recursively by axis-aligned planes (through the middle of a

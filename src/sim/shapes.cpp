@@ -28,8 +28,8 @@ double meshVolume(const std::vector<double>& xyz, const std::vector<uint32_t>& t
     const double* a = &xyz[3 * size_t(tris[t])];
     const double* b = &xyz[3 * size_t(tris[t + 1])];
     const double* c = &xyz[3 * size_t(tris[t + 2])];
-    six_v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-             a[2] * (b[0] * c[1] - b[1] * c[0]);
+    six_v +=
+        a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
   }
   return six_v / 6.0;
 }
@@ -81,10 +81,11 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
                         fmt(state->principal_inertia[k]) + " (must be positive definite)");
       }
     }
-    if (principal_axes.determinant() < 0) principal_axes.setValue(  // keep a proper rotation
-        -principal_axes[0][0], principal_axes[0][1], principal_axes[0][2], -principal_axes[1][0],
-        principal_axes[1][1], principal_axes[1][2], -principal_axes[2][0], principal_axes[2][1],
-        principal_axes[2][2]);
+    if (principal_axes.determinant() < 0)
+      principal_axes.setValue(  // keep a proper rotation
+          -principal_axes[0][0], principal_axes[0][1], principal_axes[0][2], -principal_axes[1][0],
+          principal_axes[1][1], principal_axes[1][2], -principal_axes[2][0], principal_axes[2][1],
+          principal_axes[2][2]);
     centre = toBt(desc.centre_m);
     state->mass_kg = desc.mass_kg;
   }
@@ -95,8 +96,8 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   state->body_xyz.resize(3 * vertex_count);
   btVector3 lo(SIMD_INFINITY, SIMD_INFINITY, SIMD_INFINITY), hi = -lo;
   for (size_t v = 0; v < vertex_count; ++v) {
-    const btVector3 p = state->body_from_mesh(btVector3(desc.surface_positions[3 * v], desc.surface_positions[3 * v + 1],
-                                                        desc.surface_positions[3 * v + 2]));
+    const btVector3 p = state->body_from_mesh(
+        btVector3(desc.surface_positions[3 * v], desc.surface_positions[3 * v + 1], desc.surface_positions[3 * v + 2]));
     for (int k = 0; k < 3; ++k) state->body_xyz[3 * v + size_t(k)] = p[k];
     lo.setMin(p);
     hi.setMax(p);
@@ -153,40 +154,41 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
     if (hull.vertices.size() >= 12 && radius_max - radius_min <= 0.02 * radius_mean &&
         hull_volume >= 0.9 * sphere_volume) {
       // Volume-equivalent radius, so the sphere neither floats above nor sinks into the ground.
-      const double radius = std::cbrt(3.0 * std::abs(meshVolume(state->body_xyz, desc.surface_triangles)) / (4.0 * M_PI));
+      const double radius =
+          std::cbrt(3.0 * std::abs(meshVolume(state->body_xyz, desc.surface_triangles)) / (4.0 * M_PI));
       state->shape = std::make_unique<btSphereShape>(radius > 0 ? radius : radius_mean);
       state->margin_m = state->shape->getMargin();
     } else {
-    auto convex = std::make_unique<btConvexHullShape>();
-    if (hull.vertices.size() <= kMaxPolyhedralVertices) {
-      // Polyhedral features make hull-hull contacts use face clipping, which yields the whole
-      // contact patch (up to 4 points) in the first substep; plain GJK/EPA adds one point per
-      // substep, so a box landing flat on another first touches at one corner, tips and slides
-      // [Bullet btPolyhedralContactClipping]. The clipping works on the bare points (no margin)
-      // while GJK paths (ground, triangles) add the margin, so the points are the hull itself
-      // and the margin is tiny: 0.1% of the thinnest extent, the most a body can float.
-      // Edge-edge clipping costs O(edges^2) per pair, hence only for modest hulls.
-      state->margin_m = std::clamp(0.001 * state->min_extent_m, 1e-6, 1e-3);
-      for (int v = 0; v < hull.vertices.size(); ++v) convex->addPoint(hull.vertices[v], false);
-      convex->recalcLocalAabb();
-      convex->setMargin(state->margin_m);
-      convex->initializePolyhedralFeatures();
-    } else {
-      // Large hull, GJK/EPA only: those need a real margin for robust penetration depths, and
-      // btConvexHullShape puts it outside the points. Shrink the hull by the margin first
-      // (btConvexHullComputer moves each face inwards) so the collision surface is the mesh's
-      // hull with edges rounded by the margin; the shrink is clamped to a quarter of the inner
-      // radius for thin bodies.
-      btConvexHullComputer shrunk;
-      const double shrink = shrunk.compute(state->body_xyz.data(), int(3 * sizeof(btScalar)), int(vertex_count),
-                                           state->margin_m, 0.25);
-      const btConvexHullComputer& used = shrink > 0.0 && shrunk.vertices.size() > 0 ? shrunk : hull;
-      for (int v = 0; v < used.vertices.size(); ++v) convex->addPoint(used.vertices[v], false);
-      convex->recalcLocalAabb();
-      if (shrink > 0.0) state->margin_m = shrink;  // the clamp may have made it smaller
-      convex->setMargin(state->margin_m);
-    }
-    state->shape = std::move(convex);
+      auto convex = std::make_unique<btConvexHullShape>();
+      if (hull.vertices.size() <= kMaxPolyhedralVertices) {
+        // Polyhedral features make hull-hull contacts use face clipping, which yields the whole
+        // contact patch (up to 4 points) in the first substep; plain GJK/EPA adds one point per
+        // substep, so a box landing flat on another first touches at one corner, tips and slides
+        // [Bullet btPolyhedralContactClipping]. The clipping works on the bare points (no margin)
+        // while GJK paths (ground, triangles) add the margin, so the points are the hull itself
+        // and the margin is tiny: 0.1% of the thinnest extent, the most a body can float.
+        // Edge-edge clipping costs O(edges^2) per pair, hence only for modest hulls.
+        state->margin_m = std::clamp(0.001 * state->min_extent_m, 1e-6, 1e-3);
+        for (int v = 0; v < hull.vertices.size(); ++v) convex->addPoint(hull.vertices[v], false);
+        convex->recalcLocalAabb();
+        convex->setMargin(state->margin_m);
+        convex->initializePolyhedralFeatures();
+      } else {
+        // Large hull, GJK/EPA only: those need a real margin for robust penetration depths, and
+        // btConvexHullShape puts it outside the points. Shrink the hull by the margin first
+        // (btConvexHullComputer moves each face inwards) so the collision surface is the mesh's
+        // hull with edges rounded by the margin; the shrink is clamped to a quarter of the inner
+        // radius for thin bodies.
+        btConvexHullComputer shrunk;
+        const double shrink =
+            shrunk.compute(state->body_xyz.data(), int(3 * sizeof(btScalar)), int(vertex_count), state->margin_m, 0.25);
+        const btConvexHullComputer& used = shrink > 0.0 && shrunk.vertices.size() > 0 ? shrunk : hull;
+        for (int v = 0; v < used.vertices.size(); ++v) convex->addPoint(used.vertices[v], false);
+        convex->recalcLocalAabb();
+        if (shrink > 0.0) state->margin_m = shrink;  // the clamp may have made it smaller
+        convex->setMargin(state->margin_m);
+      }
+      state->shape = std::move(convex);
     }
   } else if (shape == SimBodyDesc::Shape::ConvexPieces) {
     // Convex pieces of the surface, each a polyhedral hull as above (SAT + clipping contacts,

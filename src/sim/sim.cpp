@@ -81,7 +81,8 @@ Status Simulation::build(const std::vector<btQuaternion>& orientations) {
 ContactCoefficients Simulation::coefficients(int index_a, int index_b) const {
   // Bullet's user index: the body, or -1 for the ground.
   auto side = [&](int index) {
-    if (index < 0) return ContactSide{settings_.ground_restitution, settings_.ground_friction, settings_.ground_compliance_per_pa};
+    if (index < 0)
+      return ContactSide{settings_.ground_restitution, settings_.ground_friction, settings_.ground_compliance_per_pa};
     const SimBodyDesc& d = descs_[size_t(index)];
     return ContactSide{d.restitution, d.friction, d.compliance_per_pa};
   };
@@ -204,11 +205,12 @@ Result<SimResult> Simulation::run() {
     if (settings_.allow_sleep) hastenSleep();
     if (settings_.record_states) recordStates(result.states);
     if (events_.size() > settings_.max_events)
-      return badInput("simulate: more than " + std::to_string(settings_.max_events) + " contact events by t = " +
-                      std::to_string(double(step_ + 1) * dt) +
+      return badInput("simulate: more than " + std::to_string(settings_.max_events) +
+                      " contact events by t = " + std::to_string(double(step_ + 1) * dt) +
                       " s, the cap on contact events (memory); raise it with --max-events N or shorten the duration");
     result.energy_trace_j.push_back(energy(&kinetic));
-    for (size_t i = 0; i < n; ++i) result.max_kinetic_energy_j[i] = std::max(result.max_kinetic_energy_j[i], kinetic[i]);
+    for (size_t i = 0; i < n; ++i)
+      result.max_kinetic_energy_j[i] = std::max(result.max_kinetic_energy_j[i], kinetic[i]);
     if (settings_.progress) {
       const auto now = Clock::now();
       if (now - last_report >= std::chrono::milliseconds(100)) {

@@ -56,12 +56,12 @@ double meetingOffset(double gap_m, double closing_m_s, double closing_accel_m_s2
 
 /// Everything Bullet needs for one body; addresses must stay fixed (Bullet keeps pointers).
 struct BodyState {
-  btTransform mesh_from_body;       // fixed
+  btTransform mesh_from_body;  // fixed
   btTransform body_from_mesh;
   btVector3 principal_inertia{0, 0, 0};  // kg m^2, body frame
   double mass_kg = 0.0;
-  double size_m = 0.0;              // largest extent of the body-frame bounding box
-  double min_extent_m = 0.0;        // smallest extent
+  double size_m = 0.0;        // largest extent of the body-frame bounding box
+  double min_extent_m = 0.0;  // smallest extent
   double margin_m = 0.0;
   SimBodyDesc::Shape shape_used = SimBodyDesc::Shape::ConvexHull;
   bool is_static = false;
@@ -70,7 +70,7 @@ struct BodyState {
   std::vector<int> indices;
   std::unique_ptr<btTriangleIndexVertexArray> mesh_interface;
   std::vector<std::unique_ptr<btConvexHullShape>> pieces;  // children of a compound shape
-  std::vector<std::vector<double>> pieces_mesh;             // their points, mesh frame
+  std::vector<std::vector<double>> pieces_mesh;            // their points, mesh frame
   bool pieces_computed = false;
   double pieces_seconds = 0.0;
   std::unique_ptr<btCollisionShape> shape;

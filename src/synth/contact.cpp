@@ -158,8 +158,10 @@ SurfaceLocator::SurfaceLocator(const ModeBank& bank) : bank_(&bank) {
         for (int y = from[1]; y <= to[1]; ++y)
           for (int z = from[2]; z <= to[2]; ++z) {
             const size_t c = (static_cast<size_t>(x) * dims_[1] + y) * dims_[2] + z;
-            if (pass == 0) ++cell_start_[c + 1];
-            else cell_tris_[fill[c]++] = static_cast<uint32_t>(t);
+            if (pass == 0)
+              ++cell_start_[c + 1];
+            else
+              cell_tris_[fill[c]++] = static_cast<uint32_t>(t);
           }
     }
     if (pass == 0)
@@ -277,9 +279,12 @@ void ContactProjector::projectImpulseInto(const double point[3], const double im
       const float* read = use_rows_ ? rows_.row(v[k]) : nullptr;
       for (size_t m = 0; m < nm; ++m) {
         float* to = row + m * 9 + 3 * k;
-        if (!use_rows_) std::copy_n(bank.shapeAt(m, v[k]), 3, to);
-        else if (read != nullptr) std::copy_n(read + m * 3, 3, to);
-        else std::fill_n(to, 3, 0.0f);
+        if (!use_rows_)
+          std::copy_n(bank.shapeAt(m, v[k]), 3, to);
+        else if (read != nullptr)
+          std::copy_n(read + m * 3, 3, to);
+        else
+          std::fill_n(to, 3, 0.0f);
       }
     }
     for (int c = 0; c < 3; ++c) points_[3 * slot + c] = point[c], weights_[3 * slot + c] = w[c];
@@ -300,8 +305,10 @@ void ContactProjector::projectImpulseInto(const double point[3], const double im
 void ContactProjector::projectOnce(const double point[3], const double impulse[3], double* out) const {
   const size_t nm = bank_->modeCount();
   if (!use_rows_ || rows_.modes != nm || !locator_.hasTriangles()) {
-    if (use_rows_ && rows_.modes != nm) std::fill_n(out, nm, 0.0);
-    else locator_.projectImpulseInto(point, impulse, out);
+    if (use_rows_ && rows_.modes != nm)
+      std::fill_n(out, nm, 0.0);
+    else
+      locator_.projectImpulseInto(point, impulse, out);
     return;
   }
   uint32_t v[3];
@@ -332,16 +339,15 @@ std::vector<double> projectImpulse(const ModeBank& bank, const double point[3], 
   return g;
 }
 
-double hertzContactDuration(double youngs1_pa, double poisson1, double radius1_m, double mass1_kg,
-                            double youngs2_pa, double poisson2, double radius2_m, double mass2_kg,
-                            double normal_speed_m_s) {
+double hertzContactDuration(double youngs1_pa, double poisson1, double radius1_m, double mass1_kg, double youngs2_pa,
+                            double poisson2, double radius2_m, double mass2_kg, double normal_speed_m_s) {
   // Johnson 1985, eq. 11.24: duration of an elastic Hertzian impact, t = 2.868 (m*^2/(R* E*^2 v))^(1/5).
   // 1/x of an infinite radius or mass is 0 (a half-space, or an immovable body).
   const double inv_e = (1.0 - poisson1 * poisson1) / youngs1_pa + (1.0 - poisson2 * poisson2) / youngs2_pa;
   const double inv_r = 1.0 / radius1_m + 1.0 / radius2_m;
   const double inv_m = 1.0 / mass1_kg + 1.0 / mass2_kg;
-  if (!(inv_e > 0.0) || !(inv_r > 0.0) || !(inv_m > 0.0) || !(normal_speed_m_s > 0.0) ||
-      !std::isfinite(inv_e) || !std::isfinite(inv_r) || !std::isfinite(inv_m) || !std::isfinite(normal_speed_m_s))
+  if (!(inv_e > 0.0) || !(inv_r > 0.0) || !(inv_m > 0.0) || !(normal_speed_m_s > 0.0) || !std::isfinite(inv_e) ||
+      !std::isfinite(inv_r) || !std::isfinite(inv_m) || !std::isfinite(normal_speed_m_s))
     return 0.0;  // no contact, or nonsense input: the caller gets an ideal impulse
   const double m_star = 1.0 / inv_m, r_star = 1.0 / inv_r, e_star = 1.0 / inv_e;
   return 2.868 * std::pow(m_star * m_star / (r_star * e_star * e_star * normal_speed_m_s), 0.2);

@@ -64,8 +64,10 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
   if (!settings_.realtime) {
     const SynthStats before = v.synth_.stats();
     v.synth_.addImpact(impact);
-    if (v.synth_.stats().impacts_inaudible > before.impacts_inaudible) ++stats_.impacts_inaudible;
-    else ++stats_.impacts;
+    if (v.synth_.stats().impacts_inaudible > before.impacts_inaudible)
+      ++stats_.impacts_inaudible;
+    else
+      ++stats_.impacts;
     return;
   }
   switch (v.synth_.addImpactNoAlloc(impact)) {
@@ -84,8 +86,10 @@ void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double
   step.ramp_s = ramp_s;
   step.modal_force_change = modal_change;
   const ImpactResult r = settings_.realtime ? v.synth_.addForceStepNoAlloc(step) : v.synth_.addForceStep(step);
-  if (r == ImpactResult::NoCapacity) ++stats_.impacts_dropped;
-  else ++stats_.load_changes;
+  if (r == ImpactResult::NoCapacity)
+    ++stats_.impacts_dropped;
+  else
+    ++stats_.load_changes;
 }
 
 void SoundEngine::beginStep(double step_end_s, double step_s) {
@@ -110,18 +114,23 @@ void SoundEngine::contact(const EngineContact& c) {
   const double now = time();
   const bool impact = c.normal_speed_m_s > kImpactSpeed_m_s;
   // A resting body's contacts come back to the same points step after step: remember them.
-  if (impact) v->projector_.projectOnce(point.data(), impulse.data(), v->modal_.data());
-  else v->projector_.projectImpulseInto(point.data(), impulse.data(), v->modal_.data());
+  if (impact)
+    v->projector_.projectOnce(point.data(), impulse.data(), v->modal_.data());
+  else
+    v->projector_.projectImpulseInto(point.data(), impulse.data(), v->modal_.data());
   if (impact) {
     const double t = c.time_s >= 0.0 ? c.time_s : now;
-    scheduleImpact(*v, v->modal_.data(), t, hertzDuration(*v, c.partner, c.normal_speed_m_s), PulseShape::HalfSine, world);
+    scheduleImpact(*v, v->modal_.data(), t, hertzDuration(*v, c.partner, c.normal_speed_m_s), PulseShape::HalfSine,
+                   world);
   } else {
     // Sustained: a force over the step (its impulse / step length), summed over the step's points.
     ++stats_.sustained_contacts;
     const double per_s = step_.length_s > 0.0 ? 1.0 / step_.length_s : 1.0;
     for (size_t i = 0; i < v->modal_.size(); ++i) v->step_force_[i] += v->modal_[i] * per_s;
-    const std::array<double, 3> arm = {point[0] - v->centre_m_[0], point[1] - v->centre_m_[1], point[2] - v->centre_m_[2]};
-    const std::array<double, 3> moment = {arm[1] * impulse[2] - arm[2] * impulse[1], arm[2] * impulse[0] - arm[0] * impulse[2],
+    const std::array<double, 3> arm = {point[0] - v->centre_m_[0], point[1] - v->centre_m_[1],
+                                       point[2] - v->centre_m_[2]};
+    const std::array<double, 3> moment = {arm[1] * impulse[2] - arm[2] * impulse[1],
+                                          arm[2] * impulse[0] - arm[0] * impulse[2],
                                           arm[0] * impulse[1] - arm[1] * impulse[0]};
     for (int k = 0; k < 3; ++k) {
       v->step_load_[k] += impulse[k] * per_s;
@@ -132,15 +141,19 @@ void SoundEngine::contact(const EngineContact& c) {
     if (c.partner.voice != kNoVoice) {
       bool known = false;
       for (uint32_t k = 0; k < v->partner_count_; ++k) known = known || v->partners_[k] == c.partner.voice;
-      if (!known && v->partner_count_ < v->partners_.size()) v->partners_[v->partner_count_++] = c.partner.voice;
-      else if (!known) v->partners_overflow_ = true;
+      if (!known && v->partner_count_ < v->partners_.size())
+        v->partners_[v->partner_count_++] = c.partner.voice;
+      else if (!known)
+        v->partners_overflow_ = true;
     } else {
       v->partners_overflow_ = true;  // the ground or an unnamed body: it never sleeps
     }
     const double t = c.time_s >= 0.0 ? c.time_s : now;
     if (settings_.contact_damping_per_s > 0.0 && !v->span_open_) {
-      if (settings_.realtime) (void)v->synth_.setExtraDampingNoAlloc(0, t + delayTo(world), settings_.contact_damping_per_s);
-      else v->synth_.setExtraDamping(0, t + delayTo(world), settings_.contact_damping_per_s);
+      if (settings_.realtime)
+        (void)v->synth_.setExtraDampingNoAlloc(0, t + delayTo(world), settings_.contact_damping_per_s);
+      else
+        v->synth_.setExtraDamping(0, t + delayTo(world), settings_.contact_damping_per_s);
       v->span_open_ = true;
     }
     v->last_sustained_s_ = t;
@@ -200,8 +213,10 @@ void SoundEngine::endStepFor(Voice& v, uint32_t slot) {
   }
   if (v.span_open_ && !keep && step_start_s - v.last_sustained_s_ > kContactGap_s) {
     const double t = v.last_sustained_s_ + kContactGap_s + delayTo(centre);
-    if (settings_.realtime) (void)v.synth_.setExtraDampingNoAlloc(0, t, 0.0);
-    else v.synth_.setExtraDamping(0, t, 0.0);
+    if (settings_.realtime)
+      (void)v.synth_.setExtraDampingNoAlloc(0, t, 0.0);
+    else
+      v.synth_.setExtraDamping(0, t, 0.0);
     v.span_open_ = false;
   }
 }

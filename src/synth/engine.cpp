@@ -69,7 +69,8 @@ double SoundEngine::delayTo(const std::array<double, 3>& world_point) const {
 void SoundEngine::updateGains(Voice& v) {
   const std::array<double, 3> centre = v.pose_.toWorld(v.centre_m_);
   const double d = distance(centre, listener_.position_m);
-  const double g = static_cast<double>(v.gain_) * distanceGain(d, settings_.reference_distance_m, settings_.min_distance_m);
+  const double g =
+      static_cast<double>(v.gain_) * distanceGain(d, settings_.reference_distance_m, settings_.min_distance_m);
   v.level_gain2_ = static_cast<float>(g * g);
   if (settings_.channels == 1) {
     v.target_gain_[0] = static_cast<float>(g);

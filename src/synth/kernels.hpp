@@ -15,14 +15,13 @@ namespace strike::detail {
 struct KernelTable {
   const char* name;
   size_t lanes;
-  void (*advance)(const float* co_re, const float* co_im, float* st_re, float* st_im, size_t slots,
-                  float* acc, size_t n0, size_t n1);
+  void (*advance)(const float* co_re, const float* co_im, float* st_re, float* st_im, size_t slots, float* acc,
+                  size_t n0, size_t n1);
   /// out[n - n0] += sum over lanes of acc[n * lanes + l], for n in [n0, n1).
   void (*reduce)(const float* acc, size_t n0, size_t n1, double* out);
   /// Block end: anc = pb * anc + inj; inj = 0; st = float(anc); mag2 = |anc|^2.
-  void (*anchor)(const double* pb_re, const double* pb_im, double* anc_re, double* anc_im,
-                 double* inj_re, double* inj_im, float* st_re, float* st_im, double* mag2,
-                 size_t slots);
+  void (*anchor)(const double* pb_re, const double* pb_im, double* anc_re, double* anc_im, double* inj_re,
+                 double* inj_im, float* st_re, float* st_im, double* mag2, size_t slots);
 };
 
 /// Slots are allocated in multiples of this (the widest kernel's group of modes).

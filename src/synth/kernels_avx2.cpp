@@ -12,8 +12,8 @@ namespace {
 constexpr size_t kLanes = 8;
 constexpr int kVectors = 4;
 
-void advanceAvx2(const float* co_re, const float* co_im, float* st_re, float* st_im, size_t slots,
-                 float* acc, size_t n0, size_t n1) {
+void advanceAvx2(const float* co_re, const float* co_im, float* st_re, float* st_im, size_t slots, float* acc,
+                 size_t n0, size_t n1) {
   constexpr size_t kGroup = kLanes * kVectors;
   for (size_t g = 0; g < slots; g += kGroup) {
     __m256 pr[kVectors], pi[kVectors], xr[kVectors], xi[kVectors];

@@ -10,7 +10,6 @@
 namespace strike::detail {
 namespace {
 
-
 constexpr size_t kLanes = 16;
 // 8 zmm (128 modes) per group measured ~7% faster than 4 (more independent chains to hide the
 // mul -> FMA latency); the coefficients partly live in L1 as memory operands. A 64-mode tail
@@ -47,8 +46,8 @@ void advanceGroup(const float* co_re, const float* co_im, float* st_re, float* s
   }
 }
 
-void advanceAvx512(const float* co_re, const float* co_im, float* st_re, float* st_im, size_t slots,
-                   float* acc, size_t n0, size_t n1) {
+void advanceAvx512(const float* co_re, const float* co_im, float* st_re, float* st_im, size_t slots, float* acc,
+                   size_t n0, size_t n1) {
   size_t g = 0;
   for (; g + kBigVectors * kLanes <= slots; g += kBigVectors * kLanes)
     advanceGroup<kBigVectors>(co_re + g, co_im + g, st_re + g, st_im + g, acc, n0, n1);

@@ -7,8 +7,8 @@ namespace {
 
 constexpr size_t kLanes = 8;
 
-void advanceScalar(const float* co_re, const float* co_im, float* st_re, float* st_im, size_t slots,
-                   float* acc, size_t n0, size_t n1) {
+void advanceScalar(const float* co_re, const float* co_im, float* st_re, float* st_im, size_t slots, float* acc,
+                   size_t n0, size_t n1) {
   for (size_t g = 0; g < slots; g += kLanes) {
     float pr[kLanes], pi[kLanes], xr[kLanes], xi[kLanes];
     for (size_t l = 0; l < kLanes; ++l) {

@@ -66,9 +66,9 @@ Mat4 expm4(const Mat4& a, double t_s) {
 }
 
 Mat4 augmentedMatrix(double omega0, double damping_c, double pulse_omega) {
-  return Mat4{0.0,     omega0,     0.0, 0.0,           //
-              -omega0, -damping_c, 1.0, 0.0,           //
-              0.0,     0.0,        0.0, pulse_omega,   //
+  return Mat4{0.0,     omega0,     0.0,          0.0,          //
+              -omega0, -damping_c, 1.0,          0.0,          //
+              0.0,     0.0,        0.0,          pulse_omega,  //
               0.0,     0.0,        -pulse_omega, 0.0};
 }
 

@@ -75,7 +75,7 @@ class AlignedBuffer {
   ~AlignedBuffer() { release(); }
   void grow(size_t n) {
     if (n <= size_) return;
-    T* p = static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{64}));
+    T* p = static_cast<T*>(::operator new (n * sizeof(T), std::align_val_t{64}));
     std::fill(p, p + n, T{});
     if (size_ > 0) std::copy(data_, data_ + size_, p);
     release();
@@ -89,7 +89,7 @@ class AlignedBuffer {
 
  private:
   void release() {
-    if (data_) ::operator delete(data_, std::align_val_t{64});
+    if (data_) ::operator delete (data_, std::align_val_t{64});
     data_ = nullptr;
     size_ = 0;
   }
@@ -149,8 +149,8 @@ class DenormalGuard {
 
 detail::KernelTable chooseKernels(SimdLevel level) {
 #if defined(STRIKE_SYNTH_X86)
-  const bool has_avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-                          __builtin_cpu_supports("avx512vl");
+  const bool has_avx512 =
+      __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl");
   const bool has_avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   if ((level == SimdLevel::Auto || level == SimdLevel::Avx512) && has_avx512) return detail::avx512Kernels();
   if (level != SimdLevel::Scalar && has_avx2) return detail::avx2Kernels();
@@ -209,8 +209,8 @@ struct OscillatorBank::Impl {
     fs = (s.sample_rate_hz > 0.0 && std::isfinite(s.sample_rate_hz)) ? s.sample_rate_hz : 48000.0;
     settings.sample_rate_hz = fs;
     h = 1.0 / fs;
-    threshold = std::isfinite(s.audibility_threshold) ? std::max(s.audibility_threshold, kThresholdFloor)
-                                                      : kThresholdFloor;
+    threshold =
+        std::isfinite(s.audibility_threshold) ? std::max(s.audibility_threshold, kThresholdFloor) : kThresholdFloor;
     use_double = s.double_precision;
     kernels = chooseKernels(s.simd);
     acc.grow(kBlock * detail::kKernelMaxLanes);
@@ -227,7 +227,7 @@ struct OscillatorBank::Impl {
     const double f_max = std::min(settings.max_freq_hz, 0.45 * fs);
     for (size_t i = 0; i < desc.eigenvalues.size(); ++i) {
       ModeInfo m;
-      const double r = desc.radiation_weight.empty() ? 1.0
+      const double r = desc.radiation_weight.empty()      ? 1.0
                        : i < desc.radiation_weight.size() ? desc.radiation_weight[i]
                                                           : 0.0;
       m.radiation = std::isfinite(r) ? r : 0.0;
@@ -349,7 +349,8 @@ struct OscillatorBank::Impl {
     double extra_damping = 0.0;
     {
       const auto& schedule = obj.damping_schedule;
-      auto after = std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(start_sample, static_cast<double>(INFINITY)));
+      auto after = std::upper_bound(schedule.begin(), schedule.end(),
+                                    std::make_pair(start_sample, static_cast<double>(INFINITY)));
       if (after != schedule.begin()) extra_damping = std::prev(after)->second;
     }
     for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
@@ -362,8 +363,8 @@ struct OscillatorBank::Impl {
         const Complex pole = m.base_pole - extra_damping;
         const Complex step = extra_damping == 0.0 ? m.base_step : std::exp(pole * h);
         const Complex y_end = ideal ? Complex(1.0, 0.0)
-                              : box   ? detail::boxResponse(pole, tau_s, tau_s)
-                                      : detail::halfSineResponse(pole, tau_s, tau_s);
+                              : box ? detail::boxResponse(pole, tau_s, tau_s)
+                                    : detail::halfSineResponse(pole, tau_s, tau_s);
         const Complex bg = g * m.out_weight;
         const Complex v = bg * std::exp(pole * after_end_s) * y_end;
         if (!(std::abs(v) >= threshold)) continue;
@@ -457,7 +458,8 @@ struct OscillatorBank::Impl {
     {
       const auto& schedule = obj.damping_schedule;
       const uint64_t first = std::max<uint64_t>(static_cast<uint64_t>(std::ceil(t0 - 1e-7)), pos);
-      auto after = std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(first, static_cast<double>(INFINITY)));
+      auto after =
+          std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(first, static_cast<double>(INFINITY)));
       if (after != schedule.begin()) extra_damping = std::prev(after)->second;
     }
     // With ramped edges (the box convolved with a unit box of r), each edge is two ramps and
@@ -471,8 +473,8 @@ struct OscillatorBank::Impl {
     bool audible = false;
     const int edges = ramped ? 4 : 2;
     for (int edge = 0; edge < edges; ++edge) {
-      const double te = !ramped ? (edge == 0 ? t0 : t0 + tau)
-                                : t0 + (edge == 1 || edge == 3 ? ramp : 0.0) + (edge >= 2 ? tau : 0.0);
+      const double te =
+          !ramped ? (edge == 0 ? t0 : t0 + tau) : t0 + (edge == 1 || edge == 3 ? ramp : 0.0) + (edge >= 2 ? tau : 0.0);
       if (free_records.empty()) reserveImpacts(std::max<size_t>(16, pool.size() * 2), 0);
       const uint32_t record = free_records.back();
       free_records.pop_back();
@@ -531,12 +533,14 @@ struct OscillatorBank::Impl {
     }
     if (no_alloc)
       for (size_t k = 0; k < records; ++k)
-        if (pool[free_records[free_records.size() - 1 - k]].hits.capacity() < obj.mode_count) return ImpactResult::NoCapacity;
+        if (pool[free_records[free_records.size() - 1 - k]].hits.capacity() < obj.mode_count)
+          return ImpactResult::NoCapacity;
     double extra_damping = 0.0;
     {
       const auto& schedule = obj.damping_schedule;
       const uint64_t first = std::max<uint64_t>(static_cast<uint64_t>(std::ceil(t0 - 1e-7)), pos);
-      auto after = std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(first, static_cast<double>(INFINITY)));
+      auto after =
+          std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(first, static_cast<double>(INFINITY)));
       if (after != schedule.begin()) extra_damping = std::prev(after)->second;
     }
     ++stats.impacts;
@@ -770,8 +774,10 @@ struct OscillatorBank::Impl {
     // Recycle injected records (their transients are over: they end where injection happens).
     size_t kept = 0;
     for (size_t k = 0; k < pending.size(); ++k) {
-      if (pool[pending[k]].injected) free_records.push_back(pending[k]);  // capacity >= pool.size()
-      else pending[kept++] = pending[k];
+      if (pool[pending[k]].injected)
+        free_records.push_back(pending[k]);  // capacity >= pool.size()
+      else
+        pending[kept++] = pending[k];
     }
     pending.resize(kept);  // shrinking: no allocation
     if (!use_double) kernels.reduce(acc.data(), s0, s1, mix.data() + s0);
@@ -786,12 +792,16 @@ struct OscillatorBank::Impl {
     }
     const double threshold2 = threshold * threshold;
     for (size_t i = 0; i < n_active;) {
-      if (mag2[i] < threshold2) removeRinging(i);  // the moved-in slot is checked next
-      else ++i;
+      if (mag2[i] < threshold2)
+        removeRinging(i);  // the moved-in slot is checked next
+      else
+        ++i;
     }
     for (size_t r = 0; r < damped_mode.size();) {
-      if (dampedAmplitude(modes[damped_mode[r]], damped_x[2 * r], damped_x[2 * r + 1]) < threshold) removeDamped(r);
-      else ++r;
+      if (dampedAmplitude(modes[damped_mode[r]], damped_x[2 * r], damped_x[2 * r + 1]) < threshold)
+        removeDamped(r);
+      else
+        ++r;
     }
   }
 
@@ -811,8 +821,9 @@ struct OscillatorBank::Impl {
     if (no_alloc && (schedule.size() == schedule.capacity() || damping_changes.size() == damping_changes.capacity()))
       return false;
     DampingChange change{sample, object, extra_decay_per_s};
-    schedule.insert(std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(sample, static_cast<double>(INFINITY))),
-                    std::make_pair(sample, extra_decay_per_s));
+    schedule.insert(
+        std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(sample, static_cast<double>(INFINITY))),
+        std::make_pair(sample, extra_decay_per_s));
     auto at = std::upper_bound(damping_changes.begin(), damping_changes.end(), sample,
                                [](uint64_t s0, const DampingChange& c) { return s0 < c.sample; });
     damping_changes.insert(at, change);
@@ -848,8 +859,9 @@ struct OscillatorBank::Impl {
   // Squared output level of active entry k: ringing slots first, then damped modes.
   float level2(size_t k) const {
     if (k < n_active) {
-      if (use_double) return static_cast<float>(anc_re.data_const()[k] * anc_re.data_const()[k] +
-                                                anc_im.data_const()[k] * anc_im.data_const()[k]);
+      if (use_double)
+        return static_cast<float>(anc_re.data_const()[k] * anc_re.data_const()[k] +
+                                  anc_im.data_const()[k] * anc_im.data_const()[k]);
       const float re = st_re.data_const()[k], im = st_im.data_const()[k];
       return re * re + im * im;
     }
@@ -861,12 +873,16 @@ struct OscillatorBank::Impl {
   size_t sleepModesAtOrBelow(float threshold2, float scale2) {
     size_t culled = 0;
     for (size_t i = 0; i < n_active;) {
-      if (level2(i) * scale2 <= threshold2) removeRinging(i), ++culled;
-      else ++i;
+      if (level2(i) * scale2 <= threshold2)
+        removeRinging(i), ++culled;
+      else
+        ++i;
     }
     for (size_t r = 0; r < damped_mode.size();) {
-      if (level2(n_active + r) * scale2 <= threshold2) removeDamped(r), ++culled;
-      else ++r;
+      if (level2(n_active + r) * scale2 <= threshold2)
+        removeDamped(r), ++culled;
+      else
+        ++r;
     }
     stats.active_modes = n_active + damped_mode.size();
     return culled;

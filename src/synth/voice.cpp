@@ -72,8 +72,7 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
   modal.rayleigh_mass = bank.material.rayleigh_mass;
   modal.radiation_weight = desc.weights;
   synth_.addObject(modal);
-  if (settings.realtime)
-    synth_.reserveImpacts(settings.max_pending_impacts_per_voice, settings.max_contact_duration_s);
+  if (settings.realtime) synth_.reserveImpacts(settings.max_pending_impacts_per_voice, settings.max_contact_duration_s);
   const size_t modes = bank.modeCount();
   modal_.assign(modes, 0.0);
   step_force_.assign(modes, 0.0);

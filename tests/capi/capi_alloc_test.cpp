@@ -168,8 +168,9 @@ TEST(CApiRealtime, TenThousandRendersWithImpactsFromAnotherThreadAllocateNothing
   EXPECT_GT(st.impacts_scheduled, 500u);
   EXPECT_GT(st.modes_culled, 0u);
   std::printf("%d renders x 256 frames: %llu allocations; %llu impacts sent, %llu scheduled, %llu culled modes\n",
-              renders, static_cast<unsigned long long>(g_counted.load() - before), static_cast<unsigned long long>(sent.load()),
-              static_cast<unsigned long long>(st.impacts_scheduled), static_cast<unsigned long long>(st.modes_culled));
+              renders, static_cast<unsigned long long>(g_counted.load() - before),
+              static_cast<unsigned long long>(sent.load()), static_cast<unsigned long long>(st.impacts_scheduled),
+              static_cast<unsigned long long>(st.modes_culled));
   strike_bank_destroy(bank);
   strike_context_destroy(ctx);
 }

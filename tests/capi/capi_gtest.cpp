@@ -431,10 +431,14 @@ TEST(CApi, FourProducersWhileRendering) {
         d.object = ids[static_cast<size_t>(k + p) % ids.size()];
         d.sample_offset = static_cast<uint32_t>(k % 64);
         const strike_status s = strike_impact(f.ctx, &d);
-        if (s == STRIKE_OK) ok.fetch_add(1);
-        else if (s == STRIKE_ERR_QUEUE_FULL) full.fetch_add(1);
-        else if (s == STRIKE_ERR_STALE_ID) stale.fetch_add(1);
-        else ADD_FAILURE() << "status " << s;
+        if (s == STRIKE_OK)
+          ok.fetch_add(1);
+        else if (s == STRIKE_ERR_QUEUE_FULL)
+          full.fetch_add(1);
+        else if (s == STRIKE_ERR_STALE_ID)
+          stale.fetch_add(1);
+        else
+          ADD_FAILURE() << "status " << s;
       }
       producers_done.fetch_add(1);
     });
@@ -462,12 +466,11 @@ TEST(CApi, FourProducersWhileRendering) {
   EXPECT_GT(ok.load(), 0u);
   EXPECT_EQ(s.impacts_scheduled + s.impacts_inaudible + s.impacts_dropped_capacity + s.impacts_dropped_stale,
             s.impacts_queued);
-  std::printf("producers: %llu queued, %llu dropped (queue full), %llu scheduled, %llu stale, %llu over reserve\n",
-              static_cast<unsigned long long>(s.impacts_queued),
-              static_cast<unsigned long long>(s.impacts_dropped_queue_full),
-              static_cast<unsigned long long>(s.impacts_scheduled),
-              static_cast<unsigned long long>(s.impacts_dropped_stale),
-              static_cast<unsigned long long>(s.impacts_dropped_capacity));
+  std::printf(
+      "producers: %llu queued, %llu dropped (queue full), %llu scheduled, %llu stale, %llu over reserve\n",
+      static_cast<unsigned long long>(s.impacts_queued), static_cast<unsigned long long>(s.impacts_dropped_queue_full),
+      static_cast<unsigned long long>(s.impacts_scheduled), static_cast<unsigned long long>(s.impacts_dropped_stale),
+      static_cast<unsigned long long>(s.impacts_dropped_capacity));
 }
 
 // The allocation-free impact path gives the same samples as the allocating one.

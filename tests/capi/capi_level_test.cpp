@@ -11,19 +11,19 @@
 #include <vector>
 
 #include "cli/run_cli.hpp"
-#include "test_bank.hpp"  // the hand-made plate: modes at 440, 1000, 2500, 5200 Hz
 #include "strike/audio.hpp"
 #include "strike/bank.hpp"
 #include "strike/strike.h"
+#include "test_bank.hpp"  // the hand-made plate: modes at 440, 1000, 2500, 5200 Hz
 
 namespace strike {
 namespace {
 
 constexpr double kRate = 48000.0;
 constexpr double kSeconds = 0.5;
-constexpr double kDistance_m = 1.1;    // as in the report
-constexpr double kImpulse_Ns = 0.02;   // into the plate at its centre vertex 4, along -z
-constexpr double kContact_s = 1e-4;    // given to both, so no contact model differs
+constexpr double kDistance_m = 1.1;   // as in the report
+constexpr double kImpulse_Ns = 0.02;  // into the plate at its centre vertex 4, along -z
+constexpr double kContact_s = 1e-4;   // given to both, so no contact model differs
 constexpr uint32_t kVertex = 4;
 
 struct Level {
@@ -64,7 +64,8 @@ std::vector<float> renderThroughCApi(const std::string& bank_path, double full_s
   std::vector<float> out(static_cast<size_t>(kSeconds * kRate));
   for (size_t done = 0; done < out.size(); done += 512) {
     float* channel = out.data() + done;
-    EXPECT_EQ(strike_render(ctx, &channel, 1, static_cast<uint32_t>(std::min<size_t>(512, out.size() - done))), STRIKE_OK);
+    EXPECT_EQ(strike_render(ctx, &channel, 1, static_cast<uint32_t>(std::min<size_t>(512, out.size() - done))),
+              STRIKE_OK);
   }
   strike_bank_destroy(bank);
   strike_context_destroy(ctx);
@@ -83,8 +84,10 @@ class OutputLevel : public testing::Test {
 TEST_F(OutputLevel, CApiAndStrikeHitAgreeOnOneConvention) {
   const std::string wav = testing::TempDir() + "/capi_level_hit.wav";
   char args[512];
-  std::snprintf(args, sizeof args, "--vertex %u --impulse 0,0,%.17g --distance %.17g --contact-time %.17g --duration %.17g --rate %.17g --quiet",
-                kVertex, -kImpulse_Ns, kDistance_m, kContact_s, kSeconds, kRate);
+  std::snprintf(
+      args, sizeof args,
+      "--vertex %u --impulse 0,0,%.17g --distance %.17g --contact-time %.17g --duration %.17g --rate %.17g --quiet",
+      kVertex, -kImpulse_Ns, kDistance_m, kContact_s, kSeconds, kRate);
   const test::CliResult r = test::runCli("hit '" + bank_ + "' -o '" + wav + "' " + args);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   Result<AudioBuffer> cli = readAudio(wav);

@@ -80,7 +80,8 @@ struct Game {
   explicit Game(const strike::ModeBank& b, strike_context_config cfg = monoConfig()) {
     EXPECT_EQ(strike_context_create(&cfg, &ctx), STRIKE_OK);
     const std::vector<uint8_t> bytes = strike::encodeBank(b);
-    EXPECT_EQ(strike_bank_load_memory(ctx, bytes.data(), bytes.size(), &bank), STRIKE_OK) << strike_context_last_error(ctx);
+    EXPECT_EQ(strike_bank_load_memory(ctx, bytes.data(), bytes.size(), &bank), STRIKE_OK)
+        << strike_context_last_error(ctx);
   }
   ~Game() {
     strike_bank_destroy(bank);
@@ -124,7 +125,8 @@ struct Game {
   }
   double peak(double from_s, double to_s) const {
     double p = 0.0;
-    for (size_t n = static_cast<size_t>(from_s * kRate); n < std::min(out.size(), static_cast<size_t>(to_s * kRate)); ++n)
+    for (size_t n = static_cast<size_t>(from_s * kRate); n < std::min(out.size(), static_cast<size_t>(to_s * kRate));
+         ++n)
       p = std::max(p, std::fabs(double(out[n])));
     return p;
   }
@@ -141,9 +143,9 @@ struct Game {
 struct BoxScenario {
   double frame_s = 1.0 / 60.0;
   double duration_s = 10.0;
-  bool push = false;     // from 4 s: shoved sideways, 5 N at once, then friction alternating 5 / 5.5 N
-  double sleep_s = -1;   // from then on asleep (no contacts)
-  double wake_s = -1;    // from then on awake again, with no contacts (lifted)
+  bool push = false;    // from 4 s: shoved sideways, 5 N at once, then friction alternating 5 / 5.5 N
+  double sleep_s = -1;  // from then on asleep (no contacts)
+  double wake_s = -1;   // from then on awake again, with no contacts (lifted)
 };
 
 struct BoxResult {
@@ -166,7 +168,8 @@ BoxResult boxOnTheGround(const BoxScenario& sc) {
   EXPECT_EQ(strike_listener_set_pose(game.ctx, listener, identity), STRIKE_OK);
   BoxResult r;
   const double m = 1.0, g = 9.81;
-  const std::array<std::array<double, 3>, 4> corners = {{{-0.05, -0.05, 0}, {0.05, -0.05, 0}, {-0.05, 0.05, 0}, {0.05, 0.05, 0}}};
+  const std::array<std::array<double, 3>, 4> corners = {
+      {{-0.05, -0.05, 0}, {0.05, -0.05, 0}, {-0.05, 0.05, 0}, {0.05, 0.05, 0}}};
   const size_t total = static_cast<size_t>(sc.duration_s * kRate);
   int frame = 0;
   for (double t = sc.frame_s; t <= sc.duration_s + 1e-9; t += sc.frame_s, ++frame) {
@@ -248,7 +251,8 @@ TEST(CApiStep, ABoxRestingTenSecondsAtSixtyFramesStays60dBBelowTheImpactThatPutI
   // From one ring-out after the impact (sigma >= 5/s: 60 dB in < 1.4 s, so 2.5 s is ample) to
   // the end: the steady load is silent however its points flicker.
   const double resting = peakIn(r.out, 3.0, 10.0);
-  EXPECT_LT(resting, r.impact_peak * 1e-3) << "resting " << 20 * std::log10(resting / r.impact_peak) << " dB re the impact";
+  EXPECT_LT(resting, r.impact_peak * 1e-3)
+      << "resting " << 20 * std::log10(resting / r.impact_peak) << " dB re the impact";
   // And inaudible: below the threshold of hearing (audibility_threshold, 20 uPa at 1.0 = 20 Pa).
   // A scheduler that sounded the flicker would be heard like the pushed box (next test).
   EXPECT_LT(resting, strike_context_config_default().audibility_threshold);
@@ -305,7 +309,8 @@ TEST(CApiStep, ASleepingObjectKeepsItsLoadAndWakingWithoutContactsReleasesIt) {
   EXPECT_EQ(peakIn(r.out, 7.95, 10.0), 0.0);
   const double released = peakIn(w.out, 7.95, 10.0);
   EXPECT_GT(released, 0.0);
-  std::printf("asleep: %llu holds; released peak %.3g\n", static_cast<unsigned long long>(r.stats.load_holds), released);
+  std::printf("asleep: %llu holds; released peak %.3g\n", static_cast<unsigned long long>(r.stats.load_holds),
+              released);
 }
 
 // ---- the listener: a ball bouncing away -----------------------------------------------------
@@ -411,9 +416,12 @@ TEST(CApi, StepsFromASecondThreadWhileTheAudioThreadRenders) {
       step.contact_count = k % 50 == 0 ? 3 : 2;
       contacts += step.contact_count;
       const strike_status s = strike_step(game.ctx, &step);
-      if (s == STRIKE_OK) ++ok, ok_contacts += step.contact_count;
-      else if (s == STRIKE_ERR_QUEUE_FULL) ++full;
-      else ADD_FAILURE() << "status " << s;
+      if (s == STRIKE_OK)
+        ++ok, ok_contacts += step.contact_count;
+      else if (s == STRIKE_ERR_QUEUE_FULL)
+        ++full;
+      else
+        ADD_FAILURE() << "status " << s;
       if (k % 64 == 0) std::this_thread::yield();
     }
   });
@@ -431,8 +439,9 @@ TEST(CApi, StepsFromASecondThreadWhileTheAudioThreadRenders) {
   EXPECT_GE(s.contacts_queued, ok_contacts);
   EXPECT_LE(s.contacts_queued, contacts);
   EXPECT_EQ(s.contacts_dropped_stale, 0u);
-  std::printf("steps: %llu ok, %llu full; contacts queued %llu, dropped (full) %llu\n", static_cast<unsigned long long>(ok),
-              static_cast<unsigned long long>(full), static_cast<unsigned long long>(s.contacts_queued),
+  std::printf("steps: %llu ok, %llu full; contacts queued %llu, dropped (full) %llu\n",
+              static_cast<unsigned long long>(ok), static_cast<unsigned long long>(full),
+              static_cast<unsigned long long>(s.contacts_queued),
               static_cast<unsigned long long>(s.contacts_dropped_queue_full));
 }
 
@@ -474,7 +483,7 @@ TEST(CApiStep, AFullQueueDropsTheRestOfTheStepAndCountsExactly) {
   step.state_count = 2;
   step.contacts = seven.data();
   step.contact_count = 7;
-  EXPECT_EQ(strike_step(game.ctx, &step), STRIKE_OK);  // 11 records
+  EXPECT_EQ(strike_step(game.ctx, &step), STRIKE_OK);              // 11 records
   EXPECT_EQ(strike_step(game.ctx, &step), STRIKE_ERR_QUEUE_FULL);  // start, 2 states, 2 contacts in; 5 dropped
   EXPECT_EQ(statsOf(game.ctx).contacts_dropped_queue_full - dropped_before, 5u);
 }
@@ -506,7 +515,8 @@ TEST(CApiStep, InvalidStepsAreRefusedAndNothingIsQueued) {
     EXPECT_EQ(strike_step(game.ctx, &bad), STRIKE_ERR_INVALID_ARG) << what;
     c = saved_c, state = saved_s;
   };
-  refused("struct_size too small", [](strike_step_desc& s) { s.struct_size = offsetof(strike_step_desc, contact_size); });
+  refused("struct_size too small",
+          [](strike_step_desc& s) { s.struct_size = offsetof(strike_step_desc, contact_size); });
   refused("struct_size 0", [](strike_step_desc& s) { s.struct_size = 0; });
   refused("state_size too small", [](strike_step_desc& s) { s.state_size = sizeof(strike_body_state) - 8; });
   refused("contact_size too small", [](strike_step_desc& s) { s.contact_size = sizeof(strike_contact) - 8; });

@@ -16,22 +16,21 @@
 
 static int g_failures = 0;
 
-#define CHECK(cond)                                                     \
-  do {                                                                  \
-    if (!(cond)) {                                                      \
+#define CHECK(cond)                                                            \
+  do {                                                                         \
+    if (!(cond)) {                                                             \
       fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
-      ++g_failures;                                                     \
-    }                                                                   \
+      ++g_failures;                                                            \
+    }                                                                          \
   } while (0)
 
-#define CHECK_OK(expr)                                                                      \
-  do {                                                                                      \
-    strike_status s_ = (expr);                                                              \
-    if (s_ != STRIKE_OK) {                                                                  \
-      fprintf(stderr, "%s:%d: %s returned %d (%s)\n", __FILE__, __LINE__, #expr, (int)s_, \
-              strike_status_string(s_));                                                    \
-      ++g_failures;                                                                         \
-    }                                                                                       \
+#define CHECK_OK(expr)                                                                                               \
+  do {                                                                                                               \
+    strike_status s_ = (expr);                                                                                       \
+    if (s_ != STRIKE_OK) {                                                                                           \
+      fprintf(stderr, "%s:%d: %s returned %d (%s)\n", __FILE__, __LINE__, #expr, (int)s_, strike_status_string(s_)); \
+      ++g_failures;                                                                                                  \
+    }                                                                                                                \
   } while (0)
 
 /* |DFT| of a Hann-windowed signal at frequency f (Hz): a plain Goertzel-free sum, O(n). */

@@ -34,32 +34,31 @@ inline int checkExitCode(const char* program) {
 
 }  // namespace strike::check
 
-#define CHECK(cond)                                            \
-  do {                                                         \
+#define CHECK(cond)                                              \
+  do {                                                           \
     if (!(cond)) strike::check::fail(__FILE__, __LINE__, #cond); \
   } while (0)
 
 /// |actual - expected| <= tolerance, printing both when not.
-#define CHECK_NEAR(actual, expected, tolerance)                                                          \
-  do {                                                                                                   \
-    const double a_ = (actual), e_ = (expected), t_ = (tolerance);                                       \
-    if (!(std::fabs(a_ - e_) <= t_)) {                                                                   \
-      std::fprintf(stderr, "%s:%d: check failed: %s = %.9g, expected %s = %.9g within %.3g\n", __FILE__, \
-                   __LINE__, #actual, a_, #expected, e_, t_);                                            \
-      ++strike::check::failures();                                                                       \
-    }                                                                                                    \
+#define CHECK_NEAR(actual, expected, tolerance)                                                                    \
+  do {                                                                                                             \
+    const double a_ = (actual), e_ = (expected), t_ = (tolerance);                                                 \
+    if (!(std::fabs(a_ - e_) <= t_)) {                                                                             \
+      std::fprintf(stderr, "%s:%d: check failed: %s = %.9g, expected %s = %.9g within %.3g\n", __FILE__, __LINE__, \
+                   #actual, a_, #expected, e_, t_);                                                                \
+      ++strike::check::failures();                                                                                 \
+    }                                                                                                              \
   } while (0)
 
 /// A C API call returns the expected status code.
-#define CHECK_STATUS(expr, expected)                                                                        \
-  do {                                                                                                      \
-    const strike_status s_ = (expr), x_ = (expected);                                                       \
-    if (s_ != x_) {                                                                                         \
-      std::fprintf(stderr, "%s:%d: check failed: %s returned %d (%s), expected %d (%s)\n", __FILE__, __LINE__, \
-                   #expr, static_cast<int>(s_), strike_status_string(s_), static_cast<int>(x_),             \
-                   strike_status_string(x_));                                                               \
-      ++strike::check::failures();                                                                          \
-    }                                                                                                       \
+#define CHECK_STATUS(expr, expected)                                                                                  \
+  do {                                                                                                                \
+    const strike_status s_ = (expr), x_ = (expected);                                                                 \
+    if (s_ != x_) {                                                                                                   \
+      std::fprintf(stderr, "%s:%d: check failed: %s returned %d (%s), expected %d (%s)\n", __FILE__, __LINE__, #expr, \
+                   static_cast<int>(s_), strike_status_string(s_), static_cast<int>(x_), strike_status_string(x_));   \
+      ++strike::check::failures();                                                                                    \
+    }                                                                                                                 \
   } while (0)
 
 #define CHECK_OK(expr) CHECK_STATUS(expr, STRIKE_OK)

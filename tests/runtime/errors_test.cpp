@@ -97,7 +97,7 @@ void objectsImpactsAndRendering(strike_context context) {
   float* mono[1] = {left.data()};
   float* stereo[2] = {left.data(), right.data()};
   CHECK_STATUS(strike_render(context, mono, 1, 65), STRIKE_ERR_TOO_MANY_FRAMES);  // max_block_frames = 64
-  CHECK_STATUS(strike_render(context, stereo, 2, 64), STRIKE_ERR_INVALID_ARG);   // a mono context
+  CHECK_STATUS(strike_render(context, stereo, 2, 64), STRIKE_ERR_INVALID_ARG);    // a mono context
   CHECK_STATUS(strike_render(context, nullptr, 1, 64), STRIKE_ERR_INVALID_ARG);
   CHECK_OK(strike_render(context, mono, 1, 64));
 

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "check.hpp"
-#include "struck_bank.hpp"
 #include "strike/constants.hpp"
+#include "struck_bank.hpp"
 
 namespace {
 

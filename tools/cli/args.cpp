@@ -13,8 +13,7 @@ Result<double> parseNumber(const std::string& text, const std::string& what) {
   char* end = nullptr;
   errno = 0;
   const double value = std::strtod(begin, &end);
-  if (text.empty() || end != begin + text.size())
-    return badInput(what + " = '" + text + "' (expected a number)");
+  if (text.empty() || end != begin + text.size()) return badInput(what + " = '" + text + "' (expected a number)");
   if (!std::isfinite(value) || errno == ERANGE) return badInput(what + " = '" + text + "' (must be finite)");
   return value;
 }
@@ -26,7 +25,9 @@ Result<SampleEncoding> sampleEncodingFor(const ParsedArgs& args, const std::stri
   if (format == "pcm24") return SampleEncoding::Pcm24;
   if (format == "float") {
     // Refused here, before any work, not by the writer after it (FLAC has no float samples).
-    if (flac) return badInput("--format float with " + output + ": FLAC stores integer PCM only; use pcm16 or pcm24, or a .wav file");
+    if (flac)
+      return badInput("--format float with " + output +
+                      ": FLAC stores integer PCM only; use pcm16 or pcm24, or a .wav file");
     return SampleEncoding::Float32;
   }
   return badInput("--format = '" + format + "' (expected pcm16, pcm24 or float)");
@@ -92,7 +93,8 @@ Result<ParsedArgs> parseArgs(const CommandSpec& spec, const std::vector<std::str
   ParsedArgs parsed;
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& arg = args[i];
-    if (arg.size() > 1 && arg[0] == '-' && !(arg.size() > 1 && (std::isdigit(static_cast<unsigned char>(arg[1])) || arg[1] == '.'))) {
+    if (arg.size() > 1 && arg[0] == '-' &&
+        !(arg.size() > 1 && (std::isdigit(static_cast<unsigned char>(arg[1])) || arg[1] == '.'))) {
       std::string name = arg, value;
       bool has_inline_value = false;
       if (const size_t eq = arg.find('='); eq != std::string::npos) {
@@ -103,7 +105,9 @@ Result<ParsedArgs> parseArgs(const CommandSpec& spec, const std::vector<std::str
       const OptionSpec* option = nullptr;
       for (const OptionSpec& o : spec.options)
         if (o.name == name) option = &o;
-      if (!option) return badInput("unknown option '" + name + "' (see `" + spec.usage.substr(0, spec.usage.find(' ', 7)) + " --help`)");
+      if (!option)
+        return badInput("unknown option '" + name + "' (see `" + spec.usage.substr(0, spec.usage.find(' ', 7)) +
+                        " --help`)");
       if (option->value_name.empty()) {
         if (has_inline_value) return badInput("option " + name + " takes no value");
         parsed.values_[name] = "1";
@@ -133,10 +137,13 @@ std::string helpText(const CommandSpec& spec) {
     out << "\noptions:\n";
     for (const OptionSpec& o : spec.options) {
       std::string left = "  " + o.name + (o.value_name.empty() ? "" : " " + o.value_name);
-      if (left.size() < 30) left.resize(30, ' ');
-      else left += "\n" + std::string(30, ' ');
+      if (left.size() < 30)
+        left.resize(30, ' ');
+      else
+        left += "\n" + std::string(30, ' ');
       std::string help = o.help;  // continuation lines line up under the first
-      for (size_t at = help.find('\n'); at != std::string::npos; at = help.find('\n', at + 1)) help.insert(at + 1, 30, ' ');
+      for (size_t at = help.find('\n'); at != std::string::npos; at = help.find('\n', at + 1))
+        help.insert(at + 1, 30, ' ');
       out << left << help << "\n";
     }
   }

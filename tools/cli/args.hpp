@@ -16,16 +16,16 @@
 namespace strike::cli {
 
 struct OptionSpec {
-  std::string name;         ///< "--max-freq"
-  std::string value_name;   ///< "HZ"; empty for a flag
-  std::string help;         ///< one line; say the unit and the default
+  std::string name;        ///< "--max-freq"
+  std::string value_name;  ///< "HZ"; empty for a flag
+  std::string help;        ///< one line; say the unit and the default
 };
 
 struct CommandSpec {
-  std::string usage;        ///< "strike modes MESH -o BANK.modes [options]"
-  std::string summary;      ///< what the command does, a few lines
+  std::string usage;    ///< "strike modes MESH -o BANK.modes [options]"
+  std::string summary;  ///< what the command does, a few lines
   std::vector<OptionSpec> options;
-  std::string examples;     ///< shown by --help
+  std::string examples;  ///< shown by --help
   int min_positional = 0, max_positional = 0;
 };
 

@@ -54,7 +54,8 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
   options.max_peaks = static_cast<int>(*peaks);
   Result<double> floor_db = args->number("--floor", options.floor_db);
   if (!floor_db) return reportError("analyze", floor_db.error());
-  if (!(*floor_db < 0)) return reportError("analyze", badInput("--floor = " + args->text("--floor") + " (must be < 0 dB)"));
+  if (!(*floor_db < 0))
+    return reportError("analyze", badInput("--floor = " + args->text("--floor") + " (must be < 0 dB)"));
   options.floor_db = *floor_db;
 
   if (args->has("--spectrogram"))
@@ -76,7 +77,8 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
     j["channels"] = audio->channels;
     j["duration_s"] = analysis.duration_s;
     j["peak_amplitude"] = analysis.peak_amplitude;
-    j["peak_dbfs"] = 20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30));  // -600 when silent (JSON has no -inf)
+    j["peak_dbfs"] =
+        20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30));  // -600 when silent (JSON has no -inf)
     j["silent"] = analysis.peak_amplitude == 0.0;
     j["rms"] = analysis.rms;
     j["clipped_samples"] = analysis.clipped_samples;
@@ -99,15 +101,18 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
   std::printf("peak %.4g (%.1f dBFS), RMS %.4g (%.1f dBFS)%s\n\n", analysis.peak_amplitude,
               20.0 * std::log10(std::max(analysis.peak_amplitude, 1e-30)), analysis.rms,
               20.0 * std::log10(std::max(analysis.rms, 1e-30)),
-              analysis.clipped_samples > 0 ? (", " + std::to_string(analysis.clipped_samples) + " samples clipped").c_str() : "");
+              analysis.clipped_samples > 0
+                  ? (", " + std::to_string(analysis.clipped_samples) + " samples clipped").c_str()
+                  : "");
   if (analysis.impact_onsets_s.size() > 1)
-    std::printf("%zu impacts (first at %.3f s): peaks merged from the free ring after each\n\n", analysis.impact_onsets_s.size(),
-                analysis.impact_onsets_s.front());
+    std::printf("%zu impacts (first at %.3f s): peaks merged from the free ring after each\n\n",
+                analysis.impact_onsets_s.size(), analysis.impact_onsets_s.front());
   std::printf("%5s %14s %10s %12s %10s\n", "peak", "frequency Hz", "level dB", "decay 1/s", "T60 s");
   for (size_t i = 0; i < analysis.peaks.size(); ++i) {
     const SpectralPeak& p = analysis.peaks[i];
     if (p.decay_per_s > 0)
-      std::printf("%5zu %14.3f %10.2f %12.4g %10.4g\n", i, p.freq_hz, p.level_db, p.decay_per_s, 6.907755 / p.decay_per_s);
+      std::printf("%5zu %14.3f %10.2f %12.4g %10.4g\n", i, p.freq_hz, p.level_db, p.decay_per_s,
+                  6.907755 / p.decay_per_s);
     else
       std::printf("%5zu %14.3f %10.2f %12s %10s\n", i, p.freq_hz, p.level_db, "-", "-");
   }

@@ -19,8 +19,10 @@ namespace strike::cli {
 int runBatch(const std::vector<std::string>& args) {
 #ifndef STRIKE_PYTHON_EXECUTABLE
   (void)args;
-  std::fputs("strike batch: error: this strike was built without the Python package (STRIKE_BUILD_PYTHON=OFF); "
-             "see README, Python\n", stderr);
+  std::fputs(
+      "strike batch: error: this strike was built without the Python package (STRIKE_BUILD_PYTHON=OFF); "
+      "see README, Python\n",
+      stderr);
   return 1;
 #else
   // The package beside this executable: the build tree (BUILD/tools/strike, BUILD/python/strike)
@@ -29,8 +31,8 @@ int runBatch(const std::vector<std::string>& args) {
   std::error_code ignored;
   const fs::path self = fs::read_symlink("/proc/self/exe", ignored);
   std::string python_path;
-  for (const fs::path& dir : {self.parent_path().parent_path() / "python",
-                              self.parent_path().parent_path() / STRIKE_PYTHON_INSTALL_DIR}) {
+  for (const fs::path& dir :
+       {self.parent_path().parent_path() / "python", self.parent_path().parent_path() / STRIKE_PYTHON_INSTALL_DIR}) {
     if (fs::is_regular_file(dir / "strike" / "__init__.py", ignored)) {
       python_path = dir.string();
       break;

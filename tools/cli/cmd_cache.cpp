@@ -25,7 +25,8 @@ CommandSpec cacheSpec() {
       "computes it again.";
   spec.options = {
       {"--cache", "DIR", "cache folder; default $STRIKE_CACHE_DIR, else $XDG_CACHE_HOME/strike, else ~/.cache/strike"},
-      {"--older-than", "AGE", "prune: remove banks last used longer ago than AGE (30d, 12h, 90m, 45s; a number is days)"},
+      {"--older-than", "AGE",
+       "prune: remove banks last used longer ago than AGE (30d, 12h, 90m, 45s; a number is days)"},
       {"--max-size", "SIZE", "prune: then remove the least recently used until the cache fits in SIZE (500M, 2G)"},
       {"--dry-run", "", "prune: say what would be removed, remove nothing"},
   };
@@ -46,9 +47,12 @@ std::string megabytes(uint64_t bytes) {
 std::string age(std::time_t then, std::time_t now) {
   const double s = std::difftime(now, then);
   char text[32];
-  if (s < 3600) std::snprintf(text, sizeof text, "%.0f min ago", s / 60);
-  else if (s < 86400 * 2) std::snprintf(text, sizeof text, "%.1f h ago", s / 3600);
-  else std::snprintf(text, sizeof text, "%.0f days ago", s / 86400);
+  if (s < 3600)
+    std::snprintf(text, sizeof text, "%.0f min ago", s / 60);
+  else if (s < 86400 * 2)
+    std::snprintf(text, sizeof text, "%.1f h ago", s / 3600);
+  else
+    std::snprintf(text, sizeof text, "%.0f days ago", s / 86400);
   return text;
 }
 
@@ -65,11 +69,13 @@ int runCache(const std::vector<std::string>& raw_args) {
   const ParsedArgs& args = *parsed;
   const std::string action = args.positional[0];
   const std::string dir = args.text("--cache", defaultCacheDir());
-  if (dir.empty()) return reportError("cache", badInput("no cache folder: set HOME or STRIKE_CACHE_DIR, or give --cache DIR"));
+  if (dir.empty())
+    return reportError("cache", badInput("no cache folder: set HOME or STRIKE_CACHE_DIR, or give --cache DIR"));
   const std::time_t now = std::time(nullptr);
   if (action == "list" || action == "size") {
     if (args.has("--older-than") || args.has("--max-size") || args.has("--dry-run"))
-      return reportError("cache", badInput("--older-than, --max-size and --dry-run are options of `strike cache prune`"));
+      return reportError("cache",
+                         badInput("--older-than, --max-size and --dry-run are options of `strike cache prune`"));
     Result<std::vector<CacheEntry>> entries = listCache(dir);
     if (!entries) return reportError("cache", entries.error());
     uint64_t total = 0;
@@ -79,8 +85,8 @@ int runCache(const std::vector<std::string>& raw_args) {
       for (const CacheEntry& e : *entries) {
         const std::string name = e.path.substr(e.path.find_last_of('/') + 1);
         if (name.size() > 7 && name.compare(name.size() - 7, 7, ".pieces") == 0) {
-          std::printf("%-24s %10s  %-14s  %s\n", name.c_str(), megabytes(e.bytes).c_str(), age(e.last_used, now).c_str(),
-                      "convex pieces of a concave moving body (docs/contact.md)");
+          std::printf("%-24s %10s  %-14s  %s\n", name.c_str(), megabytes(e.bytes).c_str(),
+                      age(e.last_used, now).c_str(), "convex pieces of a concave moving body (docs/contact.md)");
           continue;
         }
         Result<BankFile> bank = BankFile::open(e.path);  // the header only: shapes are not read
@@ -88,17 +94,20 @@ int runCache(const std::vector<std::string>& raw_args) {
         if (bank) {
           char text[512];
           std::snprintf(text, sizeof text, "%s, %s, Tet%d, %zu modes", bank->bank().mesh_source.c_str(),
-                        bank->bank().material.name.c_str(), bank->bank().element_order == 2 ? 10 : 4, bank->bank().modeCount());
+                        bank->bank().material.name.c_str(), bank->bank().element_order == 2 ? 10 : 4,
+                        bank->bank().modeCount());
           what = text;
         }
-        std::printf("%-24s %10s  %-14s  %s\n", name.c_str(), megabytes(e.bytes).c_str(), age(e.last_used, now).c_str(), what.c_str());
+        std::printf("%-24s %10s  %-14s  %s\n", name.c_str(), megabytes(e.bytes).c_str(), age(e.last_used, now).c_str(),
+                    what.c_str());
       }
     }
     std::printf("%s: %zu files, %s (%llu bytes)\n", dir.c_str(), entries->size(), megabytes(total).c_str(),
                 static_cast<unsigned long long>(total));
     return 0;
   }
-  if (action != "prune") return reportError("cache", badInput("unknown action '" + action + "' (known: list, size, prune)"));
+  if (action != "prune")
+    return reportError("cache", badInput("unknown action '" + action + "' (known: list, size, prune)"));
   if (!args.has("--older-than") && !args.has("--max-size"))
     return reportError("cache", badInput("prune needs --older-than AGE and/or --max-size SIZE"));
   double max_age_s = -1.0;
@@ -111,15 +120,18 @@ int runCache(const std::vector<std::string>& raw_args) {
   if (args.has("--max-size")) {
     Result<uint64_t> m = parseByteSize(args.text("--max-size"), "--max-size");
     if (!m) return reportError("cache", m.error());
-    if (*m == 0) return reportError("cache", badInput("--max-size = 0 would empty the cache; remove the folder instead"));
+    if (*m == 0)
+      return reportError("cache", badInput("--max-size = 0 would empty the cache; remove the folder instead"));
     max_bytes = *m;
   }
   const bool dry_run = args.has("--dry-run");
   Result<PruneReport> pruned = pruneCache(dir, max_bytes, max_age_s, now, dry_run);
   if (!pruned) return reportError("cache", pruned.error());
-  for (const std::string& path : pruned->removed_paths) std::printf("%s %s\n", dry_run ? "would remove" : "removed", path.c_str());
-  std::printf("%s: %s %zu banks (%s), kept %zu (%s)\n", dir.c_str(), dry_run ? "would remove" : "removed", pruned->removed,
-              megabytes(pruned->bytes_removed).c_str(), pruned->kept, megabytes(pruned->bytes_kept).c_str());
+  for (const std::string& path : pruned->removed_paths)
+    std::printf("%s %s\n", dry_run ? "would remove" : "removed", path.c_str());
+  std::printf("%s: %s %zu banks (%s), kept %zu (%s)\n", dir.c_str(), dry_run ? "would remove" : "removed",
+              pruned->removed, megabytes(pruned->bytes_removed).c_str(), pruned->kept,
+              megabytes(pruned->bytes_kept).c_str());
   return 0;
 }
 

@@ -27,8 +27,9 @@ CommandSpec hitSpec() {
   spec.options = {
       {"-o", "OUT.wav", "output sound file, .wav or .flac (required); written atomically"},
       {"--vertex", "I", "strike surface vertex I (see `strike info`); default: the vertex that excites most"},
-      {"--at", "X,Y,Z", "strike the surface point nearest to X,Y,Z (metres, mesh frame); prints that point and\n"
-                        "how far it is from X,Y,Z, and warns past 2% of the object's size"},
+      {"--at", "X,Y,Z",
+       "strike the surface point nearest to X,Y,Z (metres, mesh frame); prints that point and\n"
+       "how far it is from X,Y,Z, and warns past 2% of the object's size"},
       {"--impulse", "X,Y,Z", "impulse vector, N s; default 0.01 N s into the surface along its normal"},
       {"--duration", "S", "length of the output, s; default 2"},
       {"--rate", "HZ", "sample rate; default 48000"},
@@ -68,7 +69,8 @@ int runHit(const std::vector<std::string>& raw_args) {
   Result<ModeBank> loaded = readBank(args.positional[0]);
   if (!loaded) return reportError("hit", loaded.error());
   const ModeBank& bank = *loaded;
-  if (bank.surfaceVertexCount() == 0) return reportError("hit", badInput(args.positional[0] + ": the bank has no surface"));
+  if (bank.surfaceVertexCount() == 0)
+    return reportError("hit", badInput(args.positional[0] + ": the bank has no surface"));
 
   Result<double> duration = args.number("--duration", 2.0);
   Result<double> rate = args.number("--rate", 48000.0);
@@ -83,7 +85,8 @@ int runHit(const std::vector<std::string>& raw_args) {
     return reportError("hit", badInput("--duration = " + args.text("--duration") + " (must be in (0, 3600] s)"));
   if (!(*rate >= 8000 && *rate <= 384000))
     return reportError("hit", badInput("--rate = " + args.text("--rate") + " (must be 8000 to 384000 Hz)"));
-  if (!(*distance > 0)) return reportError("hit", badInput("--distance = " + args.text("--distance") + " (must be > 0 m)"));
+  if (!(*distance > 0))
+    return reportError("hit", badInput("--distance = " + args.text("--distance") + " (must be > 0 m)"));
   if (!(*striker_radius > 0))
     return reportError("hit", badInput("--striker-radius = " + args.text("--striker-radius") + " (must be > 0 m)"));
 
@@ -103,8 +106,9 @@ int runHit(const std::vector<std::string>& raw_args) {
     Result<long long> chosen = args.integer("--vertex", 0);
     if (!chosen) return reportError("hit", chosen.error());
     if (*chosen < 0 || static_cast<size_t>(*chosen) >= bank.surfaceVertexCount())
-      return reportError("hit", badInput("--vertex = " + args.text("--vertex") + " (the bank has surface vertices 0 to " +
-                                         std::to_string(bank.surfaceVertexCount() - 1) + ")"));
+      return reportError("hit",
+                         badInput("--vertex = " + args.text("--vertex") + " (the bank has surface vertices 0 to " +
+                                  std::to_string(bank.surfaceVertexCount() - 1) + ")"));
     settings.vertex = static_cast<size_t>(*chosen);
   }
   if (args.has("--impulse")) {
@@ -115,7 +119,8 @@ int runHit(const std::vector<std::string>& raw_args) {
   if (args.has("--contact-time")) {
     Result<double> t = args.number("--contact-time", 0.0);
     if (!t) return reportError("hit", t.error());
-    if (!(*t >= 0 && *t < 1)) return reportError("hit", badInput("--contact-time = " + args.text("--contact-time") + " (must be in [0, 1) s)"));
+    if (!(*t >= 0 && *t < 1))
+      return reportError("hit", badInput("--contact-time = " + args.text("--contact-time") + " (must be in [0, 1) s)"));
     settings.contact_time_s = *t;
   }
   Result<HitResult> hit = renderHit(bank, settings);
@@ -146,17 +151,20 @@ int runHit(const std::vector<std::string>& raw_args) {
   const SynthStats& stats = hit->stats;
   if (stats.modes_total == stats.modes_out_of_band)
     std::fprintf(stderr, "strike hit: warning: silent: no mode in the audible band (%s)\n",
-                 bank.modeCount() == 0 ? "the bank has no elastic mode below its cut-off: too small or too stiff to ring"
-                                       : "every mode of the bank is outside 20 Hz to min(20 kHz, 0.45 x --rate)");
+                 bank.modeCount() == 0
+                     ? "the bank has no elastic mode below its cut-off: too small or too stiff to ring"
+                     : "every mode of the bank is outside 20 Hz to min(20 kHz, 0.45 x --rate)");
   if (!args.has("--quiet")) {
     if (args.has("--at"))
-      std::fprintf(stderr, "strike hit: %s, surface point (%.4g, %.4g, %.4g) m (nearest vertex %zu), %.3g m from --at, "
+      std::fprintf(stderr,
+                   "strike hit: %s, surface point (%.4g, %.4g, %.4g) m (nearest vertex %zu), %.3g m from --at, "
                    "impulse (%.3g, %.3g, %.3g) N s\n",
-                   args.positional[0].c_str(), point[0], point[1], point[2], vertex, off_surface_m, impulse[0], impulse[1],
-                   impulse[2]);
+                   args.positional[0].c_str(), point[0], point[1], point[2], vertex, off_surface_m, impulse[0],
+                   impulse[1], impulse[2]);
     else
       std::fprintf(stderr, "strike hit: %s, vertex %zu at (%.4g, %.4g, %.4g) m, impulse (%.3g, %.3g, %.3g) N s\n",
-                   args.positional[0].c_str(), vertex, point[0], point[1], point[2], impulse[0], impulse[1], impulse[2]);
+                   args.positional[0].c_str(), vertex, point[0], point[1], point[2], impulse[0], impulse[1],
+                   impulse[2]);
     std::fprintf(stderr, "  contact     %.3g ms (%s)\n", contact_time_s * 1e3,
                  args.has("--contact-time") ? "given" : "Hertz");
     std::fprintf(stderr, "  modes       %llu in the bank, %llu out of band, %llu started\n",
@@ -165,15 +173,17 @@ int runHit(const std::vector<std::string>& raw_args) {
                  static_cast<unsigned long long>(stats.mode_starts));
     if (peak == 0.0)
       std::fprintf(stderr, "  level       silent: every sample is 0 (%s)\n",
-                   stats.modes_total == stats.modes_out_of_band ? "no mode in the audible band"
-                                                                : "the impulse excites no mode at this point and direction");
+                   stats.modes_total == stats.modes_out_of_band
+                       ? "no mode in the audible band"
+                       : "the impulse excites no mode at this point and direction");
     else
-      std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL at %.3g m)\n", peak, 20.0 * std::log10(peak),
-                   20.0 * std::log10(peak * kFullScalePascal / *gain / 20e-6), *distance);
+      std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL at %.3g m)\n", peak,
+                   20.0 * std::log10(peak), 20.0 * std::log10(peak * kFullScalePascal / *gain / 20e-6), *distance);
     if (clipped > 0)
       std::fprintf(stderr, "  CLIPPING    %zu samples at or above full scale%s; lower --gain\n", clipped,
                    encoding == SampleEncoding::Float32 ? " (kept in the float file)" : " (clipped in the file)");
-    std::fprintf(stderr, "  wrote       %s (%.3g s at %.0f Hz, %s)\n", output.c_str(), *duration, *rate, args.text("--format", "default encoding").c_str());
+    std::fprintf(stderr, "  wrote       %s (%.3g s at %.0f Hz, %s)\n", output.c_str(), *duration, *rate,
+                 args.text("--format", "default encoding").c_str());
   }
   return 0;
 }

@@ -69,8 +69,10 @@ nlohmann::json bankJson(const ModeBank& bank) {
                  {"max_modes", bank.max_modes},
                  {"rigid_modes_dropped", bank.rigid_modes_dropped},
                  {"above_cutoff_dropped", bank.above_cutoff_dropped}};
-  j["precompute_seconds"] = {{"meshing", bank.meshing_seconds},     {"assembly", bank.assembly_seconds},
-                             {"factorize", bank.factorize_seconds}, {"lanczos", bank.lanczos_seconds},
+  j["precompute_seconds"] = {{"meshing", bank.meshing_seconds},
+                             {"assembly", bank.assembly_seconds},
+                             {"factorize", bank.factorize_seconds},
+                             {"lanczos", bank.lanczos_seconds},
                              {"total", bank.total_seconds}};
   j["tool_version"] = bank.tool_version;
   return j;

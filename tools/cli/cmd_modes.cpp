@@ -9,8 +9,8 @@
 #include "progress_reporter.hpp"
 #include "strike/element_order.hpp"
 #include "strike/error_estimate.hpp"
-#include "strike/mesh.hpp"
 #include "strike/materials.hpp"
+#include "strike/mesh.hpp"
 #include "strike/parse_size.hpp"
 #include "strike/precompute.hpp"
 
@@ -37,9 +37,12 @@ CommandSpec modesSpec() {
       {"--density", "KG_M3", "density, kg/m^3"},
       {"--rayleigh-stiffness", "A1", "Rayleigh damping a1 (s) in C = a1 K + a2 M; default 0 or the material's"},
       {"--rayleigh-mass", "A2", "Rayleigh damping a2 (1/s); default 0 or the material's"},
-      {"--order", "1|2", "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default: from the\n"
-                         "                              shape: 2 when the wall (2 x volume / area) is under 10% of the largest extent (plates,\n"
-                         "                              shells, bars: Tet4 locks in bending, 108% off on a mug), else 1; the summary says why"},
+      {"--order", "1|2",
+       "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default: from the\n"
+       "                              shape: 2 when the wall (2 x volume / area) is under 10% of the largest extent "
+       "(plates,\n"
+       "                              shells, bars: Tet4 locks in bending, 108% off on a mug), else 1; the summary "
+       "says why"},
       {"--size", "METRES", "target tet edge length; default: chosen from the object's size"},
       {"--units", "m|cm|mm", "unit of a mesh file's coordinates (not of primitives); default m"},
       {"--max-freq", "HZ", "keep every mode up to this frequency; default 20000"},
@@ -47,17 +50,22 @@ CommandSpec modesSpec() {
       {"--max-tets", "N", "refuse meshes with more tets than this (memory and time cap); default 2000000"},
       {"--error-estimate", "", "estimate each mode's frequency error (default: on for primitives and surfaces)"},
       {"--no-error-estimate", "", "skip the error estimate"},
-      {"--tolerance", "PCT", "refine a Tet10 mesh until every mode's estimated error is below PCT: 0.5% or 0.005\n"
-                             "(a bare number >= 0.1 is refused as ambiguous). Each step at most triples the DOF\n"
-                             "and is announced with its forecast time and memory"},
-      {"--max-memory", "BYTES", "with --tolerance: do not start a step forecast to need more (e.g. 4G, 500M);\n"
-                                "default: the memory available now (MemAvailable)"},
-      {"--max-seconds", "S", "with --tolerance: do not start a step forecast to end later than S seconds\n"
-                             "after the start; default: no limit. A budget stop keeps the finest result and says so"},
-      {"--compact", "", "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
-                        "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
+      {"--tolerance", "PCT",
+       "refine a Tet10 mesh until every mode's estimated error is below PCT: 0.5% or 0.005\n"
+       "(a bare number >= 0.1 is refused as ambiguous). Each step at most triples the DOF\n"
+       "and is announced with its forecast time and memory"},
+      {"--max-memory", "BYTES",
+       "with --tolerance: do not start a step forecast to need more (e.g. 4G, 500M);\n"
+       "default: the memory available now (MemAvailable)"},
+      {"--max-seconds", "S",
+       "with --tolerance: do not start a step forecast to end later than S seconds\n"
+       "after the start; default: no limit. A budget stop keeps the finest result and says so"},
+      {"--compact", "",
+       "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
+       "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
       {"--quiet", "", "no progress or summary on stderr"},
-      {"--list-materials", "", "print the material table (elastic constants, damping, restitution, friction) with sources and exit"},
+      {"--list-materials", "",
+       "print the material table (elastic constants, damping, restitution, friction) with sources and exit"},
   };
   spec.examples =
       "  strike modes box:0.3,0.02,0.02 --material steel --order 2 -o bar.modes\n"
@@ -124,7 +132,8 @@ Result<Material> materialFromArgs(const ParsedArgs& args) {
   if (!(material.density_kg_m3 > 0)) return badInput("--density = " + args.text("--density", "?") + " (must be > 0)");
   if (!(material.rayleigh_stiffness >= 0))
     return badInput("--rayleigh-stiffness = " + args.text("--rayleigh-stiffness") + " (must be >= 0)");
-  if (!(material.rayleigh_mass >= 0)) return badInput("--rayleigh-mass = " + args.text("--rayleigh-mass") + " (must be >= 0)");
+  if (!(material.rayleigh_mass >= 0))
+    return badInput("--rayleigh-mass = " + args.text("--rayleigh-mass") + " (must be >= 0)");
   return material;
 }
 
@@ -139,7 +148,8 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
     std::fprintf(stderr, "  modes       %zu kept, %.2f Hz to %.2f Hz\n", bank.modeCount(), bank.frequencyHz(0),
                  bank.frequencyHz(bank.modeCount() - 1));
   else
-    std::fprintf(stderr, "  modes       none below %.0f Hz: the object is too small or too stiff to ring in that band\n",
+    std::fprintf(stderr,
+                 "  modes       none below %.0f Hz: the object is too small or too stiff to ring in that band\n",
                  settings.max_freq_hz);
   std::fprintf(stderr, "  dropped     %u rigid-body, %u above %.0f Hz%s\n", bank.rigid_modes_dropped,
                bank.above_cutoff_dropped, settings.max_freq_hz,
@@ -208,7 +218,8 @@ Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSe
   if (!tolerance) return tolerance.error();
   if (args.has("--order") || args.has("--size"))
     return badInput("--tolerance chooses --order and --size itself; give one or the other");
-  if (args.has("--no-error-estimate")) return badInput("--tolerance needs the error estimate; drop --no-error-estimate");
+  if (args.has("--no-error-estimate"))
+    return badInput("--tolerance needs the error estimate; drop --no-error-estimate");
   ToleranceOptions options;
   options.tolerance = *tolerance;
   if (args.has("--max-memory")) {
@@ -238,16 +249,19 @@ Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSe
   if (!chosen) return chosen.error();
   if (!quiet) {
     for (const ToleranceTrial& t : chosen->trials)
-      std::fprintf(stderr, "strike modes: tolerance %.3g%%: Tet%d, size %.4g m, %zu DOF, %.2f s, max est. error %.3g%%%s\n",
-                   100.0 * *tolerance, t.order == 2 ? 10 : 4, t.target_edge_m, t.dofs, t.seconds, 100.0 * t.max_estimate,
-                   t.met ? "  <- chosen" : "");
+      std::fprintf(stderr,
+                   "strike modes: tolerance %.3g%%: Tet%d, size %.4g m, %zu DOF, %.2f s, max est. error %.3g%%%s\n",
+                   100.0 * *tolerance, t.order == 2 ? 10 : 4, t.target_edge_m, t.dofs, t.seconds,
+                   100.0 * t.max_estimate, t.met ? "  <- chosen" : "");
     if (chosen->met)
       std::fprintf(stderr, "strike modes: tolerance met after %zu steps, %.2f s in all\n", chosen->trials.size(),
                    chosen->total_seconds);
     else
-      std::fprintf(stderr, "strike modes: tolerance NOT met: %s; kept the finest result (max est. error %.3g%%), %.2f s in all\n",
-                   chosen->stop_reason.empty() ? "no step met it" : chosen->stop_reason.c_str(),
-                   100.0 * chosen->trials.back().max_estimate, chosen->total_seconds);
+      std::fprintf(
+          stderr,
+          "strike modes: tolerance NOT met: %s; kept the finest result (max est. error %.3g%%), %.2f s in all\n",
+          chosen->stop_reason.empty() ? "no step met it" : chosen->stop_reason.c_str(),
+          100.0 * chosen->trials.back().max_estimate, chosen->total_seconds);
   }
   settings.order = chosen->trials.back().order;
   settings.target_edge_m = chosen->trials.back().target_edge_m;
@@ -283,7 +297,8 @@ int runModes(const std::vector<std::string>& raw_args) {
   settings.order = static_cast<int>(*order);
   Result<double> size = args.number("--size", 0.0);
   if (!size) return reportError("modes", size.error());
-  if (args.has("--size") && !(*size > 0)) return reportError("modes", badInput("--size = " + args.text("--size") + " (must be > 0 metres)"));
+  if (args.has("--size") && !(*size > 0))
+    return reportError("modes", badInput("--size = " + args.text("--size") + " (must be > 0 metres)"));
   settings.target_edge_m = *size;
   const std::string units = args.text("--units", "m");
   if (units != "m" && units != "cm" && units != "mm")
@@ -293,7 +308,8 @@ int runModes(const std::vector<std::string>& raw_args) {
   settings.mesh_scale = units == "mm" ? 0.001 : units == "cm" ? 0.01 : 1.0;
   Result<double> max_freq = args.number("--max-freq", 20000.0);
   if (!max_freq) return reportError("modes", max_freq.error());
-  if (!(*max_freq > 0)) return reportError("modes", badInput("--max-freq = " + args.text("--max-freq") + " (must be > 0 Hz)"));
+  if (!(*max_freq > 0))
+    return reportError("modes", badInput("--max-freq = " + args.text("--max-freq") + " (must be > 0 Hz)"));
   settings.max_freq_hz = *max_freq;
   Result<long long> max_modes = args.integer("--max-modes", 200);
   if (!max_modes) return reportError("modes", max_modes.error());
@@ -302,7 +318,8 @@ int runModes(const std::vector<std::string>& raw_args) {
   settings.max_modes = static_cast<int>(*max_modes);
   Result<long long> max_tets = args.integer("--max-tets", kDefaultMaxTets);
   if (!max_tets) return reportError("modes", max_tets.error());
-  if (*max_tets < 1) return reportError("modes", badInput("--max-tets = " + args.text("--max-tets") + " (must be >= 1)"));
+  if (*max_tets < 1)
+    return reportError("modes", badInput("--max-tets = " + args.text("--max-tets") + " (must be >= 1)"));
   settings.max_tets = *max_tets;
 
   for (const char* option : {"--max-memory", "--max-seconds"})
@@ -318,27 +335,30 @@ int runModes(const std::vector<std::string>& raw_args) {
     if (!probe) return reportError("modes", probe.error());
     const OrderChoice choice = chooseElementOrder(probe->mesh);
     settings.order = choice.order;
-    order_reason = "Tet" + std::string(choice.order == 2 ? "10" : "4") + " chosen: " + choice.reason + " (--order to override)";
+    order_reason =
+        "Tet" + std::string(choice.order == 2 ? "10" : "4") + " chosen: " + choice.reason + " (--order to override)";
   }
 
   if (args.has("--error-estimate") && args.has("--no-error-estimate"))
     return reportError("modes", badInput("--error-estimate and --no-error-estimate contradict each other"));
   // Default: on when the mesh can be coarsened (Richardson, ~10-25% extra; see
   // src/include/strike/error_estimate.hpp), off for tet files (Tet4 on corners costs more, bounds less).
-  settings.error_estimate = args.has("--error-estimate") || (!args.has("--no-error-estimate") && canRemesh(settings.mesh_spec));
+  settings.error_estimate =
+      args.has("--error-estimate") || (!args.has("--no-error-estimate") && canRemesh(settings.mesh_spec));
 
   const bool quiet = args.has("--quiet");
   ProgressReporter progress(quiet);
   settings.progress = progress.callback();
-  Result<PrecomputeResult> result = args.has("--tolerance") ? computeToTolerance(args, settings, quiet)
-                                                           : computeModeBank(settings);
+  Result<PrecomputeResult> result =
+      args.has("--tolerance") ? computeToTolerance(args, settings, quiet) : computeModeBank(settings);
   progress.finish();
   if (!result) return reportError("modes", result.error());
   if (!quiet)
     for (const MeshWarning& warning : result->report.warnings)
       std::fprintf(stderr, "strike modes: warning: %s\n", warning.message.c_str());
   const std::string output = args.text("-o");
-  Status written = writeBank(output, result->bank, args.has("--compact") ? ShapeEncoding::Int16 : ShapeEncoding::Float32);
+  Status written =
+      writeBank(output, result->bank, args.has("--compact") ? ShapeEncoding::Int16 : ShapeEncoding::Float32);
   if (!written) return reportError("modes", written.error());
   if (!quiet) {
     printSummary(settings, *result, output);

@@ -26,7 +26,8 @@ CommandSpec renderSpec() {
       "loaded from the cache or computed, only for objects struck hard enough to be heard; each contact\n"
       "impulse is projected onto the struck body's modes (impacts as Hertz pulses, resting contact as a\n"
       "force over the step, so it is silent when steady) and the oscillator bank renders the listener's\n"
-      "pressure: output 1.0 = 20 Pa (120 dB SPL) times --gain. The scene file format is in docs/scene-format.md,\nthe command line's contracts in docs/cli.md.";
+      "pressure: output 1.0 = 20 Pa (120 dB SPL) times --gain. The scene file format is in docs/scene-format.md,\nthe "
+      "command line's contracts in docs/cli.md.";
   spec.options = {
       {"-o", "OUT.wav", "output sound file, .wav or .flac (required); written atomically"},
       {"--rate", "HZ", "sample rate; default the scene's sample_rate (48000)"},
@@ -36,13 +37,15 @@ CommandSpec renderSpec() {
       {"--gain", "G", "multiply the output (1.0 full scale = 20 Pa); default 1"},
       {"--cache", "DIR", "mode bank cache folder; default $STRIKE_CACHE_DIR or ~/.cache/strike"},
       {"--no-cache", "", "compute every bank, read and write no cache"},
-      {"--cache-max-size", "SIZE", "after the render, remove the least recently used banks until the cache fits\n"
-                                   "in SIZE (e.g. 500M, 2G; 0 = no cap); default 2G. See `strike cache`"},
+      {"--cache-max-size", "SIZE",
+       "after the render, remove the least recently used banks until the cache fits\n"
+       "in SIZE (e.g. 500M, 2G; 0 = no cap); default 2G. See `strike cache`"},
       {"--max-tets", "N", "refuse object meshes with more tets than this (memory cap); default 2000000"},
       {"--max-events", "N", "stop if the simulation records more contact events (memory cap); default 20000000"},
       {"--simd", "KERNEL", kSimdHelp},
-      {"--via-library", "", "send the simulation through libstrike's C API, step by step, as a game would\n"
-                            "(strike_step, strike_render in blocks of 256): the same sound within -100 dB"},
+      {"--via-library", "",
+       "send the simulation through libstrike's C API, step by step, as a game would\n"
+       "(strike_step, strike_render in blocks of 256): the same sound within -100 dB"},
       {"--quiet", "", "no progress or summary on stderr (warnings are still printed)"},
   };
   spec.examples =
@@ -56,7 +59,8 @@ CommandSpec renderSpec() {
 /// Why a render came out silent, from what the report counted.
 std::string silenceReason(const RenderReport& r) {
   if (r.objects_struck == 0) return "no object was struck";
-  if (r.objects_sounded == 0 && r.objects_silent > 0) return "the struck objects have no mode in the audible band; see the warnings";
+  if (r.objects_sounded == 0 && r.objects_silent > 0)
+    return "the struck objects have no mode in the audible band; see the warnings";
   if (r.objects_sounded == 0) return "every struck object was struck too softly to hear";
   return "every contribution was below the audibility threshold of 20 uPa";
 }
@@ -64,21 +68,29 @@ std::string silenceReason(const RenderReport& r) {
 void printSummary(const RenderResult& result, const std::string& output, double rate, double duration) {
   const RenderReport& r = result.report;
   std::fprintf(stderr, "strike render: wrote %s (%.3g s at %.0f Hz)\n", output.c_str(), duration, rate);
-  std::fprintf(stderr, "  objects     %zu in the scene, %zu struck, %zu sounded, %zu silent (no mode in the audible band), "
+  std::fprintf(stderr,
+               "  objects     %zu in the scene, %zu struck, %zu sounded, %zu silent (no mode in the audible band), "
                "%zu too soft to hear, %zu never struck\n",
-               r.objects, r.objects_struck, r.objects_sounded, r.objects_silent, r.objects_inaudible, r.objects - r.objects_struck);
-  std::fprintf(stderr, "  banks       %zu given, %zu from the cache, %zu computed, %zu shared between identical objects\n",
+               r.objects, r.objects_struck, r.objects_sounded, r.objects_silent, r.objects_inaudible,
+               r.objects - r.objects_struck);
+  std::fprintf(stderr,
+               "  banks       %zu given, %zu from the cache, %zu computed, %zu shared between identical objects\n",
                r.banks_given, r.banks_cached, r.banks_computed, r.banks_shared);
   if (r.shape_vertices_total > 0)
-    std::fprintf(stderr, "  shapes      read at %zu of the bank files' %zu surface vertices (%.1f%%: where contacts landed)\n",
-                 r.shape_vertices_read, r.shape_vertices_total, 100.0 * double(r.shape_vertices_read) / double(r.shape_vertices_total));
+    std::fprintf(stderr,
+                 "  shapes      read at %zu of the bank files' %zu surface vertices (%.1f%%: where contacts landed)\n",
+                 r.shape_vertices_read, r.shape_vertices_total,
+                 100.0 * double(r.shape_vertices_read) / double(r.shape_vertices_total));
   // Events are contact points (one per point per 1 ms step); what reaches the oscillators counts
   // each event once per sounding body it acts on (both bodies when both sound).
-  std::fprintf(stderr, "  events      %zu contact points recorded: %zu impacts (closing > 5 cm/s) + %zu resting or sliding\n",
+  std::fprintf(stderr,
+               "  events      %zu contact points recorded: %zu impacts (closing > 5 cm/s) + %zu resting or sliding\n",
                r.events, r.impact_events, r.sustained_events);
-  std::fprintf(stderr, "  heard       %zu impact pulses and %zu resting/sliding impulses on sounding bodies "
-               "(an event counts once per sounding body it touches), making %zu changes of load (a steady load is silent)\n",
-               r.impacts, r.sustained_contacts, r.load_changes);
+  std::fprintf(
+      stderr,
+      "  heard       %zu impact pulses and %zu resting/sliding impulses on sounding bodies "
+      "(an event counts once per sounding body it touches), making %zu changes of load (a steady load is silent)\n",
+      r.impacts, r.sustained_contacts, r.load_changes);
   std::fprintf(stderr, "  modes       %llu in the banks, %llu out of the audible band, at most %llu ringing at once\n",
                static_cast<unsigned long long>(r.modes_total), static_cast<unsigned long long>(r.modes_out_of_band),
                static_cast<unsigned long long>(r.max_active_modes));
@@ -86,20 +98,28 @@ void printSummary(const RenderResult& result, const std::string& output, double 
   // the time this saves is measured by `strike bench leftout`.
   const double all_mode_samples = double(r.modes_total - r.modes_out_of_band) * duration * rate;
   if (all_mode_samples > 0)
-    std::fprintf(stderr, "  sleeping    %.3g mode-samples synthesized, %.1f%% of every in-band mode over the whole render\n",
+    std::fprintf(stderr,
+                 "  sleeping    %.3g mode-samples synthesized, %.1f%% of every in-band mode over the whole render\n",
                  double(r.mode_samples), 100.0 * double(r.mode_samples) / all_mode_samples);
   if (r.peak == 0.0) {
     std::fprintf(stderr, "  level       silent: every sample is 0 (%s)\n", silenceReason(r).c_str());
   } else {
     std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL)%s\n", r.peak, 20.0 * std::log10(r.peak),
                  20.0 * std::log10(r.peak * kFullScalePascal / 20e-6),
-                 r.clipped_samples ? (", CLIPPING: " + std::to_string(r.clipped_samples) + " samples at or above full scale; lower --gain").c_str() : "");
+                 r.clipped_samples ? (", CLIPPING: " + std::to_string(r.clipped_samples) +
+                                      " samples at or above full scale; lower --gain")
+                                         .c_str()
+                                   : "");
   }
-  std::fprintf(stderr, "  time        load %.2f s, simulate %.2f s, modes %.2f s, synthesize %.2f s, total %.2f s (%.1fx real time)\n",
-               r.load_seconds, r.simulate_seconds, r.precompute_seconds, r.synthesize_seconds, r.total_seconds,
-               r.total_seconds > 0 ? duration / r.total_seconds : 0.0);
+  std::fprintf(
+      stderr,
+      "  time        load %.2f s, simulate %.2f s, modes %.2f s, synthesize %.2f s, total %.2f s (%.1fx real time)\n",
+      r.load_seconds, r.simulate_seconds, r.precompute_seconds, r.synthesize_seconds, r.total_seconds,
+      r.total_seconds > 0 ? duration / r.total_seconds : 0.0);
   if (r.cache_pruned > 0)
-    std::fprintf(stderr, "  cache       removed %zu least recently used banks (%.1f MB) to keep the cache under its cap (--cache-max-size)\n",
+    std::fprintf(stderr,
+                 "  cache       removed %zu least recently used banks (%.1f MB) to keep the cache under its cap "
+                 "(--cache-max-size)\n",
                  r.cache_pruned, double(r.cache_pruned_bytes) / 1e6);
   for (const std::string& note : r.collision_notes) std::fprintf(stderr, "  collision   %s\n", note.c_str());
   if (r.precompute_saved_seconds > 0)
@@ -119,9 +139,11 @@ int runRender(const std::vector<std::string>& raw_args) {
   const ParsedArgs& args = *parsed;
   if (!args.has("-o")) return reportError("render", badInput("missing -o OUT.wav (where to write the sound)"));
   // Outputs first: a typo in a path must not cost a simulation and an eigen-solve.
-  if (Status ok = checkOutputFile("-o", args.text("-o"), {".wav", ".flac"}); !ok) return reportError("render", ok.error());
+  if (Status ok = checkOutputFile("-o", args.text("-o"), {".wav", ".flac"}); !ok)
+    return reportError("render", ok.error());
   if (args.has("--events"))
-    if (Status ok = checkOutputFile("--events", args.text("--events"), {}); !ok) return reportError("render", ok.error());
+    if (Status ok = checkOutputFile("--events", args.text("--events"), {}); !ok)
+      return reportError("render", ok.error());
   if (Result<SampleEncoding> e = sampleEncodingFor(args, args.text("-o")); !e) return reportError("render", e.error());
   Result<Scene> scene = loadScene(args.positional[0]);
   if (!scene) return reportError("render", scene.error());
@@ -142,7 +164,8 @@ int runRender(const std::vector<std::string>& raw_args) {
   settings.gain = *gain;
   Result<long long> max_tets = args.integer("--max-tets", kDefaultMaxTets);
   if (!max_tets) return reportError("render", max_tets.error());
-  if (*max_tets < 1) return reportError("render", badInput("--max-tets = " + args.text("--max-tets") + " (must be >= 1)"));
+  if (*max_tets < 1)
+    return reportError("render", badInput("--max-tets = " + args.text("--max-tets") + " (must be >= 1)"));
   settings.max_tets = *max_tets;
   Result<long long> max_events = args.integer("--max-events", static_cast<long long>(settings.max_events));
   if (!max_events) return reportError("render", max_events.error());
@@ -187,7 +210,8 @@ int runRender(const std::vector<std::string>& raw_args) {
       return reportError("render", events.error());
     }
   }
-  if (!quiet) printSummary(*result, output, result->audio.sample_rate_hz, result->audio.frames() / result->audio.sample_rate_hz);
+  if (!quiet)
+    printSummary(*result, output, result->audio.sample_rate_hz, result->audio.frames() / result->audio.sample_rate_hz);
   return 0;
 }
 

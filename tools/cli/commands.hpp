@@ -17,7 +17,7 @@ int runAnalyze(const std::vector<std::string>& args);
 int runRender(const std::vector<std::string>& args);
 int runBench(const std::vector<std::string>& args);  // strike bench (bench/bench.cpp)
 int runCache(const std::vector<std::string>& args);
-int runBatch(const std::vector<std::string>& args);  // strike batch (cmd_batch.cpp): python3 -m strike.batch
+int runBatch(const std::vector<std::string>& args);        // strike batch (cmd_batch.cpp): python3 -m strike.batch
 int runBenchRender(const std::vector<std::string>& args);  // strike bench render (bench/render.cpp)
 
 /// Prints "strike <command>: error: <message>" and returns the exit code for the error's kind.

@@ -46,10 +46,10 @@ Result<AudioBuffer> readAudio(const std::string& path);
 // FFTW_ESTIMATE (deterministic, no wisdom files are read or written).
 
 struct SpectralPeak {
-  double freq_hz = 0.0;      ///< interpolated (sub-bin) peak frequency
-  double level_db = 0.0;     ///< dB relative to the strongest peak (0 dB)
-  double decay_per_s = -1.0; ///< fitted amplitude decay rate d of A e^(-d t), or < 0 if not fitted
-  double level_dbfs = 0.0;   ///< 20 log10(a) of the stationary sinusoid of amplitude a that gives this spectral peak
+  double freq_hz = 0.0;       ///< interpolated (sub-bin) peak frequency
+  double level_db = 0.0;      ///< dB relative to the strongest peak (0 dB)
+  double decay_per_s = -1.0;  ///< fitted amplitude decay rate d of A e^(-d t), or < 0 if not fitted
+  double level_dbfs = 0.0;    ///< 20 log10(a) of the stationary sinusoid of amplitude a that gives this spectral peak
 };
 
 /// Window for the whole-signal spectrum.
@@ -68,8 +68,8 @@ enum class SpectrumWindow {
 };
 
 struct AnalyzeOptions {
-  int max_peaks = 20;        ///< strongest peaks to report
-  double floor_db = -60.0;   ///< ignore peaks below this, relative to the strongest
+  int max_peaks = 20;       ///< strongest peaks to report
+  double floor_db = -60.0;  ///< ignore peaks below this, relative to the strongest
   bool fit_decay = true;
   SpectrumWindow window = SpectrumWindow::OnsetHalfHann;
   /// Peaks closer than this many bins of the unpadded DFT (1/T Hz each) to a stronger one are
@@ -159,7 +159,7 @@ AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& optio
 // ---- spectrogram picture: target strike_fftw -------------------------------------------------
 
 struct SpectrogramOptions {
-  int width_px = 1024;        ///< whole image, including the axis margins
+  int width_px = 1024;  ///< whole image, including the axis margins
   int height_px = 512;
   int fft_size = 4096;        ///< samples per Hann-windowed frame (a power of two is fastest)
   bool log_frequency = true;  ///< log axis from min_freq_hz; else linear from 0 Hz

@@ -39,20 +39,20 @@ struct ModeBank {
   Material material;
 
   // What it was computed from, so a cache can reuse it safely.
-  uint64_t mesh_hash = 0;        ///< FNV-1a 64 of the mesh file bytes or primitive spec
-  std::string mesh_source;       ///< the MESH argument as given (informational)
-  uint32_t element_order = 1;    ///< 1 Tet4, 2 Tet10
-  double target_edge_m = 0.0;    ///< resolution asked for (0 = automatic)
+  uint64_t mesh_hash = 0;      ///< FNV-1a 64 of the mesh file bytes or primitive spec
+  std::string mesh_source;     ///< the MESH argument as given (informational)
+  uint32_t element_order = 1;  ///< 1 Tet4, 2 Tet10
+  double target_edge_m = 0.0;  ///< resolution asked for (0 = automatic)
   uint32_t mesh_nodes = 0;
   uint32_t mesh_tets = 0;
-  double max_freq_hz = 0.0;      ///< cut-off the modes were computed up to
+  double max_freq_hz = 0.0;  ///< cut-off the modes were computed up to
   uint32_t max_modes = 0;
 
   // Mass properties of the solid (from the tet mesh).
   double mass_kg = 0.0;
   double volume_m3 = 0.0;
-  std::array<double, 3> centre_m{};        ///< centre of mass, mesh frame
-  std::array<double, 9> inertia_kg_m2{};   ///< row-major 3x3 about centre_m
+  std::array<double, 3> centre_m{};       ///< centre of mass, mesh frame
+  std::array<double, 9> inertia_kg_m2{};  ///< row-major 3x3 about centre_m
 
   // Modes: eigenvalues lambda_i (rad^2/s^2) ascending; shapes are mass-normalized
   // (phi^T M phi = 1, units 1/sqrt(kg)) and sampled on surface vertices only.
@@ -64,14 +64,14 @@ struct ModeBank {
   std::vector<double> radiation_m2;
 
   // The surface: collision shape and where impacts land.
-  std::vector<double> surface_positions;   ///< #V * 3, metres, mesh frame
-  std::vector<float> surface_normals;      ///< #V * 3, unit, outward (area-weighted vertex normals)
-  std::vector<uint32_t> surface_triangles; ///< #F * 3, indices into surface vertices, CCW from outside
-  std::vector<uint32_t> surface_node_index;///< #V: which tet-mesh node each surface vertex is
+  std::vector<double> surface_positions;     ///< #V * 3, metres, mesh frame
+  std::vector<float> surface_normals;        ///< #V * 3, unit, outward (area-weighted vertex normals)
+  std::vector<uint32_t> surface_triangles;   ///< #F * 3, indices into surface vertices, CCW from outside
+  std::vector<uint32_t> surface_node_index;  ///< #V: which tet-mesh node each surface vertex is
 
   // Provenance: what the precompute cost.
-  double meshing_seconds = 0.0, assembly_seconds = 0.0, factorize_seconds = 0.0,
-         lanczos_seconds = 0.0, total_seconds = 0.0;
+  double meshing_seconds = 0.0, assembly_seconds = 0.0, factorize_seconds = 0.0, lanczos_seconds = 0.0,
+         total_seconds = 0.0;
   uint32_t rigid_modes_dropped = 0;
   uint32_t above_cutoff_dropped = 0;
   std::string tool_version;
@@ -128,9 +128,9 @@ class BankFile {
   BankFile() = default;
   std::shared_ptr<const Source> source_;  ///< the file (or bytes) and its name
   ModeBank bank_;
-  bool vertex_major_ = false;             ///< format 3-4 (MODV, MODQ) or 1-2 (MODE, [mode][vertex][xyz])
-  bool int16_shapes_ = false;             ///< format 4 (MODQ): values are int16 times shape_scale_[mode]
-  std::vector<float> shape_scale_;        ///< format 4: per mode
+  bool vertex_major_ = false;       ///< format 3-4 (MODV, MODQ) or 1-2 (MODE, [mode][vertex][xyz])
+  bool int16_shapes_ = false;       ///< format 4 (MODQ): values are int16 times shape_scale_[mode]
+  std::vector<float> shape_scale_;  ///< format 4: per mode
   size_t shapeValueBytes() const { return int16_shapes_ ? 2 : 4; }
   /// Rows of `count` vertices as stored (f32 or i16) -> floats.
   void decodeRows(const uint8_t* bytes, size_t count, float* out) const;

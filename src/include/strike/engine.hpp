@@ -61,16 +61,16 @@ struct Pose {
 };
 
 struct EngineSettings {
-  SynthSettings synth;                 ///< sample rate, band, audibility threshold, kernel
-  uint32_t channels = 1;               ///< 1, or 2 (constant-power pan by the listener's x)
+  SynthSettings synth;    ///< sample rate, band, audibility threshold, kernel
+  uint32_t channels = 1;  ///< 1, or 2 (constant-power pan by the listener's x)
   uint32_t max_voices = 64;
-  uint32_t max_block_frames = 1024;    ///< largest render() call
+  uint32_t max_block_frames = 1024;  ///< largest render() call
   /// Ringing modes over all voices; above it at the end of a render call the quietest (at the
   /// listener) sleep first. 0: no budget.
   uint64_t max_active_modes = 0;
   double reference_distance_m = kReferenceDistance_m;  ///< where the voices' weights hold
   double min_distance_m = kMinListenerDistance_m;      ///< 1/d stops growing here
-  double max_contact_duration_s = 0.005;  ///< longer Hertz pulses are shortened to this
+  double max_contact_duration_s = 0.005;               ///< longer Hertz pulses are shortened to this
   /// Extra modal decay while in sustained contact, 1/s (amplitude); 0 = none. [scene file
   /// "contact_damping"]
   double contact_damping_per_s = 0.0;
@@ -91,18 +91,18 @@ struct VoiceDesc {
   /// Per mode: output units per unit modal acceleration at the reference distance (pressure
   /// weights over the output's full scale); empty means 1 (modal acceleration).
   std::vector<double> weights;
-  bool is_static = false;           ///< immovable (a table): infinite mass for Hertz
-  double contact_radius_m = 0.0;    ///< curvature radius at contacts; 0 = flat
+  bool is_static = false;         ///< immovable (a table): infinite mass for Hertz
+  double contact_radius_m = 0.0;  ///< curvature radius at contacts; 0 = flat
   Pose pose;
   float gain = 1.0f;
 };
 
 /// The other body in a contact, as the Hertz contact time needs it.
 struct ContactPartner {
-  double youngs_pa = 0.0;           ///< 0: the same material as the struck body
+  double youngs_pa = 0.0;  ///< 0: the same material as the struck body
   double poisson = 0.3;
-  double radius_m = 0.0;            ///< 0: flat (a half-space)
-  double mass_kg = 0.0;             ///< 0: immovable
+  double radius_m = 0.0;  ///< 0: flat (a half-space)
+  double mass_kg = 0.0;   ///< 0: immovable
   /// Its voice, if it is one: a static body keeps carrying a load whose bodies fell asleep.
   uint32_t voice = kNoVoice;
 };
@@ -110,10 +110,10 @@ struct ContactPartner {
 /// One body's side of one contact point in one physics step.
 struct EngineContact {
   uint32_t voice = 0;
-  bool world_frame = false;              ///< point and impulse in the world (else the mesh frame)
-  std::array<double, 3> point{};         ///< m
-  std::array<double, 3> impulse{};       ///< applied to this body over the step, N s
-  double normal_speed_m_s = 0.0;         ///< approach speed along the normal (> kImpactSpeed_m_s: impact)
+  bool world_frame = false;         ///< point and impulse in the world (else the mesh frame)
+  std::array<double, 3> point{};    ///< m
+  std::array<double, 3> impulse{};  ///< applied to this body over the step, N s
+  double normal_speed_m_s = 0.0;    ///< approach speed along the normal (> kImpactSpeed_m_s: impact)
   /// When it happened on the engine's clock (seconds since the first sample), the moment the
   /// surfaces met for an impact; < 0: now. Late times start now.
   double time_s = -1.0;
@@ -124,28 +124,28 @@ struct EngineContact {
 struct EngineImpact {
   uint32_t voice = 0;
   bool world_frame = false;
-  int32_t surface_vertex = -1;           ///< >= 0: at this surface vertex (point ignored)
+  int32_t surface_vertex = -1;  ///< >= 0: at this surface vertex (point ignored)
   std::array<double, 3> point{}, impulse{};
   double normal_speed_m_s = 1.0;
-  double contact_duration_s = -1.0;      ///< < 0: Hertz; 0: ideal impulse; > 0: this long
+  double contact_duration_s = -1.0;  ///< < 0: Hertz; 0: ideal impulse; > 0: this long
   ContactPartner partner;
-  double time_s = -1.0;                  ///< engine clock; < 0: now
+  double time_s = -1.0;  ///< engine clock; < 0: now
   PulseShape shape = PulseShape::HalfSine;
 };
 
 struct EngineStats {
-  uint64_t impacts = 0;               ///< contacts that struck (Hertz pulses scheduled)
+  uint64_t impacts = 0;  ///< contacts that struck (Hertz pulses scheduled)
   uint64_t impacts_inaudible = 0;
-  uint64_t impacts_dropped = 0;       ///< realtime reserve full
-  uint64_t sustained_contacts = 0;    ///< contact points of sustained contact
-  uint64_t load_changes = 0;          ///< force steps scheduled (a load starting, changing, ending)
-  uint64_t load_holds = 0;            ///< steps a sleeping body's load was kept
-  uint64_t modes_culled = 0;          ///< by the budget
-  uint64_t stale = 0;                 ///< contacts or impacts on an empty slot
-  uint64_t mode_samples = 0;          ///< active modes x samples, all voices
+  uint64_t impacts_dropped = 0;     ///< realtime reserve full
+  uint64_t sustained_contacts = 0;  ///< contact points of sustained contact
+  uint64_t load_changes = 0;        ///< force steps scheduled (a load starting, changing, ending)
+  uint64_t load_holds = 0;          ///< steps a sleeping body's load was kept
+  uint64_t modes_culled = 0;        ///< by the budget
+  uint64_t stale = 0;               ///< contacts or impacts on an empty slot
+  uint64_t mode_samples = 0;        ///< active modes x samples, all voices
   uint64_t modes_total = 0, modes_out_of_band = 0;
-  uint64_t max_active_modes = 0;      ///< of any render call's end, all voices
-  uint64_t active_modes = 0;          ///< after the last render call
+  uint64_t max_active_modes = 0;  ///< of any render call's end, all voices
+  uint64_t active_modes = 0;      ///< after the last render call
 };
 
 /// One sounding body. Built off the audio thread (allocates everything it will need).
@@ -163,13 +163,13 @@ class Voice {
   std::shared_ptr<const ModeBank> bank_;
   OscillatorBank synth_;
   ContactProjector projector_;
-  std::vector<double> modal_;        ///< #modes: projection scratch
-  std::vector<double> step_force_;   ///< #modes: this step's sustained modal force (N / sqrt(kg))
-  std::vector<double> held_force_;   ///< #modes: the sustained modal force in force now
-  std::vector<float> mono_;          ///< max_block_frames
-  std::vector<float> levels_;        ///< #modes: budget scratch
-  std::array<double, 3> centre_m_{}; ///< centre of mass, mesh frame
-  double size_m_ = 1.0;              ///< largest extent of its surface (load moments over it)
+  std::vector<double> modal_;         ///< #modes: projection scratch
+  std::vector<double> step_force_;    ///< #modes: this step's sustained modal force (N / sqrt(kg))
+  std::vector<double> held_force_;    ///< #modes: the sustained modal force in force now
+  std::vector<float> mono_;           ///< max_block_frames
+  std::vector<float> levels_;         ///< #modes: budget scratch
+  std::array<double, 3> centre_m_{};  ///< centre of mass, mesh frame
+  double size_m_ = 1.0;               ///< largest extent of its surface (load moments over it)
   double youngs_pa_ = 0, poisson_ = 0, mass_kg_ = 0, contact_radius_m_ = 0;
   bool is_static_ = false;
   // Pose and level (engine thread).
@@ -180,15 +180,15 @@ class Voice {
   float level_gain2_ = 0.0f;
   bool fresh_ = true;
   // Contact scheduler state (contact_scheduler.cpp).
-  bool in_step_ = false;             ///< has sustained contact in the open step
+  bool in_step_ = false;                ///< has sustained contact in the open step
   std::array<double, 6> step_load_{};   ///< force (N) and moment / size (N) of the open step
   std::array<double, 6> held_load_{};   ///< of the held force
-  bool holding_ = false;             ///< held_force_ is not zero
+  bool holding_ = false;                ///< held_force_ is not zero
   std::array<uint32_t, 8> partners_{};  ///< voices it touched in its last sustained step
   uint32_t partner_count_ = 0;
-  bool partners_overflow_ = false;   ///< more than 8: a static body keeps no load when they sleep
-  double last_sustained_s_ = -1.0;   ///< time of its last sustained contact
-  bool span_open_ = false;           ///< contact damping in force
+  bool partners_overflow_ = false;  ///< more than 8: a static body keeps no load when they sleep
+  double last_sustained_s_ = -1.0;  ///< time of its last sustained contact
+  bool span_open_ = false;          ///< contact damping in force
 };
 
 class SoundEngine {

@@ -33,12 +33,12 @@
 namespace strike {
 
 struct ErrorEstimateReport {
-  std::string method;        ///< "richardson", "richardson-finer" or "tet4-corner" (empty when not estimated)
-  std::string note;          ///< why not estimated, or a caveat
-  double seconds = 0.0;      ///< extra run time (meshing + assembly + solve of the coarse problem)
-  double ratio = 0.0;        ///< h_coarse / h_fine (richardson)
+  std::string method;    ///< "richardson", "richardson-finer" or "tet4-corner" (empty when not estimated)
+  std::string note;      ///< why not estimated, or a caveat
+  double seconds = 0.0;  ///< extra run time (meshing + assembly + solve of the coarse problem)
+  double ratio = 0.0;    ///< h_coarse / h_fine (richardson)
   size_t coarse_dofs = 0;
-  size_t unmatched = 0;      ///< fine modes with no coarse partner (their estimate is 1.0 = 100%)
+  size_t unmatched = 0;  ///< fine modes with no coarse partner (their estimate is 1.0 = 100%)
 };
 
 /// Grid-convergence safety factor Fs: Roache recommends 3 for a two-mesh study (1.25 needs three
@@ -74,22 +74,22 @@ struct ToleranceTrial {
   int order = 2;
   double target_edge_m = 0.0;  ///< the requested edge, or the automatic mesh's mean edge
   size_t dofs = 0;
-  double seconds = 0.0;         ///< its precompute + error estimate
-  double max_estimate = 0.0;    ///< largest estimated relative error over kept modes
+  double seconds = 0.0;       ///< its precompute + error estimate
+  double max_estimate = 0.0;  ///< largest estimated relative error over kept modes
   bool met = false;
   std::string method;           ///< of its error estimate
   double forecast_seconds = 0;  ///< forecast before the step (0: none yet)
   double forecast_bytes = 0;
-  double peak_bytes = 0;        ///< the process's peak resident memory after it
+  double peak_bytes = 0;  ///< the process's peak resident memory after it
 };
 
 struct ToleranceResult {
   PrecomputeResult chosen;             ///< the last (finest) step's bank
   std::vector<ToleranceTrial> trials;  ///< in the order tried (coarsest first)
   double total_seconds = 0.0;
-  bool met = false;                    ///< false: the finest step is returned, tolerance missed
-  bool stopped_by_budget = false;      ///< the next step's forecast exceeded max_bytes or max_seconds
-  std::string stop_reason;             ///< why it stopped unmet (budget, no finer mesh), empty when met
+  bool met = false;                ///< false: the finest step is returned, tolerance missed
+  bool stopped_by_budget = false;  ///< the next step's forecast exceeded max_bytes or max_seconds
+  std::string stop_reason;         ///< why it stopped unmet (budget, no finer mesh), empty when met
 };
 
 /// The DOF of one refinement step are at most this many times the last step's.

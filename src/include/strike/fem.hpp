@@ -15,8 +15,8 @@ namespace strike {
 struct MassProperties {
   double mass_kg = 0.0;
   double volume_m3 = 0.0;
-  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();              ///< centre of mass
-  Eigen::Matrix3d inertia_kg_m2 = Eigen::Matrix3d::Zero();         ///< inertia tensor about centre_m
+  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();       ///< centre of mass
+  Eigen::Matrix3d inertia_kg_m2 = Eigen::Matrix3d::Zero();  ///< inertia tensor about centre_m
 };
 
 /// Tet4 (tets.cols() == 4) or Tet10 (10 columns, isoparametric: curved edges are integrated
@@ -29,8 +29,8 @@ void assembleStiffness(const TetMesh& mesh, const Material& material, Eigen::Spa
 void assembleMass(const TetMesh& mesh, double density_kg_m3, Eigen::SparseMatrix<double>& M);
 /// Both at once, sharing one sparsity pattern (K and M then have identical structure, so
 /// K - sigma M is a plain value-wise combination). Preferred for large meshes.
-void assembleStiffnessAndMass(const TetMesh& mesh, const Material& material,
-                              Eigen::SparseMatrix<double>& K, Eigen::SparseMatrix<double>& M);
+void assembleStiffnessAndMass(const TetMesh& mesh, const Material& material, Eigen::SparseMatrix<double>& K,
+                              Eigen::SparseMatrix<double>& M);
 
 /// Mass, volume, centre and inertia integrated exactly over the tets (Tet10 with straight edges
 /// has the same geometry as its Tet4 corners).

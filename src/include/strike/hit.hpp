@@ -16,30 +16,30 @@
 namespace strike {
 
 struct HitSettings {
-  std::optional<size_t> vertex;                 ///< strike this surface vertex
-  std::optional<std::array<double, 3>> at_m;    ///< or the surface point nearest this (mesh frame)
-                                                ///< neither: the vertex that excites most (loudestVertex)
+  std::optional<size_t> vertex;                      ///< strike this surface vertex
+  std::optional<std::array<double, 3>> at_m;         ///< or the surface point nearest this (mesh frame)
+                                                     ///< neither: the vertex that excites most (loudestVertex)
   std::optional<std::array<double, 3>> impulse_n_s;  ///< default 0.01 N s into the surface along its normal
   double duration_s = 2.0;
   double sample_rate_hz = 48000.0;
-  double distance_m = 1.0;                      ///< listener distance (gain and delay)
-  double gain = 1.0;                            ///< on top of kFullScalePascal
-  std::optional<double> contact_time_s;         ///< force pulse length; default from Hertz theory
-  std::string striker = "steel";                ///< striker sphere material (Hertz contact time)
+  double distance_m = 1.0;               ///< listener distance (gain and delay)
+  double gain = 1.0;                     ///< on top of kFullScalePascal
+  std::optional<double> contact_time_s;  ///< force pulse length; default from Hertz theory
+  std::string striker = "steel";         ///< striker sphere material (Hertz contact time)
   double striker_radius_m = 0.005;
-  SimdLevel simd = SimdLevel::Auto;             ///< the synthesizer's kernel (last bits only)
+  SimdLevel simd = SimdLevel::Auto;  ///< the synthesizer's kernel (last bits only)
 };
 
 struct HitResult {
   AudioBuffer audio;
-  size_t vertex = 0;                 ///< the struck vertex (nearest to at_m when given)
-  std::array<double, 3> point_m{};   ///< where the impulse was applied: the surface point nearest at_m
-  double off_surface_m = 0.0;        ///< with at_m: its distance from point_m
+  size_t vertex = 0;                ///< the struck vertex (nearest to at_m when given)
+  std::array<double, 3> point_m{};  ///< where the impulse was applied: the surface point nearest at_m
+  double off_surface_m = 0.0;       ///< with at_m: its distance from point_m
   std::array<double, 3> impulse_n_s{};
   double contact_time_s = 0.0;
   SynthStats stats;
   double peak = 0.0;
-  size_t clipped_samples = 0;        ///< |sample| >= 1
+  size_t clipped_samples = 0;  ///< |sample| >= 1
 };
 
 /// The surface vertex whose in-band modes an impulse along the inward normal excites most

@@ -18,8 +18,8 @@ struct ContactProperties {
 };
 
 struct MaterialTable {
-  std::map<std::string, Material> materials;  ///< by lower-case name
-  std::map<std::string, std::string> sources; ///< where each entry's numbers come from
+  std::map<std::string, Material> materials;         ///< by lower-case name
+  std::map<std::string, std::string> sources;        ///< where each entry's numbers come from
   std::map<std::string, ContactProperties> contact;  ///< by lower-case name
   double fit_band_low_hz = 500.0, fit_band_high_hz = 5000.0;
 

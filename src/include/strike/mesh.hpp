@@ -43,9 +43,9 @@ constexpr int64_t kDefaultMaxTets = 2'000'000;
 
 /// Options for turning a MESH argument into a TetMesh.
 struct MeshOptions {
-  int order = 1;                  ///< 1: Tet4, 2: Tet10 (mid-edge nodes added, straight edges)
-  double target_edge_m = 0.0;     ///< target tet edge length; 0 picks one from the bounding box
-  double radius_edge_ratio = 1.4; ///< TetGen quality bound (-q), smaller = better shaped tets
+  int order = 1;                   ///< 1: Tet4, 2: Tet10 (mid-edge nodes added, straight edges)
+  double target_edge_m = 0.0;      ///< target tet edge length; 0 picks one from the bounding box
+  double radius_edge_ratio = 1.4;  ///< TetGen quality bound (-q), smaller = better shaped tets
   /// Size cap (memory and time of the FEM and eigen-solve): a mesh with more tets, or a surface
   /// whose TetGen estimate exceeds it, is refused with a message naming the cap (`--max-tets`).
   int64_t max_tets = kDefaultMaxTets;
@@ -53,7 +53,7 @@ struct MeshOptions {
   /// key "units": "mm", `strike modes --units mm`). Applied to the coordinates as read, before
   /// meshing, so target_edge_m stays in metres. Primitives are always in metres.
   double scale = 1.0;
-  ProgressFn progress;            ///< optional
+  ProgressFn progress;  ///< optional
 };
 
 /// A warning about a mesh that was still usable (unreferenced nodes, duplicate vertices...).
@@ -128,8 +128,7 @@ Status checkClosedSurface(const SurfaceMesh& surface, const std::string& source)
 /// Max tet volume: target_edge_m^3 / (6 sqrt 2) (a regular tet of that edge); when
 /// target_edge_m == 0, the enclosed volume / 600, which gives a few thousand tets for a compact
 /// object (more for thin-walled ones, where the surface sets the size).
-Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& options,
-                               const std::string& source);
+Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& options, const std::string& source);
 
 /// Turns a MESH argument (a primitive spec or a file path) into a validated TetMesh of the
 /// requested order. Surface files and sphere/cylinder primitives go through tetrahedralize().

@@ -26,7 +26,7 @@ struct ModalSettings {
   int max_modes = 200;           ///< but at most this many (lowest first)
   /// Modes with sqrt(|lambda|)/2pi below this are rigid-body modes (a free solid has 6).
   double rigid_freq_hz = 1.0;
-  ProgressFn progress;           ///< optional
+  ProgressFn progress;  ///< optional
   ModalMethod method = ModalMethod::Hybrid;
   /// Right-hand sides per block solve in the block Lanczos stage (Hybrid); 0 = default (16).
   int block_size = 0;
@@ -47,30 +47,29 @@ struct ModalSettings {
 };
 
 struct ModalResult {
-  Eigen::VectorXd eigenvalues;   ///< lambda_i, rad^2/s^2, ascending, elastic modes only
-  Eigen::MatrixXd shapes;        ///< 3N by #modes, M-orthonormal: shapes^T M shapes = I
-  int rigid_modes_dropped = 0;   ///< normally 6 for a free body
-  int above_cutoff_dropped = 0;  ///< converged modes found above max_freq_hz and not kept
+  Eigen::VectorXd eigenvalues;       ///< lambda_i, rad^2/s^2, ascending, elastic modes only
+  Eigen::MatrixXd shapes;            ///< 3N by #modes, M-orthonormal: shapes^T M shapes = I
+  int rigid_modes_dropped = 0;       ///< normally 6 for a free body
+  int above_cutoff_dropped = 0;      ///< converged modes found above max_freq_hz and not kept
   bool capped_by_max_modes = false;  ///< true when more modes lie below max_freq_hz
   double factorize_seconds = 0.0;
   double lanczos_seconds = 0.0;
-  int operator_applications = 0; ///< solves with the factorization (a block of k counts k)
+  int operator_applications = 0;  ///< solves with the factorization (a block of k counts k)
   /// Largest relative residual ||K x - lambda M x|| / (lambda ||M x||) of a kept mode: the
   /// error estimate that precompute reports (eigenvalue error is about its square).
   double max_relative_residual = 0.0;
-  double sigma = 0.0;            ///< the shift used (rad^2/s^2, negative)
-  double refine_seconds = 0.0;   ///< Rayleigh-Ritz and residuals after Lanczos
+  double sigma = 0.0;           ///< the shift used (rad^2/s^2, negative)
+  double refine_seconds = 0.0;  ///< Rayleigh-Ritz and residuals after Lanczos
   // Parts of lanczos_seconds:
-  double solve_seconds = 0.0;        ///< CHOLMOD solves
-  double orthogonalize_seconds = 0.0;///< block Lanczos recurrence, reorthogonalization, M products
-  double ritz_seconds = 0.0;         ///< projected eigen-solves (block Lanczos convergence checks)
-  int block_size = 0;                ///< block Lanczos block size used (0: ARPACK only)
-  int lanczos_basis = 0;             ///< largest block Krylov basis built
-  int reorthogonalizations = 0;      ///< extra (DGKS) Gram-Schmidt passes in block Lanczos
+  double solve_seconds = 0.0;          ///< CHOLMOD solves
+  double orthogonalize_seconds = 0.0;  ///< block Lanczos recurrence, reorthogonalization, M products
+  double ritz_seconds = 0.0;           ///< projected eigen-solves (block Lanczos convergence checks)
+  int block_size = 0;                  ///< block Lanczos block size used (0: ARPACK only)
+  int lanczos_basis = 0;               ///< largest block Krylov basis built
+  int reorthogonalizations = 0;        ///< extra (DGKS) Gram-Schmidt passes in block Lanczos
 };
 
-Result<ModalResult> solveModes(const Eigen::SparseMatrix<double>& K,
-                               const Eigen::SparseMatrix<double>& M,
+Result<ModalResult> solveModes(const Eigen::SparseMatrix<double>& K, const Eigen::SparseMatrix<double>& M,
                                const ModalSettings& settings);
 
 }  // namespace strike

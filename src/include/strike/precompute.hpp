@@ -14,15 +14,15 @@
 namespace strike {
 
 struct PrecomputeSettings {
-  std::string mesh_spec;    ///< file path or primitive ("box:0.3,0.02,0.02")
+  std::string mesh_spec;  ///< file path or primitive ("box:0.3,0.02,0.02")
   Material material;
-  int order = 1;            ///< 1 Tet4, 2 Tet10
-  double target_edge_m = 0; ///< 0: automatic
-  double mesh_scale = 1.0;  ///< metres per unit of a mesh file (MeshOptions::scale); primitives ignore it
+  int order = 1;             ///< 1 Tet4, 2 Tet10
+  double target_edge_m = 0;  ///< 0: automatic
+  double mesh_scale = 1.0;   ///< metres per unit of a mesh file (MeshOptions::scale); primitives ignore it
   double max_freq_hz = 20000.0;
   int max_modes = 200;
   int64_t max_tets = kDefaultMaxTets;  ///< size cap of the tet mesh (--max-tets), see MeshOptions
-  ProgressFn progress;      ///< optional
+  ProgressFn progress;                 ///< optional
   /// Estimate each mode's frequency error (src/precompute/error_estimate.cpp) at extra cost;
   /// does not change the modes, so it is not part of the cache key.
   bool error_estimate = false;

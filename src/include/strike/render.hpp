@@ -40,8 +40,8 @@ class SoundOutput {
                           const std::array<double, 4>& orientation_wxyz, const std::string& name) = 0;
   virtual void setListener(const std::array<double, 3>& position_m) = 0;
   virtual void beginStep(double step_end_s, double step_s) = 0;
-  virtual void setPose(uint32_t slot, const std::array<double, 3>& position_m, const std::array<double, 4>& orientation_wxyz,
-                       bool asleep) = 0;
+  virtual void setPose(uint32_t slot, const std::array<double, 3>& position_m,
+                       const std::array<double, 4>& orientation_wxyz, bool asleep) = 0;
   virtual void contact(const EngineContact& contact) = 0;
   virtual void endStep() = 0;
   /// The next `frames` (<= kRenderBlockFrames) mono samples, full scale 1.0.
@@ -57,14 +57,14 @@ using SoundOutputFactory = std::function<Result<std::unique_ptr<SoundOutput>>(co
 constexpr size_t kRenderBlockFrames = 256;
 
 struct RenderSettings {
-  double sample_rate_hz = 0.0;   ///< 0: the scene's
-  double duration_s = 0.0;       ///< 0: the scene's
-  std::string cache_dir;         ///< where banks are cached by content hash; empty: no cache
+  double sample_rate_hz = 0.0;  ///< 0: the scene's
+  double duration_s = 0.0;      ///< 0: the scene's
+  std::string cache_dir;        ///< where banks are cached by content hash; empty: no cache
   /// After the render, the cache's least recently used banks are removed until it fits in this
   /// (strike/bank_cache.hpp); 0: no cap.
   uint64_t cache_max_bytes = kDefaultCacheMaxBytes;
-  double gain = 1.0;             ///< output scale on top of kFullScalePascal
-  int64_t max_tets = kDefaultMaxTets;  ///< size cap of each object's tet mesh (PrecomputeSettings::max_tets)
+  double gain = 1.0;                             ///< output scale on top of kFullScalePascal
+  int64_t max_tets = kDefaultMaxTets;            ///< size cap of each object's tet mesh (PrecomputeSettings::max_tets)
   size_t max_events = SimSettings{}.max_events;  ///< cap on recorded contact events (SimSettings::max_events)
   /// For `strike bench leftout` only: leave nothing out, to measure what leaving out saves. Every
   /// object gets a bank and an oscillator (struck or not, however softly); the synth keeps every
@@ -129,9 +129,9 @@ struct RenderReport {
 /// KEY.modes: a hash of the mesh bytes and of every setting that changes the modes), or the
 /// bank file the scene gave.
 struct BodyBank {
-  uint64_t cache_key = 0;    ///< 0 when the scene gave the bank file
-  std::string given_path;    ///< the scene's "bank", or empty
-  bool sounded = false;      ///< struck hard enough to be heard (its bank was used)
+  uint64_t cache_key = 0;  ///< 0 when the scene gave the bank file
+  std::string given_path;  ///< the scene's "bank", or empty
+  bool sounded = false;    ///< struck hard enough to be heard (its bank was used)
 };
 
 struct RenderResult {
@@ -145,7 +145,8 @@ struct RenderResult {
 Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& settings);
 
 /// The engine settings of a render at this sample rate and cut-off (both outputs use them).
-EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& settings, double rate_hz, double max_freq_hz);
+EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& settings, double rate_hz,
+                                    double max_freq_hz);
 
 /// One row per contact event: time, bodies, points, impulses, speeds (see the header row).
 Status writeEventsCsv(const std::string& path, const RenderResult& result);

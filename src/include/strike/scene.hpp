@@ -17,14 +17,14 @@ namespace strike {
 
 struct SceneObject {
   std::string name;
-  std::string mesh;          ///< primitive spec, or a path resolved against the scene's folder
-  std::string bank;          ///< optional precomputed bank path (resolved); empty: compute or cache
+  std::string mesh;  ///< primitive spec, or a path resolved against the scene's folder
+  std::string bank;  ///< optional precomputed bank path (resolved); empty: compute or cache
   Material material;
-  std::string units = "m";   ///< unit of the mesh file's coordinates: "m", "cm" or "mm"
-  double mesh_scale = 1.0;   ///< metres per mesh unit (1, 0.01, 0.001), from units
-  int order = 1;             ///< element order when the bank is computed
-  double size_m = 0.0;       ///< target tet edge when the bank is computed (0 = automatic)
-  bool is_static = false;    ///< never moves (a table); still sounds when struck
+  std::string units = "m";     ///< unit of the mesh file's coordinates: "m", "cm" or "mm"
+  double mesh_scale = 1.0;     ///< metres per mesh unit (1, 0.01, 0.001), from units
+  int order = 1;               ///< element order when the bank is computed
+  double size_m = 0.0;         ///< target tet edge when the bank is computed (0 = automatic)
+  bool is_static = false;      ///< never moves (a table); still sounds when struck
   std::string shape = "auto";  ///< collision shape: auto, convex, pieces, concave (docs/contact.md)
   std::array<double, 3> position_m{};
   std::array<double, 4> orientation_wxyz{1, 0, 0, 0};
@@ -43,7 +43,7 @@ struct ContactPairSpec {
 };
 
 struct Scene {
-  std::string path;          ///< the scene file, for messages
+  std::string path;  ///< the scene file, for messages
   double sample_rate_hz = 48000.0;
   double duration_s = 3.0;
   std::array<double, 3> gravity_m_s2{0, 0, -9.81};

@@ -16,11 +16,11 @@ namespace strike {
 
 /// Limits of what the checks accept silently.
 struct PlacementLimits {
-  double overlap_tolerance_m = 5e-4;   ///< penetration deeper than this is reported (meshes are faceted)
-  double max_extent_m = 10.0;          ///< larger than this: implausible for a sounding object
-  double min_extent_m = 1e-3;          ///< smaller than this: likely a mesh in metres read as mm
-  double max_dynamic_mass_kg = 1000.0; ///< a heavier moving body is implausible in a sound scene
-  size_t max_vertices_tested = 2048;   ///< per body and pair (an even sample), bounds the cost
+  double overlap_tolerance_m = 5e-4;    ///< penetration deeper than this is reported (meshes are faceted)
+  double max_extent_m = 10.0;           ///< larger than this: implausible for a sounding object
+  double min_extent_m = 1e-3;           ///< smaller than this: likely a mesh in metres read as mm
+  double max_dynamic_mass_kg = 1000.0;  ///< a heavier moving body is implausible in a sound scene
+  size_t max_vertices_tested = 2048;    ///< per body and pair (an even sample), bounds the cost
 };
 
 /// Warnings about the bodies' starting placement and size: one line each, naming the objects and

@@ -19,17 +19,17 @@ namespace strike {
 /// frame of its mode bank); the pose places the mesh frame in the world.
 struct SimBodyDesc {
   std::string name;
-  bool is_static = false;                  ///< a table or tray: never moves, still sounds when struck
-  std::vector<double> surface_positions;   ///< #V * 3, metres, mesh frame
-  std::vector<uint32_t> surface_triangles; ///< #F * 3, CCW from outside
-  double mass_kg = 0.0;                    ///< from the tet mesh (ignored when static)
-  std::array<double, 3> centre_m{};        ///< centre of mass, mesh frame
-  std::array<double, 9> inertia_kg_m2{};   ///< about centre_m, mesh frame, row-major
-  std::array<double, 3> position_m{};      ///< world position of the mesh-frame origin
+  bool is_static = false;                              ///< a table or tray: never moves, still sounds when struck
+  std::vector<double> surface_positions;               ///< #V * 3, metres, mesh frame
+  std::vector<uint32_t> surface_triangles;             ///< #F * 3, CCW from outside
+  double mass_kg = 0.0;                                ///< from the tet mesh (ignored when static)
+  std::array<double, 3> centre_m{};                    ///< centre of mass, mesh frame
+  std::array<double, 9> inertia_kg_m2{};               ///< about centre_m, mesh frame, row-major
+  std::array<double, 3> position_m{};                  ///< world position of the mesh-frame origin
   std::array<double, 4> orientation_wxyz{1, 0, 0, 0};  ///< unit quaternion, mesh frame -> world
-  std::array<double, 3> velocity_m_s{};    ///< of the centre of mass, world
-  std::array<double, 3> angular_velocity_rad_s{};     ///< world
-  double restitution = 0.5;                ///< the body's own (its material on itself); see combineContact
+  std::array<double, 3> velocity_m_s{};                ///< of the centre of mass, world
+  std::array<double, 3> angular_velocity_rad_s{};      ///< world
+  double restitution = 0.5;                            ///< the body's own (its material on itself); see combineContact
   double friction = 0.5;
   /// (1 - nu^2) / E of its material, 1/Pa: weights its restitution when two bodies meet
   /// (combineContact). 0: unknown (both bodies weigh the same).
@@ -47,11 +47,11 @@ struct SimBodyDesc {
 struct SimSettings {
   double duration_s = 3.0;
   std::array<double, 3> gravity_m_s2{0, 0, -9.81};
-  double substep_s = 1.0 / 1000.0;         ///< fixed physics step, <= 1 ms
-  bool ground = true;                      ///< a static plane z = ground_height_m (silent)
+  double substep_s = 1.0 / 1000.0;  ///< fixed physics step, <= 1 ms
+  bool ground = true;               ///< a static plane z = ground_height_m (silent)
   double ground_height_m = 0.0;
   double ground_restitution = 0.5, ground_friction = 0.6;
-  double ground_compliance_per_pa = 0.0;   ///< as SimBodyDesc::compliance_per_pa
+  double ground_compliance_per_pa = 0.0;  ///< as SimBodyDesc::compliance_per_pa
   /// Contact coefficients for particular pairs of bodies (body_b may be kGroundBody), overriding
   /// combineContact; a NaN coefficient is not overridden.
   struct ContactPair {
@@ -130,14 +130,15 @@ struct ContactEvent {
   /// the moment its surfaces met, estimated within a step either side of step_time_s from the gap
   /// and the closing speed at the start of the substep. Any other contact: step_time_s.
   double time_s = 0.0;
-  double step_time_s = 0.0;         ///< start of the substep in which the impulse was applied
-  uint32_t body_a = 0, body_b = 0;  ///< indices into the body list; body_b may be kGroundBody
-  std::array<double, 3> point_a_mesh{}, point_b_mesh{};      ///< contact point in each body's mesh frame
-  std::array<double, 3> impulse_on_a_mesh{}, impulse_on_b_mesh{};  ///< total impulse (normal + friction), N s, in each body's mesh frame
-  std::array<double, 3> point_world{}, normal_world{};       ///< at time_s; normal points from b to a
+  double step_time_s = 0.0;                              ///< start of the substep in which the impulse was applied
+  uint32_t body_a = 0, body_b = 0;                       ///< indices into the body list; body_b may be kGroundBody
+  std::array<double, 3> point_a_mesh{}, point_b_mesh{};  ///< contact point in each body's mesh frame
+  std::array<double, 3> impulse_on_a_mesh{},
+      impulse_on_b_mesh{};  ///< total impulse (normal + friction), N s, in each body's mesh frame
+  std::array<double, 3> point_world{}, normal_world{};  ///< at time_s; normal points from b to a
   double normal_impulse_n_s = 0.0;
-  double friction_impulse_n_s = 0.0;   ///< magnitude of the tangential impulse
-  double normal_speed_m_s = 0.0;       ///< approach speed along the normal before the substep (>= 0)
+  double friction_impulse_n_s = 0.0;  ///< magnitude of the tangential impulse
+  double normal_speed_m_s = 0.0;      ///< approach speed along the normal before the substep (>= 0)
   /// First substep with an impulse at this contact point (an impact, not resting): no event of the
   /// same two bodies lay near this point in the previous 3 substeps (in the world or in either
   /// mesh frame), and Bullet's point is at most 4 substeps old. Proximity alone would flag a
@@ -151,14 +152,14 @@ struct ContactEvent {
 
 /// A body after a substep, as a game engine reports it every frame.
 struct SimBodyState {
-  std::array<double, 3> position_m{};                 ///< mesh-frame origin, world
-  std::array<double, 4> orientation_wxyz{1, 0, 0, 0}; ///< mesh frame -> world
-  std::array<double, 3> velocity_m_s{};               ///< of the centre of mass, world
+  std::array<double, 3> position_m{};                  ///< mesh-frame origin, world
+  std::array<double, 4> orientation_wxyz{1, 0, 0, 0};  ///< mesh frame -> world
+  std::array<double, 3> velocity_m_s{};                ///< of the centre of mass, world
   bool asleep = false;  ///< Bullet deactivated it: it reports no contacts, yet still rests on its support
 };
 
 struct SimResult {
-  std::vector<ContactEvent> events;    ///< in order of time_s
+  std::vector<ContactEvent> events;  ///< in order of time_s
   /// With SimSettings::record_states: states[k * bodies + i] is body i after substep k (at time
   /// (k + 1) * substep_s). Static bodies too (never asleep).
   std::vector<SimBodyState> states;
@@ -168,7 +169,7 @@ struct SimResult {
   std::vector<double> energy_trace_j;
   std::vector<double> max_kinetic_energy_j;
   std::vector<double> initial_kinetic_energy_j;
-  std::vector<std::array<double, 3>> final_position_m;      ///< mesh-frame origin, world
+  std::vector<std::array<double, 3>> final_position_m;  ///< mesh-frame origin, world
   /// Of the centre of mass, world; Bullet's stored velocity, which is half a step old (sim.cpp,
   /// buildBody): under gravity alone it differs from the velocity at the end by g dt / 2.
   std::vector<std::array<double, 3>> final_velocity_m_s;
@@ -185,7 +186,7 @@ struct SimResult {
   std::vector<double> pieces_seconds;
   /// Per body: when it fell asleep and stayed so to the end, s; NaN if awake at the end (or static).
   std::vector<double> sleep_start_s;
-  double simulate_seconds = 0.0;       ///< wall time
+  double simulate_seconds = 0.0;  ///< wall time
   uint64_t substeps = 0;
 };
 

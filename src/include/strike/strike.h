@@ -87,10 +87,11 @@ extern "C" {
 #define STRIKE_VERSION_MINOR 3
 #define STRIKE_VERSION_PATCH 0
 /** Packed version of this header: (major << 16) | (minor << 8) | patch. */
-#define STRIKE_VERSION \
-  ((uint32_t)(((uint32_t)STRIKE_VERSION_MAJOR << 16) | ((uint32_t)STRIKE_VERSION_MINOR << 8) | (uint32_t)STRIKE_VERSION_PATCH))
+#define STRIKE_VERSION                                                                         \
+  ((uint32_t)(((uint32_t)STRIKE_VERSION_MAJOR << 16) | ((uint32_t)STRIKE_VERSION_MINOR << 8) | \
+              (uint32_t)STRIKE_VERSION_PATCH))
 /** True when this header is at least version maj.min.rev. */
-#define STRIKE_VERSION_GE(maj, min, rev)                                                     \
+#define STRIKE_VERSION_GE(maj, min, rev)                                                              \
   (STRIKE_VERSION_MAJOR > (maj) || (STRIKE_VERSION_MAJOR == (maj) && STRIKE_VERSION_MINOR > (min)) || \
    (STRIKE_VERSION_MAJOR == (maj) && STRIKE_VERSION_MINOR == (min) && STRIKE_VERSION_PATCH >= (rev)))
 
@@ -102,17 +103,17 @@ STRIKE_API uint32_t STRIKE_CALL strike_get_version(void);
 typedef int32_t strike_status;
 enum {
   STRIKE_OK = 0,
-  STRIKE_ERR_INVALID_ARG = -1,     /**< NULL handle or pointer, out-of-range or non-finite value */
-  STRIKE_ERR_OUT_OF_MEMORY = -2,   /**< an allocation failed */
-  STRIKE_ERR_VERSION = -3,         /**< header/library mismatch, or a bank of a newer format */
-  STRIKE_ERR_IO = -4,              /**< a file could not be opened or read */
-  STRIKE_ERR_PARSE = -5,           /**< not a valid mode bank (truncated, foreign, corrupt) */
-  STRIKE_ERR_STALE_ID = -6,        /**< the object was removed (or never existed) */
-  STRIKE_ERR_QUEUE_FULL = -7,      /**< a lock-free queue is full; the item was dropped and counted */
-  STRIKE_ERR_CAPACITY = -8,        /**< a configured maximum (objects) is reached */
-  STRIKE_ERR_TOO_MANY_FRAMES = -9, /**< render asked for more frames than max_block_frames */
-  STRIKE_ERR_NOT_INITIALIZED = -10,/**< a config struct that did not come from its _default() */
-  STRIKE_ERR_INTERNAL = -11        /**< a bug in libstrike; the message says where */
+  STRIKE_ERR_INVALID_ARG = -1,      /**< NULL handle or pointer, out-of-range or non-finite value */
+  STRIKE_ERR_OUT_OF_MEMORY = -2,    /**< an allocation failed */
+  STRIKE_ERR_VERSION = -3,          /**< header/library mismatch, or a bank of a newer format */
+  STRIKE_ERR_IO = -4,               /**< a file could not be opened or read */
+  STRIKE_ERR_PARSE = -5,            /**< not a valid mode bank (truncated, foreign, corrupt) */
+  STRIKE_ERR_STALE_ID = -6,         /**< the object was removed (or never existed) */
+  STRIKE_ERR_QUEUE_FULL = -7,       /**< a lock-free queue is full; the item was dropped and counted */
+  STRIKE_ERR_CAPACITY = -8,         /**< a configured maximum (objects) is reached */
+  STRIKE_ERR_TOO_MANY_FRAMES = -9,  /**< render asked for more frames than max_block_frames */
+  STRIKE_ERR_NOT_INITIALIZED = -10, /**< a config struct that did not come from its _default() */
+  STRIKE_ERR_INTERNAL = -11         /**< a bug in libstrike; the message says where */
 };
 
 /** Static English text for a status code ("unknown status" for other values). [any-thread] */
@@ -153,11 +154,11 @@ typedef void(STRIKE_CALL* strike_free_fn)(void* user, void* pointer);
 
 /* ---- Context ---------------------------------------------------------------------------- */
 typedef struct strike_context_config {
-  uint32_t api_version;          /**< STRIKE_VERSION of the caller's header (set by _default) */
-  double sample_rate_hz;         /**< 8000 .. 768000; default 48000 */
-  uint32_t max_block_frames;     /**< largest strike_render() frames, 1 .. 16384; default 1024 */
-  uint32_t channels;             /**< 1 (mono) or 2 (stereo, constant-power pan); default 2 */
-  uint32_t max_objects;          /**< objects alive at once, 1 .. 65536; default 64 */
+  uint32_t api_version;      /**< STRIKE_VERSION of the caller's header (set by _default) */
+  double sample_rate_hz;     /**< 8000 .. 768000; default 48000 */
+  uint32_t max_block_frames; /**< largest strike_render() frames, 1 .. 16384; default 1024 */
+  uint32_t channels;         /**< 1 (mono) or 2 (stereo, constant-power pan); default 2 */
+  uint32_t max_objects;      /**< objects alive at once, 1 .. 65536; default 64 */
   /** Budget of ringing modes over all objects; when over it at the end of a render call, the
    *  quietest (at the listener) are put to sleep first. 0 = no budget. Default 100000. */
   uint32_t max_active_modes;
@@ -181,11 +182,11 @@ typedef struct strike_context_config {
    *  m (> 0). Gain = reference / max(distance, min_distance_m), distance from the object's
    *  centre of mass to the listener. Default 1. */
   double reference_distance_m;
-  strike_log_fn log;             /**< NULL = no logging */
-  strike_alloc_fn alloc;         /**< NULL = aligned_alloc; alloc and free are both set or both NULL */
+  strike_log_fn log;     /**< NULL = no logging */
+  strike_alloc_fn alloc; /**< NULL = aligned_alloc; alloc and free are both set or both NULL */
   strike_free_fn free;
-  void* user;                    /**< passed to log, alloc and free */
-  int32_t internal_cookie;       /**< set by strike_context_config_default(); do not touch */
+  void* user;              /**< passed to log, alloc and free */
+  int32_t internal_cookie; /**< set by strike_context_config_default(); do not touch */
   /** Output level convention (added in 0.2): the sound pressure at the listener, Pa, that
    *  strike_render() writes as sample value 1.0 (for STRIKE_RADIATION_PRESSURE objects; _UNIT
    *  objects are not scaled). Finite, > 0. Default 20: 1.0 = 20 Pa = 120 dB SPL, as the `strike`
@@ -251,14 +252,14 @@ typedef struct strike_stats {
   uint32_t active_modes;               /**< ringing after the last render */
   uint32_t objects;                    /**< objects alive on the audio thread after the last render */
   /* 0.3 */
-  uint64_t steps;                      /**< strike_step() calls rendered */
-  uint64_t contacts_queued;            /**< contacts accepted by strike_step() */
-  uint64_t contacts_dropped_queue_full;/**< body states and contacts refused: the queue was full */
-  uint64_t contacts_dropped_stale;     /**< on an object that was not alive when rendered */
-  uint64_t sustained_contacts;         /**< contacts slower than 5 cm/s: part of a load */
-  uint64_t load_changes;               /**< changes of an object's load (force steps scheduled) */
-  uint64_t load_holds;                 /**< steps a sleeping object's load was kept */
-  uint64_t clock_frames;               /**< frames since creation or the last strike_context_reset() */
+  uint64_t steps;                       /**< strike_step() calls rendered */
+  uint64_t contacts_queued;             /**< contacts accepted by strike_step() */
+  uint64_t contacts_dropped_queue_full; /**< body states and contacts refused: the queue was full */
+  uint64_t contacts_dropped_stale;      /**< on an object that was not alive when rendered */
+  uint64_t sustained_contacts;          /**< contacts slower than 5 cm/s: part of a load */
+  uint64_t load_changes;                /**< changes of an object's load (force steps scheduled) */
+  uint64_t load_holds;                  /**< steps a sleeping object's load was kept */
+  uint64_t clock_frames;                /**< frames since creation or the last strike_context_reset() */
 } strike_stats;
 
 /** Copies the counters. [any-thread]
@@ -304,27 +305,27 @@ STRIKE_API void STRIKE_CALL strike_bank_destroy(strike_bank bank);
 typedef struct strike_bank_info {
   /** Set to sizeof(strike_bank_info) before the call (see strike_stats.struct_size). */
   uint32_t struct_size;
-  uint32_t mode_count;             /**< modes in the bank (some may be out of band) */
-  uint32_t surface_vertex_count;   /**< valid strike_impact_desc.surface_vertex values: 0 .. this-1 */
+  uint32_t mode_count;           /**< modes in the bank (some may be out of band) */
+  uint32_t surface_vertex_count; /**< valid strike_impact_desc.surface_vertex values: 0 .. this-1 */
   uint32_t surface_triangle_count;
   double mass_kg;
-  double lowest_frequency_hz;      /**< of mode 0, 0 if no modes */
-  double bounds_min_m[3];          /**< axis-aligned bounds of the surface, mesh frame */
+  double lowest_frequency_hz; /**< of mode 0, 0 if no modes */
+  double bounds_min_m[3];     /**< axis-aligned bounds of the surface, mesh frame */
   double bounds_max_m[3];
   /* 0.3: the object's physical data, for the physics engine (mass properties) and contacts */
   double volume_m3;
-  double centre_of_mass_m[3];      /**< mesh frame */
-  double inertia_kg_m2[9];         /**< about the centre of mass, mesh frame, row-major */
+  double centre_of_mass_m[3]; /**< mesh frame */
+  double inertia_kg_m2[9];    /**< about the centre of mass, mesh frame, row-major */
   double surface_area_m2;
   /** Radius of the sphere of the same volume, m: what `strike render` uses as the object's
    *  contact radius (strike_object_config.contact_radius_m). */
   double equal_volume_radius_m;
-  char material_name[32];          /**< NUL-terminated, truncated */
+  char material_name[32]; /**< NUL-terminated, truncated */
   double youngs_pa;
   double poisson;
   double density_kg_m3;
-  double rayleigh_stiffness_s;     /**< a1 of C = a1 K + a2 M */
-  double rayleigh_mass_per_s;      /**< a2 */
+  double rayleigh_stiffness_s; /**< a1 of C = a1 K + a2 M */
+  double rayleigh_mass_per_s;  /**< a2 */
 } strike_bank_info;
 
 /** [any-thread] (banks are immutable) @param[out] out its struct_size must be set; at most that
@@ -335,8 +336,8 @@ STRIKE_API strike_status STRIKE_CALL strike_bank_get_info(strike_bank bank, stri
 STRIKE_API strike_status STRIKE_CALL strike_bank_mode_frequency(strike_bank bank, uint32_t mode, double* out_hz);
 
 /** Position of a surface vertex in the mesh frame, m. [any-thread] */
-STRIKE_API strike_status STRIKE_CALL strike_bank_surface_vertex(strike_bank bank, uint32_t vertex, double out_position[3],
-                                                                double out_normal[3]);
+STRIKE_API strike_status STRIKE_CALL strike_bank_surface_vertex(strike_bank bank, uint32_t vertex,
+                                                                double out_position[3], double out_normal[3]);
 
 /* ---- Objects ---------------------------------------------------------------------------- */
 enum {
@@ -348,18 +349,18 @@ enum {
 };
 
 typedef struct strike_object_config {
-  strike_bank bank;              /**< required; must come from the same context */
-  double position[3];            /**< world position of the mesh-frame origin, m; default 0 */
-  double orientation[4];         /**< unit quaternion w, x, y, z (world from mesh frame); default 1,0,0,0 */
-  float gain;                    /**< linear, >= 0; default 1 */
-  int32_t radiation;             /**< STRIKE_RADIATION_*; default PRESSURE */
+  strike_bank bank;      /**< required; must come from the same context */
+  double position[3];    /**< world position of the mesh-frame origin, m; default 0 */
+  double orientation[4]; /**< unit quaternion w, x, y, z (world from mesh frame); default 1,0,0,0 */
+  float gain;            /**< linear, >= 0; default 1 */
+  int32_t radiation;     /**< STRIKE_RADIATION_*; default PRESSURE */
   /** Radius of curvature of the object's surface at contacts, m, for the Hertz contact time;
    *  0 = flat (a half-space). Default 0. */
   double contact_radius_m;
   /** (0.3) Non-zero: immovable (a table, a floor): infinite mass in the Hertz contact time,
    *  and it keeps carrying the load of objects that fall asleep on it. Default 0. */
   int32_t is_static;
-  int32_t internal_cookie;       /**< set by strike_object_config_default(); do not touch */
+  int32_t internal_cookie; /**< set by strike_object_config_default(); do not touch */
 } strike_object_config;
 
 /** Defaults (see each field). [any-thread] */
@@ -387,7 +388,8 @@ STRIKE_API strike_status STRIKE_CALL strike_object_set_pose(strike_context conte
                                                             const double position[3], const double orientation[4]);
 
 /** Sets the linear gain (>= 0), ramped over the next block. [main-thread] */
-STRIKE_API strike_status STRIKE_CALL strike_object_set_gain(strike_context context, strike_object_id object, float gain);
+STRIKE_API strike_status STRIKE_CALL strike_object_set_gain(strike_context context, strike_object_id object,
+                                                            float gain);
 
 /**
  * Sets the listener pose (world frame). The listener faces its local +y, with +x to its right
@@ -410,22 +412,22 @@ typedef struct strike_impact_desc {
   /** >= 0: strike this surface vertex (point ignored; O(modes) on the audio thread). -1
    *  (default): the surface point nearest to `point` (O(triangles + modes) on the audio thread). */
   int32_t surface_vertex;
-  double point[3];               /**< contact point, m */
-  double impulse[3];             /**< impulse applied TO the object, N s */
+  double point[3];   /**< contact point, m */
+  double impulse[3]; /**< impulse applied TO the object, N s */
   /** Relative normal speed at contact, m/s (> 0), for the Hertz contact time: faster is
    *  shorter, so harder hits are brighter. Default 1. */
   double normal_speed_m_s;
   /** < 0 (default): Hertz duration from normal_speed_m_s and the materials; 0: an ideal
    *  impulse; > 0: this duration, s. Always capped at max_contact_duration_s. */
   double contact_duration_s;
-  double striker_radius_m;       /**< radius of the striking body at contact, m; 0 = flat. Default 0.01 */
-  double striker_youngs_pa;      /**< 0 (default): same material as the object */
-  double striker_poisson;        /**< used when striker_youngs_pa > 0; default 0.3 */
-  double striker_mass_kg;        /**< 0 (default): immovable (infinite mass) */
+  double striker_radius_m;  /**< radius of the striking body at contact, m; 0 = flat. Default 0.01 */
+  double striker_youngs_pa; /**< 0 (default): same material as the object */
+  double striker_poisson;   /**< used when striker_youngs_pa > 0; default 0.3 */
+  double striker_mass_kg;   /**< 0 (default): immovable (infinite mass) */
   /** Frames after the start of the next strike_render() at which the contact begins
    *  (sample-accurate scheduling within or beyond that block). Default 0. */
   uint32_t sample_offset;
-  int32_t pulse;                 /**< STRIKE_PULSE_HALF_SINE (default) or STRIKE_PULSE_BOX (sustained) */
+  int32_t pulse; /**< STRIKE_PULSE_HALF_SINE (default) or STRIKE_PULSE_BOX (sustained) */
 } strike_impact_desc;
 
 /** Defaults (see each field). [any-thread] */
@@ -446,8 +448,8 @@ STRIKE_API strike_status STRIKE_CALL strike_impact(strike_context context, const
 /** Where a body is after a physics step. */
 typedef struct strike_body_state {
   strike_object_id object;
-  double position[3];            /**< world position of the mesh-frame origin, m */
-  double orientation[4];         /**< unit quaternion w, x, y, z (world from mesh frame) */
+  double position[3];    /**< world position of the mesh-frame origin, m */
+  double orientation[4]; /**< unit quaternion w, x, y, z (world from mesh frame) */
   /** Non-zero when the physics engine has put it to sleep: it reports no contacts, but it still
    *  rests on its support, so its load is kept (not released as if it were lifted). */
   int32_t asleep;
@@ -457,12 +459,12 @@ typedef struct strike_body_state {
  *  physics engine solved, resting ones included (a contact between two objects is two of these,
  *  one per object, each with its own point and impulse). */
 typedef struct strike_contact {
-  strike_object_id object;       /**< the object heard */
+  strike_object_id object; /**< the object heard */
   /** The other body, if it is an object; {0, 0} for the ground or anything else. */
   strike_object_id partner;
-  int32_t frame;                 /**< STRIKE_FRAME_OBJECT (default: object's mesh frame) or _WORLD */
-  double point[3];               /**< contact point, m */
-  double impulse[3];             /**< applied TO the object over the step (normal + friction), N s */
+  int32_t frame;     /**< STRIKE_FRAME_OBJECT (default: object's mesh frame) or _WORLD */
+  double point[3];   /**< contact point, m */
+  double impulse[3]; /**< applied TO the object over the step (normal + friction), N s */
   /** Speed at which the surfaces approach along the normal, m/s (>= 0). Above 0.05 m/s an impact
    *  (a Hertz pulse); at or below, part of the object's load over the step. */
   double normal_speed_m_s;
@@ -483,18 +485,18 @@ STRIKE_API strike_contact STRIKE_CALL strike_contact_default(void);
 
 /** One physics step: what a game reports once per step, after stepping its physics. */
 typedef struct strike_step_desc {
-  uint32_t struct_size;          /**< sizeof(strike_step_desc); set by _default() */
+  uint32_t struct_size; /**< sizeof(strike_step_desc); set by _default() */
   /** End of the step on the context's clock, s. A game whose physics runs ahead of its audio
    *  passes its physics time; the step's sound is placed there (a time already rendered sounds
    *  at once). Render audio at least one step behind the physics for sample-accurate timing. */
   double end_time_s;
-  double duration_s;             /**< the step, s (> 0) */
-  const strike_body_state* states;  /**< poses of the objects that moved (others keep theirs) */
+  double duration_s;               /**< the step, s (> 0) */
+  const strike_body_state* states; /**< poses of the objects that moved (others keep theirs) */
   uint32_t state_count;
-  uint32_t state_size;           /**< sizeof(strike_body_state); set by _default() */
+  uint32_t state_size; /**< sizeof(strike_body_state); set by _default() */
   const strike_contact* contacts;
   uint32_t contact_count;
-  uint32_t contact_size;         /**< sizeof(strike_contact); set by _default() */
+  uint32_t contact_size; /**< sizeof(strike_contact); set by _default() */
 } strike_step_desc;
 
 /** Defaults: sizes set, no states or contacts. [any-thread] */

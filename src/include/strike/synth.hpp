@@ -24,13 +24,13 @@ enum class SimdLevel { Auto, Scalar, Avx2, Avx512 };
 
 struct SynthSettings {
   double sample_rate_hz = 48000.0;
-  double min_freq_hz = 20.0;        ///< modes below are not synthesized
-  double max_freq_hz = 20000.0;     ///< modes above min(this, 0.45 * sample rate) are not synthesized
+  double min_freq_hz = 20.0;     ///< modes below are not synthesized
+  double max_freq_hz = 20000.0;  ///< modes above min(this, 0.45 * sample rate) are not synthesized
   /// Output amplitude (same units as the output) below which a mode is not started and at which
   /// a ringing mode goes to sleep. Default ~ -120 dB re full scale 1.0.
   double audibility_threshold = 1e-6;
-  bool double_precision = false;    ///< reference path: double state, no SIMD (for accuracy studies)
-  SimdLevel simd = SimdLevel::Auto; ///< float path only; for tests and benchmarks
+  bool double_precision = false;     ///< reference path: double state, no SIMD (for accuracy studies)
+  SimdLevel simd = SimdLevel::Auto;  ///< float path only; for tests and benchmarks
 };
 
 /// Samples between re-anchorings of the float oscillator state to its double-precision anchor
@@ -40,15 +40,15 @@ constexpr size_t kSynthAnchorBlock = 128;
 
 /// The modes of one sounding object as the synth needs them.
 struct ModalObjectDesc {
-  std::vector<double> eigenvalues;       ///< lambda_i, rad^2/s^2
-  double rayleigh_stiffness = 0.0;       ///< a1, s
-  double rayleigh_mass = 0.0;            ///< a2, 1/s
+  std::vector<double> eigenvalues;  ///< lambda_i, rad^2/s^2
+  double rayleigh_stiffness = 0.0;  ///< a1, s
+  double rayleigh_mass = 0.0;       ///< a2, 1/s
   /// Per mode: output units per unit modal acceleration (m/s^2 * sqrt(kg)). Output sample =
   /// sum_i radiation_weight_i * q_i''(t - delay), where q'' excludes the feedthrough g_i f(t) of
   /// the force pulse itself (see oscillator_bank.cpp). Build it with radiationWeights(). Empty
   /// means 1 for every mode (output = modal acceleration); a shorter vector means 0 for the rest.
   std::vector<double> radiation_weight;
-  double delay_s = 0.0;                  ///< propagation delay to the listener
+  double delay_s = 0.0;  ///< propagation delay to the listener
 };
 
 /// The time course of a contact force of unit area.
@@ -97,14 +97,14 @@ enum class ImpactResult {
 };
 
 struct SynthStats {
-  uint64_t modes_total = 0;         ///< over all objects
-  uint64_t modes_out_of_band = 0;   ///< never synthesized (below min or above max frequency)
+  uint64_t modes_total = 0;        ///< over all objects
+  uint64_t modes_out_of_band = 0;  ///< never synthesized (below min or above max frequency)
   uint64_t impacts = 0;
-  uint64_t impacts_inaudible = 0;   ///< changed no mode above the threshold
-  uint64_t mode_starts = 0;         ///< a sleeping mode woken by an impact
-  uint64_t mode_samples = 0;        ///< work done: active modes x samples rendered
+  uint64_t impacts_inaudible = 0;  ///< changed no mode above the threshold
+  uint64_t mode_starts = 0;        ///< a sleeping mode woken by an impact
+  uint64_t mode_samples = 0;       ///< work done: active modes x samples rendered
   uint64_t max_active_modes = 0;
-  uint64_t active_modes = 0;        ///< ringing now (after the last completed render call)
+  uint64_t active_modes = 0;  ///< ringing now (after the last completed render call)
 };
 
 class OscillatorBank {
@@ -227,10 +227,10 @@ class ContactProjector {
   bool use_rows_ = false;
   ShapeRows rows_;
   size_t max_points_;
-  size_t next_ = 0;                      ///< slot to overwrite when full (round robin)
-  std::vector<double> points_;           ///< 3 per remembered point
-  std::vector<double> weights_;          ///< 3 barycentric weights per point
-  std::vector<float> shapes_;            ///< per point: #modes x [vertex 0..2][xyz]
+  size_t next_ = 0;              ///< slot to overwrite when full (round robin)
+  std::vector<double> points_;   ///< 3 per remembered point
+  std::vector<double> weights_;  ///< 3 barycentric weights per point
+  std::vector<float> shapes_;    ///< per point: #modes x [vertex 0..2][xyz]
 };
 /// Same, at surface vertex v.
 std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]);
@@ -245,9 +245,8 @@ void projectImpulseAtVertexInto(const ModeBank& bank, size_t vertex, const doubl
 /// 1/R* = 1/R1 + 1/R2, 1/m* = 1/m1 + 1/m2 (Johnson, Contact Mechanics, 1985, ch. 11).
 /// Pass infinite mass or radius for a half-space. Returns seconds; 0 (an ideal impulse) when the
 /// speed is not positive or the input is degenerate (e.g. two half-spaces, NaN).
-double hertzContactDuration(double youngs1_pa, double poisson1, double radius1_m, double mass1_kg,
-                            double youngs2_pa, double poisson2, double radius2_m, double mass2_kg,
-                            double normal_speed_m_s);
+double hertzContactDuration(double youngs1_pa, double poisson1, double radius1_m, double mass1_kg, double youngs2_pa,
+                            double poisson2, double radius2_m, double mass2_kg, double normal_speed_m_s);
 
 /// The output level convention of the tools and (by default, output_full_scale_pa) of libstrike:
 /// sample value 1.0 = 20 Pa (120 dB SPL, the threshold of pain) at the listener, so no physically

@@ -39,7 +39,8 @@ struct Scene {
     c.audibility_threshold = 1e-12;
     strike_context_create(&c, &ctx);
     std::vector<double> f(modes_per_object);
-    for (size_t i = 0; i < f.size(); ++i) f[i] = 60.0 * std::pow(300.0, static_cast<double>(i) / static_cast<double>(f.size()));
+    for (size_t i = 0; i < f.size(); ++i)
+      f[i] = 60.0 * std::pow(300.0, static_cast<double>(i) / static_cast<double>(f.size()));
     strike::ModeBank mb = strike::test::makeTestBank(f);
     mb.material.rayleigh_stiffness = 1e-11;  // decays slowly: modes stay awake
     mb.material.rayleigh_mass = 0.5;
@@ -89,8 +90,8 @@ void BM_CapiRender(benchmark::State& state) {
   strike_context_get_stats(s.ctx, &st);
   state.counters["active_modes"] = st.active_modes;
   state.counters["rt_factor"] = benchmark::Counter(kBlock / kRate, benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["modes_realtime"] =
-      benchmark::Counter(static_cast<double>(st.active_modes) * kBlock / kRate, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["modes_realtime"] = benchmark::Counter(static_cast<double>(st.active_modes) * kBlock / kRate,
+                                                        benchmark::Counter::kIsIterationInvariantRate);
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kBlock * st.active_modes);
 }
 BENCHMARK(BM_CapiRender)

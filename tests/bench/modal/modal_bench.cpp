@@ -64,8 +64,8 @@ int main(int argc, char** argv) {
     std::fclose(f);
   }
   std::printf("%-6s %8s %8s %7s %8s %8s %9s %8s %8s %8s %8s %6s %5s %8s %8s\n", "case", "tets", "dofs", "mesh_s",
-              "assemb_s", "factor_s", "lanczos_s", "(solve", "orth", "ritz)", "refine_s", "solves", "block",
-              "total_s", "rss_MiB");
+              "assemb_s", "factor_s", "lanczos_s", "(solve", "orth", "ritz)", "refine_s", "solves", "block", "total_s",
+              "rss_MiB");
   for (const Case& c : cases) {
     if (!only.empty() && only != c.name) continue;
     auto t0 = std::chrono::steady_clock::now();
@@ -108,12 +108,13 @@ int main(int argc, char** argv) {
     }
     const double best = *std::min_element(totals.begin(), totals.end());
     const double worst = *std::max_element(totals.begin(), totals.end());
-    std::printf("       %s: best total %.3f s, spread %.3f s over %d run(s); modes %lld, f1 %.2f Hz, f100 %.2f Hz,"
-                " rigid dropped %d, max residual %.2e, sigma %.3e, basis %d, reorthogonalized steps %d\n",
-                c.name, best, worst - best, repeat, static_cast<long long>(modes.eigenvalues.size()),
-                std::sqrt(modes.eigenvalues[0]) / (2 * M_PI),
-                std::sqrt(modes.eigenvalues[modes.eigenvalues.size() - 1]) / (2 * M_PI), modes.rigid_modes_dropped,
-                modes.max_relative_residual, modes.sigma, modes.lanczos_basis, modes.reorthogonalizations);
+    std::printf(
+        "       %s: best total %.3f s, spread %.3f s over %d run(s); modes %lld, f1 %.2f Hz, f100 %.2f Hz,"
+        " rigid dropped %d, max residual %.2e, sigma %.3e, basis %d, reorthogonalized steps %d\n",
+        c.name, best, worst - best, repeat, static_cast<long long>(modes.eigenvalues.size()),
+        std::sqrt(modes.eigenvalues[0]) / (2 * M_PI),
+        std::sqrt(modes.eigenvalues[modes.eigenvalues.size() - 1]) / (2 * M_PI), modes.rigid_modes_dropped,
+        modes.max_relative_residual, modes.sigma, modes.lanczos_basis, modes.reorthogonalizations);
     if (naive) {
       settings.method = strike::ModalMethod::ArpackOnly;
       t0 = std::chrono::steady_clock::now();
@@ -125,11 +126,14 @@ int main(int argc, char** argv) {
       }
       const Eigen::Index common = std::min(reference->eigenvalues.size(), modes.eigenvalues.size());
       const double max_diff = ((reference->eigenvalues.head(common) - modes.eigenvalues.head(common)).array() /
-                               reference->eigenvalues.head(common).array()).abs().maxCoeff();
-      std::printf("       ARPACK-only baseline (same process): factor %.3f s, lanczos %.3f s (solve %.3f s), %d solves,"
-                  " total %.3f s; hybrid speed-up %.2fx (best hybrid run); max relative eigenvalue difference %.2e\n",
-                  reference->factorize_seconds, reference->lanczos_seconds, reference->solve_seconds,
-                  reference->operator_applications, assembly_s + naive_s, (assembly_s + naive_s) / best, max_diff);
+                               reference->eigenvalues.head(common).array())
+                                  .abs()
+                                  .maxCoeff();
+      std::printf(
+          "       ARPACK-only baseline (same process): factor %.3f s, lanczos %.3f s (solve %.3f s), %d solves,"
+          " total %.3f s; hybrid speed-up %.2fx (best hybrid run); max relative eigenvalue difference %.2e\n",
+          reference->factorize_seconds, reference->lanczos_seconds, reference->solve_seconds,
+          reference->operator_applications, assembly_s + naive_s, (assembly_s + naive_s) / best, max_diff);
     }
     std::fflush(stdout);
   }

@@ -28,7 +28,8 @@ const SpectralPeak* nearest(const AudioAnalysis& a, double freq_hz) {
 void checkThreeTones(SpectrumWindow window) {
   const double rate = 48000.0;
   // 440 Hz at 0 dB, 1234.5 Hz at -20 dB, 5000 Hz at -40 dB (amplitudes 0.5, 0.05, 0.005).
-  const AudioBuffer audio = partials({{440.0, 0.5, 0.0, 0.3}, {1234.5, 0.05, 0.0, 1.1}, {5000.0, 0.005, 0.0, 2.0}}, rate, 1.0);
+  const AudioBuffer audio =
+      partials({{440.0, 0.5, 0.0, 0.3}, {1234.5, 0.05, 0.0, 1.1}, {5000.0, 0.005, 0.0, 2.0}}, rate, 1.0);
   AnalyzeOptions options;
   options.window = window;
   options.fit_decay = false;
@@ -40,8 +41,8 @@ void checkThreeTones(SpectrumWindow window) {
     const SpectralPeak& p = a.peaks[static_cast<size_t>(i)];  // by decreasing level
     const double rel_f = std::fabs(p.freq_hz - expected_f[i]) / expected_f[i];
     std::printf("    window %d: %8.3f Hz: frequency error %.2e (%.4f bins), level %.4f dB (error %.4f dB), %.4f dBFS\n",
-                static_cast<int>(window), expected_f[i], rel_f, std::fabs(p.freq_hz - expected_f[i]) * 1.0,
-                p.level_db, p.level_db - expected_db[i], p.level_dbfs - (expected_db[i] + 20.0 * std::log10(0.5)));
+                static_cast<int>(window), expected_f[i], rel_f, std::fabs(p.freq_hz - expected_f[i]) * 1.0, p.level_db,
+                p.level_db - expected_db[i], p.level_dbfs - (expected_db[i] + 20.0 * std::log10(0.5)));
     EXPECT_LT(rel_f, 1e-4);
     EXPECT_NEAR(p.level_db, expected_db[i], 0.1);
     EXPECT_NEAR(p.level_dbfs, expected_db[i] + 20.0 * std::log10(0.5), 0.1);
@@ -76,8 +77,8 @@ TEST(Analyze, DecayRatesFromOneToTwoHundredPerSecond) {
       ASSERT_FALSE(a.peaks.empty());
       const SpectralPeak& p = a.peaks[0];
       const double err = (p.decay_per_s - d) / d;
-      std::printf("    f %7.1f Hz d %6.1f /s: fitted %9.4f /s (error %+.3f%%), frequency error %.2e\n", f, d, p.decay_per_s,
-                  100.0 * err, std::fabs(p.freq_hz - f) / f);
+      std::printf("    f %7.1f Hz d %6.1f /s: fitted %9.4f /s (error %+.3f%%), frequency error %.2e\n", f, d,
+                  p.decay_per_s, 100.0 * err, std::fabs(p.freq_hz - f) / f);
       EXPECT_LT(std::fabs(err), 0.03) << "f " << f << " d " << d;
       EXPECT_LT(std::fabs(p.freq_hz - f) / f, 1e-3);
     }
@@ -85,15 +86,19 @@ TEST(Analyze, DecayRatesFromOneToTwoHundredPerSecond) {
 
 TEST(Analyze, ModesOfAnImpactKeepTheirDecays) {
   // A struck-bar-like spectrum: faster decay at higher modes; all start at t = 0.
-  const std::vector<test::Partial> modes = {
-      {523.0, 0.4, 2.0, 0.0}, {1441.0, 0.3, 8.0, 1.0}, {2826.0, 0.2, 25.0, 2.0}, {4671.0, 0.1, 70.0, 3.0}, {6977.0, 0.05, 180.0, 4.0}};
+  const std::vector<test::Partial> modes = {{523.0, 0.4, 2.0, 0.0},
+                                            {1441.0, 0.3, 8.0, 1.0},
+                                            {2826.0, 0.2, 25.0, 2.0},
+                                            {4671.0, 0.1, 70.0, 3.0},
+                                            {6977.0, 0.05, 180.0, 4.0}};
   const AudioBuffer audio = partials(modes, 48000.0, 1.5);
   const AudioAnalysis a = analyzeAudio(audio, AnalyzeOptions{});
   for (const test::Partial& m : modes) {
     const SpectralPeak* p = nearest(a, m.freq_hz);
     ASSERT_NE(p, nullptr);
-    std::printf("    mode %6.0f Hz: %9.3f Hz, d %7.3f (true %5.1f, error %+.3f%%), level %7.2f dB\n", m.freq_hz, p->freq_hz,
-                p->decay_per_s, m.decay_per_s, 100.0 * (p->decay_per_s - m.decay_per_s) / m.decay_per_s, p->level_db);
+    std::printf("    mode %6.0f Hz: %9.3f Hz, d %7.3f (true %5.1f, error %+.3f%%), level %7.2f dB\n", m.freq_hz,
+                p->freq_hz, p->decay_per_s, m.decay_per_s, 100.0 * (p->decay_per_s - m.decay_per_s) / m.decay_per_s,
+                p->level_db);
     EXPECT_LT(std::fabs(p->freq_hz - m.freq_hz) / m.freq_hz, 1e-3);
     EXPECT_LT(std::fabs(p->decay_per_s - m.decay_per_s) / m.decay_per_s, 0.03);
   }
@@ -108,8 +113,8 @@ TEST(Analyze, TwoClosePeaksHaveSeparateDecays) {
     const SpectralPeak* p1 = nearest(a, f1);
     const SpectralPeak* p2 = nearest(a, f2);
     ASSERT_NE(p1, p2);
-    std::printf("    df %4.1f Hz: %.3f Hz d %.4f (true 3, %+.3f%%); %.3f Hz d %.4f (true 9, %+.3f%%)\n", df, p1->freq_hz,
-                p1->decay_per_s, 100.0 * (p1->decay_per_s - 3.0) / 3.0, p2->freq_hz, p2->decay_per_s,
+    std::printf("    df %4.1f Hz: %.3f Hz d %.4f (true 3, %+.3f%%); %.3f Hz d %.4f (true 9, %+.3f%%)\n", df,
+                p1->freq_hz, p1->decay_per_s, 100.0 * (p1->decay_per_s - 3.0) / 3.0, p2->freq_hz, p2->decay_per_s,
                 100.0 * (p2->decay_per_s - 9.0) / 9.0);
     EXPECT_NEAR(p1->freq_hz, f1, 0.5);
     EXPECT_NEAR(p2->freq_hz, f2, 0.5);
@@ -128,7 +133,8 @@ TEST(Analyze, DecayThroughSixteenBitQuantizationAndSilenceBeforeOnset) {
   ASSERT_FALSE(a.peaks.empty());
   EXPECT_NEAR(a.onset_s, 0.05, 1e-3);
   EXPECT_NEAR(a.peaks[0].freq_hz, 880.0, 0.5);
-  std::printf("    quantized d 40: fitted %.4f (%+.3f%%)\n", a.peaks[0].decay_per_s, 100.0 * (a.peaks[0].decay_per_s - 40.0) / 40.0);
+  std::printf("    quantized d 40: fitted %.4f (%+.3f%%)\n", a.peaks[0].decay_per_s,
+              100.0 * (a.peaks[0].decay_per_s - 40.0) / 40.0);
   EXPECT_NEAR(a.peaks[0].decay_per_s, 40.0, 0.03 * 40.0);
 }
 
@@ -159,7 +165,7 @@ TEST(Analyze, DecayAboveAWhiteNoiseFloor) {
 
 TEST(Analyze, LevelStatisticsAndClipping) {
   AudioBuffer audio = partials({{1000.0, 0.5, 0.0}}, 48000.0, 1.0, 2);
-  audio.samples[10] = 1.0f;     // exactly full scale counts as clipped
+  audio.samples[10] = 1.0f;  // exactly full scale counts as clipped
   audio.samples[11] = -1.25f;
   audio.samples[12] = 3.0f;
   audio.samples[13] = std::nanf("");
@@ -275,7 +281,9 @@ void checkBar(const std::vector<Line>& lines, double isolated_tol, double pair_t
   const AudioAnalysis a = analyzeAudio(audio, options);
   std::vector<double> expected;
   for (const Line& l : lines) {
-    const double centre = l.freq2_hz > 0.0 ? (l.amplitude * l.freq_hz + l.amplitude2 * l.freq2_hz) / (l.amplitude + l.amplitude2) : l.freq_hz;
+    const double centre = l.freq2_hz > 0.0
+                              ? (l.amplitude * l.freq_hz + l.amplitude2 * l.freq2_hz) / (l.amplitude + l.amplitude2)
+                              : l.freq_hz;
     expected.push_back(expectedPeak(partialsOf({l}), centre, rate, duration));
   }
   const double loudest = *std::max_element(expected.begin(), expected.end());
@@ -299,7 +307,8 @@ void checkBar(const std::vector<Line>& lines, double isolated_tol, double pair_t
       EXPECT_TRUE(found) << "missed line " << l.freq_hz << " Hz at " << expected_db[i] << " dB";
     }
     if (!found) {
-      std::printf("    %s %9.2f Hz (%5.1f dB expected): not reported\n", l.freq2_hz > 0.0 ? "pair" : "mode", l.freq_hz, expected_db[i]);
+      std::printf("    %s %9.2f Hz (%5.1f dB expected): not reported\n", l.freq2_hz > 0.0 ? "pair" : "mode", l.freq_hz,
+                  expected_db[i]);
       continue;
     }
     const double err = (p->decay_per_s - l.decay_per_s) / l.decay_per_s;
@@ -315,18 +324,13 @@ TEST(Analyze, BarWithNearDegeneratePairsAndWeakModesReportsOnlyLines) {
   // antiphase (their envelope beats or rises within the record); isolated strong modes; weak
   // modes 40-60 dB down, > 150 Hz from strong ones; decays 0.6-65 /s, growing with frequency.
   const std::vector<Line> lines = {
-      {1300.00, 1300.12, 0.30, 0.20, 0.65, 0.3, 2.0},
-      {2200.0, 0.0, 2e-3, 0.0, 1.5, 1.0, 0.0},  // weak
-      {3045.09, 3045.19, 0.40, 0.50, 2.0, 1.9, -1.27},  // antiphase
-      {4819.0, 0.0, 3e-3, 0.0, 4.4, -1.1, 0.0},  // weak
-      {5754.23, 5754.59, 0.60, 0.70, 6.1, 2.1, 0.2},
-      {7000.0, 0.0, 1e-2, 0.0, 10.0, 0.5, 0.0},  // weak
-      {8410.0, 0.0, 0.30, 0.0, 12.5, -0.7, 0.0},
-      {9101.2, 9101.5, 0.50, 0.50, 14.6, -0.7, 2.4},
-      {9638.3, 0.0, 0.02, 0.0, 16.3, 2.5, 0.0},
-      {12945.5, 12945.9, 0.50, 0.40, 29.1, -0.3, 2.9},
-      {14458.3, 0.0, 0.10, 0.0, 36.2, 3.0, 0.0},
-      {16000.0, 0.0, 5e-2, 0.0, 48.0, 0.1, 0.0},  // weak
+      {1300.00, 1300.12, 0.30, 0.20, 0.65, 0.3, 2.0},  {2200.0, 0.0, 2e-3, 0.0, 1.5, 1.0, 0.0},   // weak
+      {3045.09, 3045.19, 0.40, 0.50, 2.0, 1.9, -1.27},                                            // antiphase
+      {4819.0, 0.0, 3e-3, 0.0, 4.4, -1.1, 0.0},                                                   // weak
+      {5754.23, 5754.59, 0.60, 0.70, 6.1, 2.1, 0.2},   {7000.0, 0.0, 1e-2, 0.0, 10.0, 0.5, 0.0},  // weak
+      {8410.0, 0.0, 0.30, 0.0, 12.5, -0.7, 0.0},       {9101.2, 9101.5, 0.50, 0.50, 14.6, -0.7, 2.4},
+      {9638.3, 0.0, 0.02, 0.0, 16.3, 2.5, 0.0},        {12945.5, 12945.9, 0.50, 0.40, 29.1, -0.3, 2.9},
+      {14458.3, 0.0, 0.10, 0.0, 36.2, 3.0, 0.0},       {16000.0, 0.0, 5e-2, 0.0, 48.0, 0.1, 0.0},  // weak
       {19279.3, 0.0, 0.20, 0.0, 64.1, -2.8, 0.0},
   };
   checkBar(lines, 0.03, 0.05);
@@ -341,15 +345,24 @@ TEST(Analyze, RenderedSteelBarRegression) {
     double f, d, a, phase;
   };
   const Mode modes[] = {
-      {1135.2128057253058, 0.6492315042778163, 8.8345e-05, -1.476}, {1135.2223871390183, 0.6492352320309218, 1.5738e-04, 1.678},
-      {3045.093674358744, 2.017347244980382, 8.8961e-04, 1.875},    {3045.186773257054, 2.017444405599014, 1.4217e-03, -1.268},
-      {4818.9716037206945, 4.407795119378677, 5.2861e-05, -1.123},  {5754.2287636138235, 6.102312165202826, 2.2868e-03, 2.145},
-      {5754.589310170104, 6.103023215815074, 3.1525e-03, 2.140},    {8409.981604259841, 12.548284851123897, 1.3343e-03, -0.740},
-      {9101.192464760205, 14.622406651977519, 3.3106e-03, -0.676}, {9102.128469642286, 14.625326344905286, 3.7067e-03, -0.664},
-      {9638.283916003722, 16.347108899992648, 2.7840e-04, 2.540},  {12945.555518845107, 29.146110025731897, 2.7994e-03, -0.307},
-      {12947.48202295022, 29.15465796401182, 2.5421e-03, -0.269},  {14458.283889414408, 36.2497477302109, 1.1209e-03, 3.007},
-      {16804.24610705206, 48.81738312683433, 1.1736e-03, -3.045},  {17166.926342229013, 50.92864868303711, 1.0797e-03, 0.051},
-      {17170.337332584175, 50.94871901763319, 8.0929e-04, -3.123}, {19279.3308892947, 64.12149391304267, 2.1915e-03, -2.804},
+      {1135.2128057253058, 0.6492315042778163, 8.8345e-05, -1.476},
+      {1135.2223871390183, 0.6492352320309218, 1.5738e-04, 1.678},
+      {3045.093674358744, 2.017347244980382, 8.8961e-04, 1.875},
+      {3045.186773257054, 2.017444405599014, 1.4217e-03, -1.268},
+      {4818.9716037206945, 4.407795119378677, 5.2861e-05, -1.123},
+      {5754.2287636138235, 6.102312165202826, 2.2868e-03, 2.145},
+      {5754.589310170104, 6.103023215815074, 3.1525e-03, 2.140},
+      {8409.981604259841, 12.548284851123897, 1.3343e-03, -0.740},
+      {9101.192464760205, 14.622406651977519, 3.3106e-03, -0.676},
+      {9102.128469642286, 14.625326344905286, 3.7067e-03, -0.664},
+      {9638.283916003722, 16.347108899992648, 2.7840e-04, 2.540},
+      {12945.555518845107, 29.146110025731897, 2.7994e-03, -0.307},
+      {12947.48202295022, 29.15465796401182, 2.5421e-03, -0.269},
+      {14458.283889414408, 36.2497477302109, 1.1209e-03, 3.007},
+      {16804.24610705206, 48.81738312683433, 1.1736e-03, -3.045},
+      {17166.926342229013, 50.92864868303711, 1.0797e-03, 0.051},
+      {17170.337332584175, 50.94871901763319, 8.0929e-04, -3.123},
+      {19279.3308892947, 64.12149391304267, 2.1915e-03, -2.804},
   };
   // partials() uses sin(); the fit used cos(phase) - j sin(phase) terms: sin(x + phase + pi/2).
   std::vector<test::Partial> parts;
@@ -385,7 +398,8 @@ TEST(Analyze, WeakModeBesideAStrongOneIsKept) {
   // the strong line's skirt there, (d / 2 pi + 1 / pi T) / df of its peak (Lorentzian plus the
   // onset step), is -70 dB, so the weak line stands 12 dB above it and is a line, not leakage.
   // Nothing else is reported.
-  const AudioBuffer audio = partials({{3000.0, 0.5, 2.0, 0.2}, {4500.0, 0.5 * std::pow(10.0, -58.0 / 20.0), 2.0, 1.1}}, 48000.0, 2.0);
+  const AudioBuffer audio =
+      partials({{3000.0, 0.5, 2.0, 0.2}, {4500.0, 0.5 * std::pow(10.0, -58.0 / 20.0), 2.0, 1.1}}, 48000.0, 2.0);
   const AudioAnalysis a = analyzeAudio(audio, AnalyzeOptions{});
   const SpectralPeak* p = nearest(a, 4500.0);
   ASSERT_NE(p, nullptr);
@@ -402,7 +416,8 @@ struct Tap {
   double time_s;
   double gain;
 };
-AudioBuffer tappedModes(const std::vector<test::Partial>& modes, const std::vector<Tap>& taps, double rate_hz, double duration_s) {
+AudioBuffer tappedModes(const std::vector<test::Partial>& modes, const std::vector<Tap>& taps, double rate_hz,
+                        double duration_s) {
   AudioBuffer audio;
   audio.sample_rate_hz = rate_hz;
   const auto frames = static_cast<size_t>(std::llround(duration_s * rate_hz));
@@ -413,7 +428,8 @@ AudioBuffer tappedModes(const std::vector<test::Partial>& modes, const std::vect
     for (const Tap& tap : taps) {
       if (t < tap.time_s) continue;
       const double s = t - tap.time_s;
-      for (const test::Partial& m : modes) x += tap.gain * m.amplitude * std::exp(-m.decay_per_s * s) * std::sin(2.0 * test::kPi * m.freq_hz * s);
+      for (const test::Partial& m : modes)
+        x += tap.gain * m.amplitude * std::exp(-m.decay_per_s * s) * std::sin(2.0 * test::kPi * m.freq_hz * s);
     }
     audio.samples[n] = static_cast<float>(x);
   }
@@ -427,7 +443,8 @@ TEST(Analyze, RepeatedTapsOfOneModeAreOnePeakWithItsDecay) {
   const double f = 5567.0, d = 38.3;
   const std::vector<Tap> taps = {{0.05, 1.0}, {0.31, 0.7}, {0.52, 1.2}, {0.86, 0.5}};
   const AudioAnalysis a = analyzeAudio(tappedModes({{f, 0.2, d}}, taps, 48000.0, 1.5), AnalyzeOptions{});
-  for (const SpectralPeak& p : a.peaks) std::printf("    %10.3f Hz %7.2f dB d %8.4f\n", p.freq_hz, p.level_db, p.decay_per_s);
+  for (const SpectralPeak& p : a.peaks)
+    std::printf("    %10.3f Hz %7.2f dB d %8.4f\n", p.freq_hz, p.level_db, p.decay_per_s);
   ASSERT_EQ(a.peaks.size(), 1u);  // a sum of damped sinusoids of one frequency has one line
   EXPECT_NEAR(a.peaks[0].freq_hz, f, 0.05);
   EXPECT_NEAR(a.peaks[0].decay_per_s, d, 0.01 * d);
@@ -443,7 +460,8 @@ TEST(Analyze, BlocksFallingImpactsGiveNoComb) {
   const std::vector<test::Partial> modes = {{8047.0, 0.05, 384.0}, {9444.0, 0.03, 524.0}, {10145.0, 0.03, 602.0}};
   const std::vector<Tap> taps = {{0.059, 0.4}, {0.299, 0.3}, {0.424, 1.0}, {0.468, 0.6}};
   const AudioAnalysis a = analyzeAudio(tappedModes(modes, taps, 48000.0, 3.0), AnalyzeOptions{});
-  for (const SpectralPeak& p : a.peaks) std::printf("    %10.3f Hz %7.2f dB d %8.4f\n", p.freq_hz, p.level_db, p.decay_per_s);
+  for (const SpectralPeak& p : a.peaks)
+    std::printf("    %10.3f Hz %7.2f dB d %8.4f\n", p.freq_hz, p.level_db, p.decay_per_s);
   EXPECT_EQ(a.peaks.size(), modes.size());
   for (const test::Partial& m : modes) {
     int count = 0;

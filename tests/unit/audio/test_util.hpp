@@ -73,8 +73,10 @@ inline AudioBuffer partials(const std::vector<Partial>& parts, double rate_hz, d
   for (size_t n = 0; n < frames; ++n) {
     const double t = static_cast<double>(n) / rate_hz;
     double x = 0.0;
-    for (const Partial& p : parts) x += p.amplitude * std::exp(-p.decay_per_s * t) * std::sin(2.0 * kPi * p.freq_hz * t + p.phase);
-    for (int c = 0; c < channels; ++c) audio.samples[n * static_cast<size_t>(channels) + static_cast<size_t>(c)] = static_cast<float>(x);
+    for (const Partial& p : parts)
+      x += p.amplitude * std::exp(-p.decay_per_s * t) * std::sin(2.0 * kPi * p.freq_hz * t + p.phase);
+    for (int c = 0; c < channels; ++c)
+      audio.samples[n * static_cast<size_t>(channels) + static_cast<size_t>(c)] = static_cast<float>(x);
   }
   return audio;
 }

@@ -89,7 +89,8 @@ TEST(CompactBank, RowsReadFromTheFileEqualTheWholeReadAndDamageIsFound) {
   EXPECT_TRUE(damaged->readShapeRows({0, 999}));
   Result<ShapeRows> bad = damaged->readShapeRows({421});
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().message.find("checksum mismatch in the shapes of surface vertices 408 to 475"), std::string::npos)
+  EXPECT_NE(bad.error().message.find("checksum mismatch in the shapes of surface vertices 408 to 475"),
+            std::string::npos)
       << bad.error().message;
   std::filesystem::remove(path);
 }

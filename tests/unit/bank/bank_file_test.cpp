@@ -8,9 +8,9 @@
 #include <filesystem>
 #include <random>
 
+#include "common/same_bytes.hpp"
 #include "strike/atomic_file.hpp"
 #include "strike/bank.hpp"
-#include "common/same_bytes.hpp"
 
 namespace strike {
 namespace {
@@ -149,7 +149,8 @@ ModeBank makeBigBank() {
   bank.eigenvalues.clear();
   for (int m = 0; m < 40; ++m) bank.eigenvalues.push_back(std::pow(2 * M_PI * (500.0 + 100.0 * m), 2));
   bank.shapes.clear();
-  for (size_t i = 0; i < 40 * 1000 * 3; ++i) bank.shapes.push_back(static_cast<float>(std::sin(0.37 * static_cast<double>(i))));
+  for (size_t i = 0; i < 40 * 1000 * 3; ++i)
+    bank.shapes.push_back(static_cast<float>(std::sin(0.37 * static_cast<double>(i))));
   bank.frequency_error_estimate.clear();
   return bank;
 }
@@ -185,7 +186,8 @@ std::vector<uint8_t> legacyFile(const ModeBank& bank, uint32_t version) {
   put(body, bank.shapes.data(), 4 * bank.shapes.size());
   chunk("MODE", body);
   const uint64_t payload = out.size() - 32;
-  const uint64_t checksum = version == 1 ? fnv1a64(out.data() + 32, payload) : bankPayloadChecksum(2, out.data() + 32, payload);
+  const uint64_t checksum =
+      version == 1 ? fnv1a64(out.data() + 32, payload) : bankPayloadChecksum(2, out.data() + 32, payload);
   std::memcpy(out.data() + 16, &payload, 8);
   std::memcpy(out.data() + 24, &checksum, 8);
   return out;

@@ -34,9 +34,9 @@ struct Target {
 };
 
 TEST(FuzzReplay, CorpusAndKeptCrashersRunClean) {
-  const Target targets[] = {{"obj", fuzzObj},       {"stl", fuzzStl},     {"ply", fuzzPly},
-                            {"gmsh", fuzzGmsh},     {"tetgen", fuzzTetgen}, {"scene", fuzzScene},
-                            {"bank", fuzzBank},     {"capi_bank", fuzzCapiBank}};
+  const Target targets[] = {{"obj", fuzzObj},   {"stl", fuzzStl},           {"ply", fuzzPly},
+                            {"gmsh", fuzzGmsh}, {"tetgen", fuzzTetgen},     {"scene", fuzzScene},
+                            {"bank", fuzzBank}, {"capi_bank", fuzzCapiBank}};
   const fs::path root = fs::path(STRIKE_SOURCE_DIR) / "tests" / "fuzz";
   for (const Target& t : targets) {
     size_t corpus = 0, regressions = 0;

@@ -2,9 +2,9 @@
 // Nothing lost on interruption (issue 7): SIGINT/SIGTERM during `strike modes`, `hit` and `render`
 // leaves neither the output nor a temporary file, and the process still dies by that signal; two
 // renders sharing one cache folder do not corrupt it.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -145,15 +145,16 @@ KillReport killRepeatedly(const std::vector<std::string>& args, const std::strin
 }
 
 void print(const char* what, const KillReport& r) {
-  std::printf("[ interrupt ] %-42s %2d runs: %2d killed (%d mid-write, %d after the rename), %2d finished; "
-              "no partial output, no temporary\n",
-              what, r.runs, r.killed, r.killed_mid_write, r.killed_after_rename, r.finished);
+  std::printf(
+      "[ interrupt ] %-42s %2d runs: %2d killed (%d mid-write, %d after the rename), %2d finished; "
+      "no partial output, no temporary\n",
+      what, r.runs, r.killed, r.killed_mid_write, r.killed_after_rename, r.finished);
 }
 
 TEST_F(Interrupt, SigintDuringModesLeavesNothing) {
   const std::string out = dir_ + "/bar.modes";
-  const std::vector<std::string> args{"modes", "box:0.3,0.04,0.04", "--material", "steel", "--order", "2",
-                                      "--size", "0.006", "--max-modes", "60", "--quiet", "-o", out};
+  const std::vector<std::string> args{"modes", "box:0.3,0.04,0.04", "--material", "steel",   "--order", "2", "--size",
+                                      "0.006", "--max-modes",       "60",         "--quiet", "-o",      out};
   const KillReport r = killRepeatedly(args, out, dir_, SIGINT, 0.3, 0.3, 1);
   print("SIGINT 0.3 s into strike modes", r);
   EXPECT_EQ(r.killed, 1) << "strike modes finished within 0.3 s: choose a slower input";
@@ -165,7 +166,8 @@ TEST_F(Interrupt, SignalsDuringHitNeverLeaveAPartialWav) {
                     dir_ + "/bar.modes"}),
             0);
   const std::string out = dir_ + "/hit.wav";
-  const std::vector<std::string> args{"hit", dir_ + "/bar.modes", "--duration", "600", "--rate", "48000", "--quiet", "-o", out};
+  const std::vector<std::string> args{"hit",   dir_ + "/bar.modes", "--duration", "600", "--rate",
+                                      "48000", "--quiet",           "-o",         out};
   const auto start = std::chrono::steady_clock::now();
   ASSERT_EQ(runCli(args), 0);
   const double full_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -190,8 +192,9 @@ const char kSlowScene[] =
 TEST_F(Interrupt, SigtermDuringRenderLeavesNothing) {
   std::ofstream(dir_ + "/scene.json") << kSlowScene;
   const std::string out = dir_ + "/drop.wav";
-  const std::vector<std::string> args{"render", dir_ + "/scene.json", "--cache", dir_ + "/cache", "--quiet",
-                                      "--events", dir_ + "/events.csv", "-o", out};
+  const std::vector<std::string> args{
+      "render", dir_ + "/scene.json", "--cache", dir_ + "/cache", "--quiet", "--events", dir_ + "/events.csv", "-o",
+      out};
   const KillReport r = killRepeatedly(args, out, dir_, SIGTERM, 0.3, 0.3, 1);
   print("SIGTERM 0.3 s into strike render", r);
   EXPECT_EQ(r.killed, 1) << "strike render finished within 0.3 s: choose a slower scene";
@@ -226,7 +229,8 @@ TEST_F(Interrupt, ConcurrentRendersShareOneCacheSafely) {
   // A third render answers from that cache and gives the same bytes.
   ASSERT_EQ(runCli(args(dir_ + "/c.wav")), 0);
   EXPECT_TRUE(test::sameBytes(wav_a, slurp(dir_ + "/c.wav")));
-  std::printf("[ interrupt ] two concurrent renders on one cache: %zu entries, all valid, outputs identical\n", entries);
+  std::printf("[ interrupt ] two concurrent renders on one cache: %zu entries, all valid, outputs identical\n",
+              entries);
 }
 
 }  // namespace

@@ -6,8 +6,8 @@
 // How the disk "fills" without mounting anything: the child gets RLIMIT_FSIZE (setrlimit) with
 // SIGXFSZ ignored, so any write() past the limit fails with EFBIG, the same path through
 // fwrite/fclose and libsndfile as ENOSPC on a full disk (POSIX: setrlimit(2), write(2)).
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -98,7 +98,8 @@ class OutOfDisk : public testing::Test {
   std::string dir_;
 };
 
-const std::vector<std::string> kBarModes{"modes", "box:0.1,0.02,0.02", "--material", "steel", "--max-modes", "8", "--quiet"};
+const std::vector<std::string> kBarModes{"modes",  "box:0.1,0.02,0.02", "--material", "steel", "--max-modes", "8",
+                                         "--quiet"};
 
 TEST_F(OutOfDisk, ModesLeavesNoBank) {
   const std::string out = dir_ + "/bar.modes";
@@ -129,8 +130,8 @@ const char kDropScene[] =
 TEST_F(OutOfDisk, RenderLeavesNoWavNoEventsAndNoCorruptCacheEntry) {
   std::ofstream(dir_ + "/scene.json") << kDropScene;
   const std::string cache = dir_ + "/cache", out = dir_ + "/drop.wav", events = dir_ + "/events.csv";
-  const std::vector<std::string> args{"render", dir_ + "/scene.json", "--cache", cache, "--quiet",
-                                      "--events", events, "-o", out};
+  const std::vector<std::string> args{
+      "render", dir_ + "/scene.json", "--cache", cache, "--quiet", "--events", events, "-o", out};
   expectCleanFailure(runWithFileSizeLimit(args, kDiskSpace), out);
   EXPECT_FALSE(fs::exists(events));
   // The bank did not fit either: the cache holds nothing, or only whole banks.
@@ -153,8 +154,8 @@ TEST_F(OutOfDisk, RenderLeavesNoWavNoEventsAndNoCorruptCacheEntry) {
 TEST_F(OutOfDisk, RenderWhoseEventsDoNotFitLeavesNoWavEither) {
   std::ofstream(dir_ + "/scene.json") << kDropScene;
   const std::string out = dir_ + "/drop.wav", events = dir_ + "/events.csv";
-  const std::vector<std::string> args{"render", dir_ + "/scene.json", "--no-cache", "--quiet", "--rate", "8000",
-                                      "--events", events, "-o", out};
+  const std::vector<std::string> args{"render", dir_ + "/scene.json", "--no-cache", "--quiet", "--rate",
+                                      "8000",   "--events",           events,       "-o",      out};
   // The case holds only if the WAV (0.6 s of float at 8 kHz, 19 kB) fits and the events (every
   // contact point of every step until the bodies sleep, about 90 kB at 1 ms steps) do not: the limit goes
   // half-way between the two sizes of a run with space (renders are deterministic), so the

@@ -2,8 +2,8 @@
 // Issue 15, "A newcomer's first hour": outputs checked before any work (item 9), scenes that
 // cannot be right named (10), silent results flagged (11), `hit --at` and the events summary
 // (13), the bank cache tool (14), and the CLI reference in docs/cli.md (5).
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <utime.h>
@@ -12,9 +12,9 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <string>
-#include <nlohmann/json.hpp>
 
 #include "run_cli.hpp"
 
@@ -72,11 +72,13 @@ TEST(NewcomerOutputs, BadOutputPathsFailBeforeTheSimulationAndLeaveNoCacheEntry)
     // Before: the eigen-solve ran and its bank was cached before the write failed.
     EXPECT_EQ(filesIn(cache), 0u) << c.output;
   }
-  CliResult events = runCli("render '" + dir + "/drop.json' -o '" + dir + "/ok.wav' --events /nonexistent-folder/e.csv --cache '" + cache + "'");
+  CliResult events = runCli("render '" + dir + "/drop.json' -o '" + dir +
+                            "/ok.wav' --events /nonexistent-folder/e.csv --cache '" + cache + "'");
   EXPECT_EQ(events.exit_code, 1);
   EXPECT_NE(events.err.find("--events /nonexistent-folder/e.csv"), std::string::npos) << events.err;
   EXPECT_EQ(filesIn(cache), 0u);
-  CliResult flac = runCli("render '" + dir + "/drop.json' -o '" + dir + "/x.flac' --format float --cache '" + cache + "'");
+  CliResult flac =
+      runCli("render '" + dir + "/drop.json' -o '" + dir + "/x.flac' --format float --cache '" + cache + "'");
   EXPECT_EQ(flac.exit_code, 1);
   EXPECT_NE(flac.err.find("FLAC stores integer PCM only"), std::string::npos) << flac.err;
   EXPECT_EQ(filesIn(cache), 0u);
@@ -115,11 +117,13 @@ TEST(NewcomerScenes, OverlapsTheGroundAndUnstruckObjectsAreNamedWithNumbers) {
   EXPECT_NE(r.err.find("warning: objects \"sunk\": starts 10 mm inside the ground"), std::string::npos) << r.err;
   // b's face at x = 0.02 lies 30 mm inside a (whose face is at x = 0.05).
   EXPECT_NE(r.err.find("warning: objects \"a\" and \"b\" start inside each other (a surface point 30 mm deep)"),
-            std::string::npos) << r.err;
+            std::string::npos)
+      << r.err;
   // Lowest point 800 m up: sqrt(2 x 800 / 9.81) = 12.77 s of free fall.
   EXPECT_NE(r.err.find("objects \"high\": never struck (it starts at (-1, 0, 800) m, its lowest point 800 m above the "
                        "ground; falling from there takes 12.8 s, the render lasts 0.2 s)"),
-            std::string::npos) << r.err;
+            std::string::npos)
+      << r.err;
 }
 
 // Item 13: a scene object left at the default Tet4 on a thin shape is told that its frequencies
@@ -133,7 +137,8 @@ TEST(NewcomerScenes, AThinObjectAtTet4IsWarnedToUseOrder2) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // 2 V / A of a 60 x 60 x 3 mm plate: 2 (10.8e-6) / (7.2e-3 + 0.72e-3) = 2.73 mm, under 6 mm.
   EXPECT_NE(r.err.find("objects \"plate\": thin shape (wall 2.73 mm (2 V / A) is under 10% of the 60 mm extent"),
-            std::string::npos) << r.err;
+            std::string::npos)
+      << r.err;
   EXPECT_NE(r.err.find("use order 2"), std::string::npos) << r.err;
   // A cube's 2 V / A is a third of its side: a solid, where Tet4 does not lock.
   EXPECT_EQ(r.err.find("objects \"cube\": thin shape"), std::string::npos) << r.err;
@@ -144,7 +149,8 @@ TEST(NewcomerScenes, AMeshInMillimetresIsFlaggedAndUnitsMmScalesIt) {
   // A 100 mm cube written in millimetres.
   std::string obj;
   for (int i = 0; i < 8; ++i)
-    obj += "v " + std::to_string(i & 1 ? 50 : -50) + " " + std::to_string(i & 2 ? 50 : -50) + " " + std::to_string(i & 4 ? 50 : -50) + "\n";
+    obj += "v " + std::to_string(i & 1 ? 50 : -50) + " " + std::to_string(i & 2 ? 50 : -50) + " " +
+           std::to_string(i & 4 ? 50 : -50) + "\n";
   obj += "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
   write(dir + "/cube_mm.obj", obj);
   // Read as metres: a 100 m, 7.85e9 kg steel cube (warned); with "units": "mm", 0.1 m and 7.85 kg.
@@ -152,16 +158,19 @@ TEST(NewcomerScenes, AMeshInMillimetresIsFlaggedAndUnitsMmScalesIt) {
     {"name": "cube", "mesh": "cube_mm.obj", "material": "steel", "static": true, "position": [0, 0, 50]}]})");
   CliResult metres = runCli("render '" + dir + "/as-metres.json' -o '" + dir + "/m.wav' --no-cache --quiet");
   ASSERT_EQ(metres.exit_code, 0) << metres.err;
-  EXPECT_NE(metres.err.find("objects \"cube\": 100 x 100 x 100 m, 7.85e+09 kg (7.85e+06 tonnes): implausibly large for a "
-                            "sounding object; if the mesh file is in millimetres, add \"units\": \"mm\" to the object"),
-            std::string::npos) << metres.err;
+  EXPECT_NE(
+      metres.err.find("objects \"cube\": 100 x 100 x 100 m, 7.85e+09 kg (7.85e+06 tonnes): implausibly large for a "
+                      "sounding object; if the mesh file is in millimetres, add \"units\": \"mm\" to the object"),
+      std::string::npos)
+      << metres.err;
   write(dir + "/as-mm.json", R"({"duration": 0.05, "max_modes": 2, "objects": [
     {"name": "cube", "mesh": "cube_mm.obj", "units": "mm", "material": "steel", "static": true, "position": [0, 0, 0.05]}]})");
   CliResult mm = runCli("render '" + dir + "/as-mm.json' -o '" + dir + "/mm.wav' --no-cache --quiet");
   ASSERT_EQ(mm.exit_code, 0) << mm.err;
   EXPECT_EQ(mm.err.find("implausibly"), std::string::npos) << mm.err;
   // The bank in millimetres: volume (0.1 m)^3, mass 7850 kg/m^3 x 1e-3 m^3, to rounding.
-  CliResult bank = runCli("modes '" + dir + "/cube_mm.obj' --units mm --material steel --max-modes 2 --no-error-estimate --quiet -o '" +
+  CliResult bank = runCli("modes '" + dir +
+                          "/cube_mm.obj' --units mm --material steel --max-modes 2 --no-error-estimate --quiet -o '" +
                           dir + "/cube.modes'");
   ASSERT_EQ(bank.exit_code, 0) << bank.err;
   const nlohmann::json info = nlohmann::json::parse(runCli("info --json '" + dir + "/cube.modes'").out);
@@ -184,12 +193,14 @@ TEST(NewcomerSilence, AnObjectWithNoAudibleModeIsSilentNotSounded) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("warning: objects \"pebble\": silent: no mode in the audible band (its bank has no elastic mode "
                        "below its cut-off of 20000 Hz"),
-            std::string::npos) << r.err;
+            std::string::npos)
+      << r.err;
   EXPECT_NE(r.err.find("1 struck, 0 sounded, 1 silent (no mode in the audible band)"), std::string::npos) << r.err;
   // Its contacts reached no oscillator: none is counted as heard.
   EXPECT_NE(r.err.find("heard       0 impact pulses and 0 resting/sliding impulses"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("level       silent: every sample is 0 (the struck objects have no mode in the audible band"),
-            std::string::npos) << r.err;
+            std::string::npos)
+      << r.err;
   EXPECT_EQ(r.err.find("-600"), std::string::npos) << r.err;
   // Its file is all zeros, and analyze says so instead of "-600 dBFS".
   CliResult text = runCli("analyze '" + dir + "/p.wav'");
@@ -205,12 +216,16 @@ TEST(NewcomerSilence, AnObjectWithNoAudibleModeIsSilentNotSounded) {
 
 TEST(NewcomerHit, AtPrintsThePointStruckAndWarnsFarFromTheSurface) {
   const std::string dir = folder("hit");
-  ASSERT_EQ(runCli("modes box:0.3,0.02,0.02 --material steel --max-modes 4 --no-error-estimate --quiet -o '" + dir + "/bar.modes'").exit_code, 0);
+  ASSERT_EQ(runCli("modes box:0.3,0.02,0.02 --material steel --max-modes 4 --no-error-estimate --quiet -o '" + dir +
+                   "/bar.modes'")
+                .exit_code,
+            0);
   CliResult far = runCli("hit '" + dir + "/bar.modes' -o '" + dir + "/far.wav' --at 5,5,5");
   ASSERT_EQ(far.exit_code, 0) << far.err;
   // The nearest surface point is the corner (0.15, 0.01, 0.01): sqrt(4.85^2 + 2 x 4.99^2) = 8.563 m away.
   EXPECT_NE(far.err.find("surface point (0.15, 0.01, 0.01) m"), std::string::npos) << far.err;
-  EXPECT_NEAR(numberAfter(far.err, "warning: --at 5,5,5 is "), std::sqrt(4.85 * 4.85 + 2 * 4.99 * 4.99), 1e-3) << far.err;
+  EXPECT_NEAR(numberAfter(far.err, "warning: --at 5,5,5 is "), std::sqrt(4.85 * 4.85 + 2 * 4.99 * 4.99), 1e-3)
+      << far.err;
   EXPECT_EQ(far.err.find("at (5, 5, 5) m"), std::string::npos) << far.err;
   CliResult on = runCli("hit '" + dir + "/bar.modes' -o '" + dir + "/on.wav' --at 0.1,0.003,0.01");
   ASSERT_EQ(on.exit_code, 0) << on.err;
@@ -220,7 +235,8 @@ TEST(NewcomerHit, AtPrintsThePointStruckAndWarnsFarFromTheSurface) {
 
 TEST(NewcomerCompactBank, ModesCompactWritesFormatFourWithTheSameModes) {
   const std::string dir = folder("compact");
-  const std::string common = "modes box:0.3,0.02,0.02 --material steel --max-modes 4 --no-error-estimate --quiet -o '" + dir;
+  const std::string common =
+      "modes box:0.3,0.02,0.02 --material steel --max-modes 4 --no-error-estimate --quiet -o '" + dir;
   ASSERT_EQ(runCli(common + "/f32.modes'").exit_code, 0);
   ASSERT_EQ(runCli(common + "/i16.modes' --compact").exit_code, 0);
   const nlohmann::json a = nlohmann::json::parse(runCli("info --json '" + dir + "/f32.modes'").out);
@@ -237,7 +253,9 @@ TEST(NewcomerEvents, TheSummaryAddsUpAndMatchesTheEventsFile) {
   CliResult r = runCli("render '" + dir + "/drop.json' -o '" + dir + "/d.wav' --events '" + dir + "/e.csv' --no-cache");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.err, m, std::regex(R"((\d+) contact points recorded: (\d+) impacts \(closing > 5 cm/s\) \+ (\d+) resting or sliding)")))
+  ASSERT_TRUE(std::regex_search(
+      r.err, m,
+      std::regex(R"((\d+) contact points recorded: (\d+) impacts \(closing > 5 cm/s\) \+ (\d+) resting or sliding)")))
       << r.err;
   const long total = std::stol(m[1]), impacts = std::stol(m[2]), resting = std::stol(m[3]);
   EXPECT_EQ(impacts + resting, total);
@@ -257,7 +275,9 @@ TEST(NewcomerEvents, TheSummaryAddsUpAndMatchesTheEventsFile) {
   EXPECT_GT(impacts, 0);
   EXPECT_NE(r.err.find("1 struck, 1 sounded, 0 silent"), std::string::npos) << r.err;
   // One body against the ground: every event acts on exactly one sounding body.
-  ASSERT_TRUE(std::regex_search(r.err, m, std::regex(R"(heard +(\d+) impact pulses and (\d+) resting/sliding impulses)"))) << r.err;
+  ASSERT_TRUE(
+      std::regex_search(r.err, m, std::regex(R"(heard +(\d+) impact pulses and (\d+) resting/sliding impulses)")))
+      << r.err;
   EXPECT_EQ(std::stol(m[1]), impacts);
   EXPECT_EQ(std::stol(m[2]), resting);
 }
@@ -267,7 +287,9 @@ TEST(NewcomerEvents, TheSummaryAddsUpAndMatchesTheEventsFile) {
 void makeEntry(const std::string& path, size_t bytes, double age_s) {
   write(path, std::string(bytes, 'x'));
   const std::time_t when = std::time(nullptr) - static_cast<std::time_t>(age_s);
-  struct utimbuf times {when, when};
+  struct utimbuf times {
+    when, when
+  };
   utime(path.c_str(), &times);
 }
 
@@ -282,7 +304,8 @@ TEST(NewcomerCache, ListSizeAndPruneByAgeAndSize) {
   EXPECT_NE(size.out.find("3 files, 0.0 MB (6000 bytes)"), std::string::npos) << size.out;
   CliResult list = runCli("cache list --cache '" + cache + "'");
   ASSERT_EQ(list.exit_code, 0) << list.err;
-  EXPECT_LT(list.out.find("0000000000000001"), list.out.find("0000000000000003")) << list.out;  // least recently used first
+  EXPECT_LT(list.out.find("0000000000000001"), list.out.find("0000000000000003"))
+      << list.out;  // least recently used first
   EXPECT_NE(list.out.find("unreadable"), std::string::npos) << list.out;
 
   CliResult dry = runCli("cache prune --older-than 1d --dry-run --cache '" + cache + "'");
@@ -312,13 +335,14 @@ TEST(NewcomerCache, ARenderKeepsTheCacheUnderItsCapRemovingTheLeastRecentlyUsed)
   const std::string dir = folder("cap");
   const std::string cache = dir + "/cache";
   write(dir + "/drop.json", kDrop);
-  ASSERT_EQ(runCli("render '" + dir + "/drop.json' -o '" + dir + "/a.wav' --cache '" + cache + "' --quiet").exit_code, 0);
+  ASSERT_EQ(runCli("render '" + dir + "/drop.json' -o '" + dir + "/a.wav' --cache '" + cache + "' --quiet").exit_code,
+            0);
   ASSERT_EQ(filesIn(cache), 1u);
   const uintmax_t bank_bytes = fs::directory_iterator(cache)->file_size();
   makeEntry(cache + "/00000000000000aa.modes", 5000, 30 * 86400.0);  // an old bank of another scene
   // Cap: this render's bank fits, the old one does not.
-  CliResult r = runCli("render '" + dir + "/drop.json' -o '" + dir + "/b.wav' --cache '" + cache + "' --cache-max-size " +
-                       std::to_string(bank_bytes + 1000));
+  CliResult r = runCli("render '" + dir + "/drop.json' -o '" + dir + "/b.wav' --cache '" + cache +
+                       "' --cache-max-size " + std::to_string(bank_bytes + 1000));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("1 from the cache"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("cache       removed 1 least recently used banks"), std::string::npos) << r.err;
@@ -339,7 +363,8 @@ TEST(NewcomerDocs, EveryOptionOfEveryCommandIsInDocsCli) {
     EXPECT_EQ(help.out.find("ARCHITECTURE"), std::string::npos) << command;
     std::regex option(R"(\n  (--?[a-z][a-z0-9-]*))");
     for (std::sregex_iterator it(help.out.begin(), help.out.end(), option), end; it != end; ++it)
-      EXPECT_NE(doc.find("`" + (*it)[1].str()), std::string::npos) << "strike " << command << " " << (*it)[1] << " is not in docs/cli.md";
+      EXPECT_NE(doc.find("`" + (*it)[1].str()), std::string::npos)
+          << "strike " << command << " " << (*it)[1] << " is not in docs/cli.md";
   }
 }
 

@@ -10,12 +10,12 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-#include <nlohmann/json.hpp>
 
-#include "references/beam_theory.hpp"
 #include "common/same_bytes.hpp"
+#include "references/beam_theory.hpp"
 #include "run_cli.hpp"
 #include "strike/audio.hpp"
 #include "strike/bank.hpp"
@@ -126,7 +126,8 @@ class SteelBar : public testing::Test {
     stat(STRIKE_CLI, &tool);
     bank_ = temp("steel-bar-" + std::to_string(tool.st_size) + "-" + std::to_string(tool.st_mtime) + ".modes");
     if (!std::filesystem::exists(bank_)) {
-      CliResult r = runCli("modes box:0.3,0.02,0.02 --material steel --order 2 --max-freq 12000 --quiet -o '" + bank_ + "'");
+      CliResult r =
+          runCli("modes box:0.3,0.02,0.02 --material steel --order 2 --max-freq 12000 --quiet -o '" + bank_ + "'");
       ASSERT_EQ(r.exit_code, 0) << r.err;
     }
     CliResult info = runCli("info --json '" + bank_ + "'");
@@ -143,7 +144,8 @@ nlohmann::json* SteelBar::info_ = nullptr;
 
 TEST_F(SteelBar, InfoJsonHasTheContractFields) {
   const nlohmann::json& j = *info_;
-  for (const char* key : {"format_version", "frequencies_hz", "decay_per_s", "mass_kg", "volume_m3", "material", "mesh"})
+  for (const char* key :
+       {"format_version", "frequencies_hz", "decay_per_s", "mass_kg", "volume_m3", "material", "mesh"})
     EXPECT_TRUE(j.contains(key)) << key;
   for (const char* key : {"youngs_pa", "poisson", "density_kg_m3", "rayleigh_stiffness", "rayleigh_mass"})
     EXPECT_TRUE(j["material"].contains(key)) << key;
@@ -198,12 +200,14 @@ TEST_F(SteelBar, BendingAndLongitudinalModesMatchBeamTheory) {
 TEST_F(SteelBar, StruckObliquelyItsSpectrumPeaksAtTheoryAndBank) {
   const std::string wav = temp("bar-hit.wav");
   // At an end vertex, obliquely, so bending in both planes and the longitudinal mode all sound.
-  CliResult r = runCli("hit '" + bank_ + "' -o '" + wav + "' --at 0.15,0.01,0.01 --impulse -0.006,-0.003,-0.008 --duration 2 --quiet");
+  CliResult r = runCli("hit '" + bank_ + "' -o '" + wav +
+                       "' --at 0.15,0.01,0.01 --impulse -0.006,-0.003,-0.008 --duration 2 --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   CliResult a = runCli("analyze --json --peaks 30 '" + wav + "'");
   ASSERT_EQ(a.exit_code, 0) << a.err;
   const nlohmann::json j = jsonOf(a);
-  for (const char* key : {"sample_rate", "duration_s", "peak_amplitude", "rms", "peaks"}) EXPECT_TRUE(j.contains(key)) << key;
+  for (const char* key : {"sample_rate", "duration_s", "peak_amplitude", "rms", "peaks"})
+    EXPECT_TRUE(j.contains(key)) << key;
   std::vector<double> peaks;
   for (const auto& p : j["peaks"]) peaks.push_back(p["freq_hz"].get<double>());
   auto nearest = [&](double target) {
@@ -232,7 +236,8 @@ TEST_F(SteelBar, StruckObliquelyItsSpectrumPeaksAtTheoryAndBank) {
 TEST_F(SteelBar, AFixedHitRendersTheSameBytesEveryTime) {
   const std::string a = temp("golden-a.wav"), b = temp("golden-b.wav");
   for (const std::string& out : {a, b}) {
-    CliResult r = runCli("hit '" + bank_ + "' -o '" + out + "' --vertex 3 --impulse 0,0,-0.01 --duration 0.5 --format pcm24 --quiet");
+    CliResult r = runCli("hit '" + bank_ + "' -o '" + out +
+                         "' --vertex 3 --impulse 0,0,-0.01 --duration 0.5 --format pcm24 --quiet");
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
   const std::string bytes = test::slurp(a);
@@ -258,7 +263,8 @@ TEST(CliHit, FittedDecayRatesMatchTheBank) {
   CliResult r = runCli("modes box:0.3,0.02,0.03 --material aluminium --max-freq 8000 --quiet -o '" + bank + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json info = jsonOf(runCli("info --json '" + bank + "'"));
-  r = runCli("hit '" + bank + "' -o '" + wav + "' --at 0.15,0.01,0.015 --impulse -0.005,-0.004,-0.008 --duration 4 --quiet");
+  r = runCli("hit '" + bank + "' -o '" + wav +
+             "' --at 0.15,0.01,0.015 --impulse -0.005,-0.004,-0.008 --duration 4 --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json a = jsonOf(runCli("analyze --json --peaks 12 '" + wav + "'"));
   int checked = 0;
@@ -292,7 +298,8 @@ class BarDrop : public testing::Test {
     wav_ = temp("bar-drop-" + key + ".wav");
     events_ = temp("bar-drop-" + key + ".csv");
     if (!std::filesystem::exists(wav_)) {
-      CliResult r = runCli("render '" + kBarDrop + "' -o '" + wav_ + "' --events '" + events_ + "' --cache '" + cache_ + "' --quiet");
+      CliResult r = runCli("render '" + kBarDrop + "' -o '" + wav_ + "' --events '" + events_ + "' --cache '" + cache_ +
+                           "' --quiet");
       ASSERT_EQ(r.exit_code, 0) << r.err;
     }
   }
@@ -353,11 +360,14 @@ TEST_F(BarDrop, FirstSoundOfADropArrivesAtTheClosedFormTimePlusTheListenerDelay)
   const double g = 9.81, t_meet = 0.1505, h = 0.5 * g * t_meet * t_meet;
   const double listener[3] = {0.0, -1.0, 0.01};
   const std::string scene = temp("flat-drop.json"), wav = temp("flat-drop.wav"), events = temp("flat-drop.csv");
-  std::ofstream(scene) << R"({"sample_rate": 48000, "duration": 0.4, "max_modes": 60, "ground": {"material": "concrete"},
+  std::ofstream(scene)
+      << R"({"sample_rate": 48000, "duration": 0.4, "max_modes": 60, "ground": {"material": "concrete"},
     "listener": {"position": [0, -1.0, 0.01]},
     "objects": [{"name": "bar", "mesh": "box:0.3,0.02,0.02", "material": "steel", "order": 2,
-                 "position": [0, 0, )" << std::to_string(h + 0.01) << "]}]}";
-  CliResult r = runCli("render '" + scene + "' -o '" + wav + "' --events '" + events + "' --cache '" + cache_ + "' --quiet");
+                 "position": [0, 0, )"
+      << std::to_string(h + 0.01) << "]}]}";
+  CliResult r =
+      runCli("render '" + scene + "' -o '" + wav + "' --events '" + events + "' --cache '" + cache_ + "' --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // Each contact point is heard from where it is: the first sound is the earliest arrival of
   // the impact's points (the bar lands flat, on four corners at once).
@@ -380,7 +390,8 @@ TEST_F(BarDrop, FirstSoundOfADropArrivesAtTheClosedFormTimePlusTheListenerDelay)
     }
     if (fields[0] > first_time + 1e-3) break;
     double distance2 = 0.0;
-    for (int k = 0; k < 3; ++k) distance2 += (fields[7 + size_t(k)] - listener[k]) * (fields[7 + size_t(k)] - listener[k]);
+    for (int k = 0; k < 3; ++k)
+      distance2 += (fields[7 + size_t(k)] - listener[k]) * (fields[7 + size_t(k)] - listener[k]);
     expected_sample = std::min(expected_sample, (fields[0] + std::sqrt(distance2) / 343.0) * 48000.0);
   }
 
@@ -402,7 +413,8 @@ TEST_F(BarDrop, RendersAreDeterministicAndTheCacheChangesNothing) {
   EXPECT_TRUE(test::sameBytes(test::slurp(again), test::slurp(wav_))) << "two renders differ";
   r = runCli("render '" + kBarDrop + "' -o '" + uncached + "' --no-cache --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(test::sameBytes(test::slurp(uncached), test::slurp(wav_))) << "a render from the cache differs from one without";
+  EXPECT_TRUE(test::sameBytes(test::slurp(uncached), test::slurp(wav_)))
+      << "a render from the cache differs from one without";
 }
 
 // A cached bank's shapes are read only where the contacts land, each block checked on reading
@@ -424,7 +436,8 @@ TEST_F(BarDrop, DamagedShapesInTheCacheAreRecomputedNotTrusted) {
   std::memcpy(&head_size, bytes.data() + 32, 8);  // format 3: the shapes follow the checked head
   ASSERT_LT(40 + head_size, bytes.size());
   for (size_t at = 40 + head_size; at < bytes.size(); at += 256) bytes[at] = static_cast<char>(bytes[at] ^ 0x5a);
-  std::ofstream(bank, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  std::ofstream(bank, std::ios::binary | std::ios::trunc)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 
   const std::string wav = temp("bar-drop-damaged-cache.wav");
   CliResult r = runCli("render '" + kBarDrop + "' -o '" + wav + "' --cache '" + cache + "'");
@@ -451,7 +464,8 @@ TEST_F(BarDrop, DamagedGivenBankFailsNamingItAndWritesNothing) {
   std::memcpy(&head_size, bytes.data() + 32, 8);
   for (size_t at = 40 + head_size; at < bytes.size(); at += 200) bytes[at] = static_cast<char>(bytes[at] ^ 0x55);
   std::ofstream(dir + "/bar.modes", std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  std::ofstream(dir + "/scene.json") << R"({"objects": [{"name": "bar", "mesh": "box:0.3,0.02,0.02", "bank": "bar.modes",
+  std::ofstream(dir + "/scene.json")
+      << R"({"objects": [{"name": "bar", "mesh": "box:0.3,0.02,0.02", "bank": "bar.modes",
     "material": "steel", "position": [0, 0, 0.15]}], "duration": 1})";
   const std::string wav = dir + "/out.wav";
   CliResult r = runCli("render '" + dir + "/scene.json' -o '" + wav + "' --no-cache");
@@ -465,10 +479,13 @@ TEST(CliRender, MalformedScenesFailNamingTheKeyAndWriteNothing) {
   struct Case {
     std::string json, expected;
   } cases[] = {
-      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "steel", "colour": "red"}]})", "objects[0].colour: unknown key"},
-      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "steel", "velocity": [0, "x", 0]}]})", "objects[0].velocity[1]"},
+      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "steel", "colour": "red"}]})",
+       "objects[0].colour: unknown key"},
+      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "steel", "velocity": [0, "x", 0]}]})",
+       "objects[0].velocity[1]"},
       {R"({"objects": [{"mesh": "nothere.obj", "material": "steel"}]})", "objects[0].mesh: file not found"},
-      {"{\"objects\": [{\"mesh\": \"box:1,1,1\", \"material\": \"steel\", \"velocity\": [NaN, 0, 0]}]}", "scene.json:1:"},
+      {"{\"objects\": [{\"mesh\": \"box:1,1,1\", \"material\": \"steel\", \"velocity\": [NaN, 0, 0]}]}",
+       "scene.json:1:"},
   };
   int n = 0;
   for (const Case& c : cases) {

@@ -90,7 +90,8 @@ TEST(CliContact, GlassRestingOnATableFallsAsleepAndGoesSilent) {
       "listener": {"position": [0, -0.7, 1.0]},
       "objects": [
         {"name": "table", "mesh": "box:1.0,0.6,0.03", "material": "wood", "static": true, "position": [0, 0, 0.735]},
-        {"name": "glass", "mesh": ")" << kGlass << R"(", "material": "glass", "size": 0.02, "shape": ")" << shape
+        {"name": "glass", "mesh": ")"
+                         << kGlass << R"(", "material": "glass", "size": 0.02, "shape": ")" << shape
                          << R"(", "position": [0, 0, 0.78], "orientation": [0.9962, 0.0872, 0.0, 0.0]}]})";
     CliResult r = runCli("render '" + scene + "' -o '" + wav + "' --events '" + events + "' --cache '" + cache + "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -109,7 +110,8 @@ TEST(CliContact, GlassRestingOnATableFallsAsleepAndGoesSilent) {
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_NE(r.err.find("glass: "), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("convex pieces (from the cache)"), std::string::npos) << r.err;
-    EXPECT_TRUE(test::sameBytes(test::slurp(dir + "/again.wav"), test::slurp(wav))) << "pieces from the cache change the render";
+    EXPECT_TRUE(test::sameBytes(test::slurp(dir + "/again.wav"), test::slurp(wav)))
+        << "pieces from the cache change the render";
   }
 }
 
@@ -120,9 +122,10 @@ std::vector<double> bounceTimes(const std::string& name, const std::string& ball
   std::filesystem::create_directories(dir);
   const std::string scene = dir + "/scene.json", events = dir + "/events.csv";
   std::ofstream(scene) << R"({"sample_rate": 48000, "duration": 1.0, "max_modes": 5,
-    "listener": {"position": [0, -0.5, 0.2]}, )" << top_keys << R"(
+    "listener": {"position": [0, -0.5, 0.2]}, )"
+                       << top_keys << R"(
     "objects": [{"name": "ball", "mesh": "sphere:0.02", "material": "rubber", "size": 0.006, "position": [0, 0, 0.12])"
-                           << ball_keys << "}]}";
+                       << ball_keys << "}]}";
   CliResult r = runCli("render '" + scene + "' -o '" + dir + "/out.wav' --events '" + events + "' --cache '" +
                        temp("bounce-cache") + "' --quiet");
   EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -144,7 +147,8 @@ void expectBounces(const std::vector<double>& hits, double e, const std::string&
   for (size_t k = 1; k < 4; ++k) {
     const double interval = 2 * e * v / g;
     v *= e;
-    std::printf("[ bounce   ] %s: interval %zu: %.6f s, closed form %.6f s\n", label.c_str(), k, hits[k] - hits[k - 1], interval);
+    std::printf("[ bounce   ] %s: interval %zu: %.6f s, closed form %.6f s\n", label.c_str(), k, hits[k] - hits[k - 1],
+                interval);
     EXPECT_NEAR(hits[k] - hits[k - 1], interval, 0.05e-3) << label << ": interval " << k;
   }
 }
@@ -154,8 +158,9 @@ void expectBounces(const std::vector<double>& hits, double e, const std::string&
 // values combine to themselves (Bullet's product gave 0.72). A "contacts" entry for the pair
 // wins over both: 0.6.
 TEST(CliContact, RestitutionFromTheSceneSetsTheBounceIntervals) {
-  expectBounces(bounceTimes("own", R"(, "restitution": 0.85)", R"("ground": {"material": "concrete", "restitution": 0.85},)"),
-                0.85, "ball 0.85 on ground 0.85");
+  expectBounces(
+      bounceTimes("own", R"(, "restitution": 0.85)", R"("ground": {"material": "concrete", "restitution": 0.85},)"),
+      0.85, "ball 0.85 on ground 0.85");
   expectBounces(bounceTimes("pair", R"(, "restitution": 0.85)",
                             R"("contacts": [{"objects": ["ground", "ball"], "restitution": 0.6}],)"),
                 0.6, "pair 0.6");

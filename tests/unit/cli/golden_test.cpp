@@ -66,8 +66,9 @@ Difference compare(const AudioBuffer& a, const AudioBuffer& b) {
   }
   d.db = worst > 0 ? 20.0 * std::log10(worst / std::max(peak, 1e-30)) : -1000.0;
   char line[256];
-  std::snprintf(line, sizeof line, "peak %.4g; max difference %.3g (%.1f dB re peak) at sample %zu; first difference at sample %zu",
-                peak, worst, d.db, worst_at, first_at);
+  std::snprintf(line, sizeof line,
+                "peak %.4g; max difference %.3g (%.1f dB re peak) at sample %zu; first difference at sample %zu", peak,
+                worst, d.db, worst_at, first_at);
   d.summary = line;
   return d;
 }
@@ -78,9 +79,9 @@ class Golden : public testing::Test {
     dir_ = testing::TempDir() + "/golden_" + std::to_string(static_cast<long>(getpid()));
     fs::create_directories(dir_ + "/cache");
     // bar-drop for 1.5 s (the drop, the first bounces and their rings), banks cached in dir_.
-    const auto render = runCli("render " + shellQuoted(std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/bar-drop.json") +
-                               " -o " + shellQuoted(dir_ + "/bar-drop.wav") + " --duration 1.5 --cache " +
-                               shellQuoted(dir_ + "/cache") + " --quiet");
+    const auto render = runCli(
+        "render " + shellQuoted(std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/bar-drop.json") + " -o " +
+        shellQuoted(dir_ + "/bar-drop.wav") + " --duration 1.5 --cache " + shellQuoted(dir_ + "/cache") + " --quiet");
     ASSERT_EQ(render.exit_code, 0) << render.err;
     // The bar's bank, as the render solved it: the only bank in the cache.
     for (const auto& entry : fs::directory_iterator(dir_ + "/cache"))
@@ -130,7 +131,7 @@ TEST_F(Golden, SynthKernelsAgreeWithin120dB) {
   for (const char* kernel : {"scalar", "avx2"}) {
     const std::string out = dir_ + "/bar-drop-" + kernel + ".wav";
     const auto forced = runCli(std::string("render ") + scene + " -o " + shellQuoted(out) + " --duration 1.5 --cache " +
-                                     shellQuoted(dir_ + "/cache") + " --quiet --simd " + kernel);
+                               shellQuoted(dir_ + "/cache") + " --quiet --simd " + kernel);
     ASSERT_EQ(forced.exit_code, 0) << forced.err;
     const Difference d = compare(read(dir_ + "/bar-drop.wav"), read(out));
     EXPECT_LT(d.db, kKernelToleranceDb) << "bar-drop, auto vs " << kernel << ": " << d.summary;
@@ -140,7 +141,8 @@ TEST_F(Golden, SynthKernelsAgreeWithin120dB) {
 
 TEST_F(Golden, EnvironmentPicksTheKernelAndABadNameIsAnError) {
   const std::string out = dir_ + "/env.wav";
-  const std::string command = "hit " + shellQuoted(bank_) + " -o " + shellQuoted(out) + " --vertex 12 --duration 0.1 --quiet";
+  const std::string command =
+      "hit " + shellQuoted(bank_) + " -o " + shellQuoted(out) + " --vertex 12 --duration 0.1 --quiet";
   setenv("STRIKE_SIMD", "sse9", 1);
   const auto refused = runCli(command);
   unsetenv("STRIKE_SIMD");
@@ -158,13 +160,15 @@ TEST_F(Golden, EnvironmentPicksTheKernelAndABadNameIsAnError) {
 class ViaLibrary : public testing::TestWithParam<const char*> {};
 
 TEST_P(ViaLibrary, EqualsTheRenderWithin100dB) {
-  const std::string dir = testing::TempDir() + "/via_library_" + GetParam() + "_" + std::to_string(static_cast<long>(getpid()));
+  const std::string dir =
+      testing::TempDir() + "/via_library_" + GetParam() + "_" + std::to_string(static_cast<long>(getpid()));
   fs::create_directories(dir + "/cache");
   const std::string scene = shellQuoted(std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/" + GetParam() + ".json");
   const std::string common = " --duration 1.2 --cache " + shellQuoted(dir + "/cache") + " --quiet";
   const auto direct = runCli("render " + scene + " -o " + shellQuoted(dir + "/direct.wav") + common);
   ASSERT_EQ(direct.exit_code, 0) << direct.err;
-  const auto library = runCli("render " + scene + " -o " + shellQuoted(dir + "/library.wav") + common + " --via-library");
+  const auto library =
+      runCli("render " + scene + " -o " + shellQuoted(dir + "/library.wav") + common + " --via-library");
   ASSERT_EQ(library.exit_code, 0) << library.err;
   EXPECT_EQ(library.err.find("dropped"), std::string::npos) << library.err;
   const AudioBuffer a = read(dir + "/direct.wav"), b = read(dir + "/library.wav");
@@ -178,7 +182,8 @@ TEST_P(ViaLibrary, EqualsTheRenderWithin100dB) {
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryExample, ViaLibrary,
-                         testing::Values("bar-drop", "blocks-falling", "coin-spin", "glass-on-table", "marbles-in-bowl"),
+                         testing::Values("bar-drop", "blocks-falling", "coin-spin", "glass-on-table",
+                                         "marbles-in-bowl"),
                          [](const testing::TestParamInfo<const char*>& param) {
                            std::string name = param.param;
                            std::replace(name.begin(), name.end(), '-', '_');

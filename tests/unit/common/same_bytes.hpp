@@ -106,7 +106,8 @@ testing::AssertionResult sameValues(const std::vector<T>& a, const std::vector<T
   } else {
     m << differing << " of " << std::min(a.size(), b.size()) << " values differ; first at [" << first << "]";
     if constexpr (std::is_arithmetic_v<T>) {
-      m << ": " << +a[first] << " vs " << +b[first] << "; largest |difference| " << max_diff << " at [" << max_at << "]";
+      m << ": " << +a[first] << " vs " << +b[first] << "; largest |difference| " << max_diff << " at [" << max_at
+        << "]";
     }
   }
   return testing::AssertionFailure() << m.str();

@@ -68,7 +68,8 @@ TEST(ErrorEstimate, Tet4BarBendingCoveredByEstimate) {
       ++c.modes;
       c.covered += truth <= est;
       c.worst_ratio = std::max(c.worst_ratio, truth / est);
-      std::printf("bar Tet4 %8.1f Hz ref %8.1f true %.3f%% est %.3f%%\n", bank.frequencyHz(i), ref, 100 * truth, 100 * est);
+      std::printf("bar Tet4 %8.1f Hz ref %8.1f true %.3f%% est %.3f%%\n", bank.frequencyHz(i), ref, 100 * truth,
+                  100 * est);
     }
   }
   std::printf("bar Tet4: %d of %d covered, worst true/estimate %.2f, estimate cost %.3f s of %.3f s\n", c.covered,
@@ -154,7 +155,8 @@ TEST(ErrorEstimate, ThickPlateOneLayerTet10IsCovered) {
   ASSERT_EQ(coarse.bank.frequency_error_estimate.size(), coarse.bank.modeCount()) << coarse.report.error_estimate_note;
   for (size_t i = 0; i < 4; ++i) {
     const double change = std::abs(coarse.bank.frequencyHz(i) - fine.bank.frequencyHz(i)) / fine.bank.frequencyHz(i);
-    EXPECT_GE(coarse.bank.frequency_error_estimate[i], change) << "mode " << i << " (" << coarse.report.error_estimate_method << ")";
+    EXPECT_GE(coarse.bank.frequency_error_estimate[i], change)
+        << "mode " << i << " (" << coarse.report.error_estimate_method << ")";
   }
 }
 
@@ -192,8 +194,8 @@ TEST(ErrorEstimate, ThinWalledCupTet10WithinASmallFactor) {
   for (size_t i = 0; i < 2; ++i) {
     const double truth = std::abs(r.bank.frequencyHz(i) - reference_hz[i]) / reference_hz[i];
     const double estimate = r.bank.frequency_error_estimate[i];
-    std::printf("    mode %zu: %.3f Hz, true error %.3f%%, estimate %.3f%% (%.2fx)\n", i, r.bank.frequencyHz(i), 100 * truth,
-                100 * estimate, estimate / truth);
+    std::printf("    mode %zu: %.3f Hz, true error %.3f%%, estimate %.3f%% (%.2fx)\n", i, r.bank.frequencyHz(i),
+                100 * truth, 100 * estimate, estimate / truth);
     EXPECT_GE(estimate, truth) << "mode " << i;
     EXPECT_LE(estimate, 5.0 * truth) << "mode " << i;
   }

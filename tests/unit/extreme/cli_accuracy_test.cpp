@@ -23,7 +23,8 @@ std::string temp(const std::string& name) { return "'" + ::testing::TempDir() + 
 // Expectation: on by default for a primitive; the summary names the method and its extra cost;
 // `info --json` carries one estimate per mode.
 TEST(CliAccuracy, ModesReportsAnErrorEstimateByDefault) {
-  const test::CliResult made = runCli("modes box:0.3,0.02,0.02 --material steel --order 2 --max-freq 6000 -o " + temp("e.modes"));
+  const test::CliResult made =
+      runCli("modes box:0.3,0.02,0.02 --material steel --order 2 --max-freq 6000 -o " + temp("e.modes"));
   ASSERT_EQ(made.exit_code, 0) << made.err;
   EXPECT_NE(made.err.find("est. error  max"), std::string::npos) << made.err;
   EXPECT_NE(made.err.find("richardson"), std::string::npos) << made.err;
@@ -36,20 +37,23 @@ TEST(CliAccuracy, ModesReportsAnErrorEstimateByDefault) {
   ASSERT_EQ(off.exit_code, 0) << off.err;
   EXPECT_EQ(off.err.find("est. error"), std::string::npos) << off.err;
   EXPECT_EQ(runCli("info " + temp("n.modes") + " --json").out.find("frequency_error_estimate"), std::string::npos);
-  EXPECT_EQ(runCli("modes box:0.3,0.02,0.02 --material steel --error-estimate --no-error-estimate -o " + temp("x.modes"))
-                .exit_code,
-            1);
+  EXPECT_EQ(
+      runCli("modes box:0.3,0.02,0.02 --material steel --error-estimate --no-error-estimate -o " + temp("x.modes"))
+          .exit_code,
+      1);
 }
 
 // Expectation: --tolerance 0.5% on the steel bar (modes to 3 kHz) tries the cheapest candidates
 // first, marks the chosen one, says the tolerance was met and how long it all took; it refuses
 // --order/--size alongside (it chooses them) and a malformed value.
 TEST(CliAccuracy, TolerancePicksTheCheapestMeshThatMeetsIt) {
-  const test::CliResult r = runCli("modes box:0.3,0.02,0.02 --material steel --max-freq 3000 --tolerance 0.5% -o " + temp("t.modes"));
+  const test::CliResult r =
+      runCli("modes box:0.3,0.02,0.02 --material steel --max-freq 3000 --tolerance 0.5% -o " + temp("t.modes"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("<- chosen"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("tolerance met after"), std::string::npos) << r.err;
-  EXPECT_EQ(runCli("modes box:0.3,0.02,0.02 --material steel --tolerance 0.5% --order 2 -o " + temp("u.modes")).exit_code, 1);
+  EXPECT_EQ(
+      runCli("modes box:0.3,0.02,0.02 --material steel --tolerance 0.5% --order 2 -o " + temp("u.modes")).exit_code, 1);
   EXPECT_EQ(runCli("modes box:0.3,0.02,0.02 --material steel --tolerance fast -o " + temp("u.modes")).exit_code, 1);
   EXPECT_EQ(runCli("modes box:0.3,0.02,0.02 --material steel --tolerance 150% -o " + temp("u.modes")).exit_code, 1);
 }
@@ -75,7 +79,8 @@ TEST(CliAccuracy, BenchAccuracyWritesItsTables) {
 // saves the eigen-solve (the cached run is faster than the everything run).
 TEST(CliAccuracy, BenchLeftOutCostsNothingAudible) {
   const std::string dir = ::testing::TempDir();
-  const test::CliResult r = runCli("bench leftout '" + std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/bar-drop.json' -o '" + dir + "'");
+  const test::CliResult r =
+      runCli("bench leftout '" + std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/bar-drop.json' -o '" + dir + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::ifstream csv(dir + "/leftout.csv");
   std::string line;
@@ -128,13 +133,15 @@ TEST(CliAccuracy, DefaultOrderIsTet10ForAThinWalledCup) {
 // started; the finest result is written and the summary says the tolerance was not met and why.
 // A memory budget below the first step's forecast is an error, and nothing is written.
 TEST(CliAccuracy, ToleranceRefusesAmbiguousValuesAndStopsAtTheBudget) {
-  const test::CliResult ambiguous = runCli("modes " + kThinCup + " --material porcelain --tolerance 0.5 -o " + temp("a.modes"));
+  const test::CliResult ambiguous =
+      runCli("modes " + kThinCup + " --material porcelain --tolerance 0.5 -o " + temp("a.modes"));
   EXPECT_EQ(ambiguous.exit_code, 1);
   EXPECT_NE(ambiguous.err.find("--tolerance = 0.5 is ambiguous"), std::string::npos) << ambiguous.err;
   EXPECT_FALSE(std::ifstream(::testing::TempDir() + "/a.modes").good());
 
   const test::CliResult stopped =
-      runCli("modes box:0.1,0.015,0.01 --material porcelain --max-modes 2 --tolerance 0.0001% --max-seconds 0.01 -o " + temp("b.modes"));
+      runCli("modes box:0.1,0.015,0.01 --material porcelain --max-modes 2 --tolerance 0.0001% --max-seconds 0.01 -o " +
+             temp("b.modes"));
   ASSERT_EQ(stopped.exit_code, 0) << stopped.err;
   EXPECT_NE(stopped.err.find("step 1: Tet10"), std::string::npos) << stopped.err;
   EXPECT_NE(stopped.err.find("stopped before step 2"), std::string::npos) << stopped.err;

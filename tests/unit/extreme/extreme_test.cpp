@@ -93,8 +93,9 @@ TEST(Scale, TinyAndLargeObjectsScaleAsOneOverSize) {
   const Material steel = material(2e11, 0.29, 7850);
   double reference = 0;
   for (double L : {0.001, 0.05, 5.0}) {
-    Result<PrecomputeResult> r = run("box:" + std::to_string(L) + "," + std::to_string(L / 4) + "," + std::to_string(L / 4),
-                                     steel, 1, 1e12, 4, L / 8);
+    Result<PrecomputeResult> r =
+        run("box:" + std::to_string(L) + "," + std::to_string(L / 4) + "," + std::to_string(L / 4), steel, 1, 1e12, 4,
+            L / 8);
     ASSERT_TRUE(r.ok()) << r.error().message;
     ASSERT_EQ(r->bank.modeCount(), 4u);
     EXPECT_TRUE(allFinite(r->bank));

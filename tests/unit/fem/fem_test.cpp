@@ -22,7 +22,8 @@ void expectRuleExact(const std::vector<fem::QuadPoint>& rule, int degree) {
     for (int b = 0; a + b <= degree; ++b) {
       for (int c = 0; a + b + c <= degree; ++c) {
         double sum = 0.0;
-        for (const auto& q : rule) sum += q.weight * std::pow(q.bary[1], a) * std::pow(q.bary[2], b) * std::pow(q.bary[3], c);
+        for (const auto& q : rule)
+          sum += q.weight * std::pow(q.bary[1], a) * std::pow(q.bary[2], b) * std::pow(q.bary[3], c);
         const double exact = factorial(a) * factorial(b) * factorial(c) / factorial(a + b + c + 3);
         EXPECT_NEAR(sum, exact, 1e-15) << "monomial " << a << " " << b << " " << c;
       }
@@ -89,7 +90,9 @@ TEST_P(FemOrder, MassIsSymmetricAndSumsToRhoV) {
   const Eigen::SparseMatrix<double> Mt = M.transpose();
   EXPECT_LT((M - Mt).norm(), 1e-15 * M.norm());
   const MassProperties props = computeMassProperties(mesh, kSteel.density_kg_m3);
-  EXPECT_NEAR(props.volume_m3, 0.05 * 0.02 * 0.03 * (1.0 * 1.1 * 0.9 - 0.2 * (0.0 * 0.9 + 0.15 * 0.05) + 0.1 * (0.0 - 1.1 * 0.05)), 1e-18);
+  EXPECT_NEAR(props.volume_m3,
+              0.05 * 0.02 * 0.03 * (1.0 * 1.1 * 0.9 - 0.2 * (0.0 * 0.9 + 0.15 * 0.05) + 0.1 * (0.0 - 1.1 * 0.05)),
+              1e-18);
   for (int axis = 0; axis < 3; ++axis) {
     Eigen::VectorXd u = Eigen::VectorXd::Zero(M.rows());
     for (Eigen::Index i = 0; i < mesh.nodes.rows(); ++i) u[3 * i + axis] = 1.0;
@@ -117,7 +120,8 @@ TEST_P(FemOrder, ConstantStrainPatchTest) {
   const double lambda = kSteel.youngs_pa * nu / ((1 + nu) * (1 - 2 * nu));
   const double mu = kSteel.youngs_pa / (2 * (1 + nu));
   const double volume = computeMassProperties(mesh, 1.0).volume_m3;
-  const double energy = 0.5 * volume * (lambda * eps.trace() * eps.trace() + 2 * mu * (eps.array() * eps.array()).sum());
+  const double energy =
+      0.5 * volume * (lambda * eps.trace() * eps.trace() + 2 * mu * (eps.array() * eps.array()).sum());
   EXPECT_NEAR(0.5 * u.dot(K * u), energy, 1e-11 * energy);
 }
 

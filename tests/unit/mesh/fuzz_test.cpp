@@ -60,8 +60,9 @@ std::string readAny(const std::string& path, const std::string& ext) {
 
 TEST(MeshFuzz, TruncatedAndMutatedFilesNeverCrash) {
   std::mt19937 rng(12345);
-  const char* names[] = {"cube.obj", "cube_ascii.stl", "cube_binary.stl", "cube_ascii.ply", "cube_binary_le.ply",
-                         "cube_binary_be.ply", "cube_tet4_v22.msh", "cube_tet10_v41.msh", "cube_tet10.ele"};
+  const char* names[] = {"cube.obj",          "cube_ascii.stl",     "cube_binary.stl",
+                         "cube_ascii.ply",    "cube_binary_le.ply", "cube_binary_be.ply",
+                         "cube_tet4_v22.msh", "cube_tet10_v41.msh", "cube_tet10.ele"};
   const std::string dir = ::testing::TempDir();
   for (const char* name : names) {
     const std::string original = slurp(test::meshData(name));

@@ -102,13 +102,15 @@ TEST(LoadTetMesh, TetgenStemAndRepairWarnings) {
   Result<LoadedMesh> inv = loadTetMesh(meshData("bad/inverted.msh"), MeshOptions{});
   ASSERT_TRUE(inv.ok()) << inv.error().message;
   EXPECT_TRUE(hasWarning(inv->warnings, "inverted"));
-  EXPECT_TRUE(failsWith(loadTetMesh(meshData("bad/degenerate.msh"), MeshOptions{}), {"degenerate.msh", "tet 0 is degenerate"}));
+  EXPECT_TRUE(
+      failsWith(loadTetMesh(meshData("bad/degenerate.msh"), MeshOptions{}), {"degenerate.msh", "tet 0 is degenerate"}));
 }
 
 TEST(LoadTetMesh, MissingDirectoryUnknownExtension) {
   EXPECT_TRUE(failsWith(loadTetMesh(meshData("nope.obj"), MeshOptions{}), {"nope.obj", "not found"}));
   EXPECT_TRUE(failsWith(loadTetMesh(meshData("bad"), MeshOptions{}), {"/bad", "directory"}));
-  EXPECT_TRUE(failsWith(loadTetMesh(meshData("../../../README.md"), MeshOptions{}), {"README.md", "unknown mesh file extension", ".md"}));
+  EXPECT_TRUE(failsWith(loadTetMesh(meshData("../../../README.md"), MeshOptions{}),
+                        {"README.md", "unknown mesh file extension", ".md"}));
   MeshOptions o;
   o.order = 3;
   EXPECT_TRUE(failsWith(loadTetMesh("box:1,1,1", o), {"order 3"}));

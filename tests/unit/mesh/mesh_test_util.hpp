@@ -12,7 +12,9 @@
 
 namespace strike::test {
 
-inline std::string meshData(const std::string& name) { return std::string(STRIKE_SOURCE_DIR) + "/tests/data/mesh/" + name; }
+inline std::string meshData(const std::string& name) {
+  return std::string(STRIKE_SOURCE_DIR) + "/tests/data/mesh/" + name;
+}
 
 inline double tetVolume(const TetMesh& mesh, Eigen::Index t) {
   const Eigen::Vector3d p0 = mesh.nodes.row(mesh.tets(t, 0)).transpose();

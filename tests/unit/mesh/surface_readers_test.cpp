@@ -30,7 +30,9 @@ TEST(SurfaceReaders, StlAsciiCubeIsWelded) {
 
 TEST(SurfaceReaders, StlBinaryWithSolidHeaderIsDetectedBySize) { expectUnitCube(readStl(meshData("cube_binary.stl"))); }
 
-TEST(SurfaceReaders, PlyAsciiSkipsUnknownPropertiesListsAndElements) { expectUnitCube(readPly(meshData("cube_ascii.ply"))); }
+TEST(SurfaceReaders, PlyAsciiSkipsUnknownPropertiesListsAndElements) {
+  expectUnitCube(readPly(meshData("cube_ascii.ply")));
+}
 TEST(SurfaceReaders, PlyBinaryLittleEndian) { expectUnitCube(readPly(meshData("cube_binary_le.ply"))); }
 TEST(SurfaceReaders, PlyBinaryBigEndian) { expectUnitCube(readPly(meshData("cube_binary_be.ply"))); }
 
@@ -42,7 +44,8 @@ TEST(SurfaceReaders, DispatchOnExtension) {
 }
 
 TEST(SurfaceReaders, ObjBadIndexNamesLineIndexAndCount) {
-  EXPECT_TRUE(failsWith(readObj(meshData("bad/bad_index.obj")), {"bad_index.obj:23:", "references vertex 9", "8 vertices"}));
+  EXPECT_TRUE(
+      failsWith(readObj(meshData("bad/bad_index.obj")), {"bad_index.obj:23:", "references vertex 9", "8 vertices"}));
 }
 
 TEST(SurfaceReaders, ObjNanCoordinate) {
@@ -52,7 +55,8 @@ TEST(SurfaceReaders, ObjNanCoordinate) {
 TEST(SurfaceReaders, OpenAndFlippedSurfacesAreRejectedByCheckClosedSurface) {
   Result<SurfaceMesh> open = readObj(meshData("bad/open.obj"));
   ASSERT_TRUE(open.ok());
-  EXPECT_TRUE(failsWith(checkClosedSurface(*open, "open.obj"), {"open.obj", "not closed", "edge (", "used by 1 triangle"}));
+  EXPECT_TRUE(
+      failsWith(checkClosedSurface(*open, "open.obj"), {"open.obj", "not closed", "edge (", "used by 1 triangle"}));
   Result<SurfaceMesh> flipped = readObj(meshData("bad/flipped.obj"));
   ASSERT_TRUE(flipped.ok());
   EXPECT_TRUE(failsWith(checkClosedSurface(*flipped, "flipped.obj"), {"flipped.obj", "orientation", "same direction"}));
@@ -80,7 +84,8 @@ TEST(SurfaceReaders, PlyHugeCountIsRefusedBeforeAllocating) {
 }
 
 TEST(SurfaceReaders, PlyBadIndexNamesLineFaceAndCount) {
-  EXPECT_TRUE(failsWith(readPly(meshData("bad/bad_index.ply")), {"bad_index.ply:31:", "face 5", "vertex 70", "8 vertices"}));
+  EXPECT_TRUE(
+      failsWith(readPly(meshData("bad/bad_index.ply")), {"bad_index.ply:31:", "face 5", "vertex 70", "8 vertices"}));
 }
 
 TEST(SurfaceReaders, MissingFileAndDirectory) {

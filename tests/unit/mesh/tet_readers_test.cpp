@@ -57,7 +57,8 @@ TEST(GmshReader, InfCoordinate) {
   EXPECT_TRUE(failsWith(readGmsh(meshData("bad/nan.msh"), nullptr), {"nan.msh:11:", "inf", "finite"}));
 }
 TEST(GmshReader, HugeNodeCountIsRefusedBeforeAllocating) {
-  EXPECT_TRUE(failsWith(readGmsh(meshData("bad/huge_count.msh"), nullptr), {"huge_count.msh:9:", "1000000000", "bytes left"}));
+  EXPECT_TRUE(
+      failsWith(readGmsh(meshData("bad/huge_count.msh"), nullptr), {"huge_count.msh:9:", "1000000000", "bytes left"}));
 }
 TEST(GmshReader, Truncated) {
   EXPECT_TRUE(failsWith(readGmsh(meshData("bad/truncated.msh"), nullptr), {"truncated.msh:", "truncated"}));

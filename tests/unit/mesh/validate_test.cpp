@@ -94,7 +94,8 @@ TEST(CheckClosedSurface, SingleTriangleIsOpen) {
   s.V << 0, 0, 0, 1, 0, 0, 0, 1, 0;
   s.F.resize(1, 3);
   s.F << 0, 1, 2;
-  EXPECT_TRUE(failsWith(checkClosedSurface(s, "tri"), {"tri", "not closed", "edge (0, 1) from (0, 0, 0) to (1, 0, 0)"}));
+  EXPECT_TRUE(
+      failsWith(checkClosedSurface(s, "tri"), {"tri", "not closed", "edge (0, 1) from (0, 0, 0) to (1, 0, 0)"}));
 }
 
 TEST(CheckClosedSurface, DegenerateTriangle) {

@@ -68,8 +68,8 @@ ModalResult solve(const ModalSettings& settings) {
 /// Empty when a and b are the same bits; else a one-line summary (no dump of the arrays).
 std::string bitDifference(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, const char* what) {
   if (a.rows() != b.rows() || a.cols() != b.cols()) {
-    return std::string(what) + ": sizes differ (" + std::to_string(a.rows()) + "x" + std::to_string(a.cols()) +
-           " vs " + std::to_string(b.rows()) + "x" + std::to_string(b.cols()) + ")";
+    return std::string(what) + ": sizes differ (" + std::to_string(a.rows()) + "x" + std::to_string(a.cols()) + " vs " +
+           std::to_string(b.rows()) + "x" + std::to_string(b.cols()) + ")";
   }
   Eigen::Index differing = 0, first = -1;
   double worst = 0.0;

@@ -240,7 +240,9 @@ TEST(Settings, HybridMatchesArpackOnly) {
   ASSERT_EQ(reference->eigenvalues.size(), 60);
   ASSERT_EQ(hybrid.modes.eigenvalues.size(), 60);
   EXPECT_EQ(reference->rigid_modes_dropped, 6);
-  EXPECT_LT(((hybrid.modes.eigenvalues - reference->eigenvalues).array() / reference->eigenvalues.array()).abs().maxCoeff(), 1e-9);
+  EXPECT_LT(
+      ((hybrid.modes.eigenvalues - reference->eigenvalues).array() / reference->eigenvalues.array()).abs().maxCoeff(),
+      1e-9);
   EXPECT_LT(maxOrthonormalityError(hybrid), 1e-8);
 }
 
@@ -261,7 +263,8 @@ TEST(Settings, BlockLanczosMatchesArpackOnlyOnAMediumSolidAndIsDeterministic) {
   auto reference = solveModes(s.K, s.M, reference_settings);
   ASSERT_TRUE(reference.ok()) << reference.error().message;
   ASSERT_EQ(reference->eigenvalues.size(), 100);
-  EXPECT_LT(((s.modes.eigenvalues - reference->eigenvalues).array() / reference->eigenvalues.array()).abs().maxCoeff(), 1e-8);
+  EXPECT_LT(((s.modes.eigenvalues - reference->eigenvalues).array() / reference->eigenvalues.array()).abs().maxCoeff(),
+            1e-8);
 
   ModalSettings other = settings;
   other.block_size = 32;
@@ -270,7 +273,8 @@ TEST(Settings, BlockLanczosMatchesArpackOnlyOnAMediumSolidAndIsDeterministic) {
   ASSERT_TRUE(wide.ok()) << wide.error().message;
   ASSERT_EQ(wide->eigenvalues.size(), 100);
   EXPECT_EQ(wide->block_size, 32);
-  EXPECT_LT(((wide->eigenvalues - reference->eigenvalues).array() / reference->eigenvalues.array()).abs().maxCoeff(), 1e-8);
+  EXPECT_LT(((wide->eigenvalues - reference->eigenvalues).array() / reference->eigenvalues.array()).abs().maxCoeff(),
+            1e-8);
 
   // Fixed start blocks: the same request gives the same numbers (under hostile timing too:
   // determinism_test.cpp).

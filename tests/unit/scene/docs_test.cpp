@@ -56,13 +56,13 @@ TEST(Docs, TheKeyTableIsTheOneTheParserChecks) {
   // A key in the table is accepted; one that is not is refused with the table in the message.
   for (const SceneKeyTable& table : sceneKeyTables()) {
     if (std::string(table.where) != "objects[]") continue;
-    for (const char* key : table.keys)
-      EXPECT_NE(std::string(key), "colour");
+    for (const char* key : table.keys) EXPECT_NE(std::string(key), "colour");
   }
   Result<Scene> bad = parseScene(R"({"objects": [{"mesh": "box:1,1,1", "material": "steel", "colour": 1}]})", "s.json");
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find("units"), std::string::npos) << bad.error().message;
-  Result<Scene> ok = parseScene(R"({"objects": [{"mesh": "box:1,1,1", "material": "steel", "shape": "convex"}]})", "s.json");
+  Result<Scene> ok =
+      parseScene(R"({"objects": [{"mesh": "box:1,1,1", "material": "steel", "shape": "convex"}]})", "s.json");
   EXPECT_TRUE(ok) << (ok ? "" : ok.error().message);
 }
 

@@ -16,10 +16,12 @@ SimBodyDesc box(const std::string& name, double side, std::array<double, 3> posi
   b.mass_kg = mass_kg;
   b.position_m = position;
   const double h = side / 2;
-  for (int i = 0; i < 8; ++i) b.surface_positions.insert(b.surface_positions.end(), {i & 1 ? h : -h, i & 2 ? h : -h, i & 4 ? h : -h});
+  for (int i = 0; i < 8; ++i)
+    b.surface_positions.insert(b.surface_positions.end(), {i & 1 ? h : -h, i & 2 ? h : -h, i & 4 ? h : -h});
   // Faces as quads (outward normal by the right-hand rule), two triangles each.
   const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : quads) b.surface_triangles.insert(b.surface_triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+  for (const auto& q : quads)
+    b.surface_triangles.insert(b.surface_triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
   return b;
 }
 
@@ -49,7 +51,8 @@ TEST(SceneChecks, OverlapsAndTheGroundAreNamedWithTheirDepth) {
   const std::vector<std::string> w = checkStartingPlacement(sceneOf(bodies), bodies);
   ASSERT_EQ(w.size(), 2u) << (w.empty() ? "" : w[0]);
   EXPECT_NE(w[0].find("\"sunk\": starts 10 mm inside the ground"), std::string::npos) << w[0];
-  EXPECT_NE(w[1].find("\"a\" and \"b\" start inside each other (a surface point 30 mm deep)"), std::string::npos) << w[1];
+  EXPECT_NE(w[1].find("\"a\" and \"b\" start inside each other (a surface point 30 mm deep)"), std::string::npos)
+      << w[1];
 }
 
 TEST(SceneChecks, TouchingIsNotOverlapping) {
@@ -75,7 +78,8 @@ TEST(SceneChecks, NeverStruckSaysHowLongTheFallTakes) {
   const std::string w = neverStruckWarning(scene, high, 3.0);
   // Lowest point 800 m up: t = sqrt(2 h / g) = sqrt(1600 / 9.81) = 12.77 s.
   EXPECT_NE(w.find("its lowest point 800 m above the ground; falling from there takes 12.8 s, the render lasts 3 s"),
-            std::string::npos) << w;
+            std::string::npos)
+      << w;
 }
 
 }  // namespace

@@ -57,18 +57,22 @@ TEST(SceneFile, ErrorsNameTheKeyPathAndValue) {
   const std::string obj = R"("mesh": "box:0.1,0.1,0.1", "material": "steel")";
   const BadCase cases[] = {
       {R"({"objects": [{)" + obj + R"(, "velocty": [0,0,1]}]})", "objects[0].velocty: unknown key"},
-      {R"({"objects": [{)" + obj + R"(, "velocity": [0,"fast",1]}]})", "objects[0].velocity[1]: expected a number, got \"fast\""},
+      {R"({"objects": [{)" + obj + R"(, "velocity": [0,"fast",1]}]})",
+       "objects[0].velocity[1]: expected a number, got \"fast\""},
       {R"({"objects": [{)" + obj + R"(, "velocity": [0,1]}]})", "objects[0].velocity: expected an array of 3 numbers"},
       {R"({"objects": [{)" + obj + R"(, "velocity": [0,1e999,0]}]})", "number overflow parsing '1e999'"},
-      {R"({"objects": [{)" + obj + R"(, "orientation": [2,0,0,0]}]})", "objects[0].orientation: expected a unit quaternion"},
-      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "adamantium"}]})", "objects[0].material: unknown material 'adamantium'"},
+      {R"({"objects": [{)" + obj + R"(, "orientation": [2,0,0,0]}]})",
+       "objects[0].orientation: expected a unit quaternion"},
+      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "adamantium"}]})",
+       "objects[0].material: unknown material 'adamantium'"},
       {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": {"youngs_pa": 1e9, "poisson": 0.6, "density_kg_m3": 1000}}]})",
        "objects[0].material: poisson = 0.6"},
       {R"({"objects": [{"mesh": "missing.obj", "material": "steel"}]})", "objects[0].mesh: file not found"},
       {R"({"objects": [{"material": "steel"}]})", "objects[0]: needs \"mesh\""},
       {R"({"objects": [{"mesh": "box:1,1,1"}]})", "objects[0]: needs \"material\""},
       {R"({"objects": [{)" + obj + R"(, "order": 3}]})", "objects[0].order: expected 1 or 2, got 3"},
-      {R"({"objects": [{)" + obj + R"(, "name": "a"}, {)" + obj + R"(, "name": "a"}]})", "objects[1].name: duplicate name"},
+      {R"({"objects": [{)" + obj + R"(, "name": "a"}, {)" + obj + R"(, "name": "a"}]})",
+       "objects[1].name: duplicate name"},
       {R"({"objects": []})", "objects: the list is empty"},
       {R"({"sample_rate": 100, "objects": [{)" + obj + R"(}]})", "sample_rate: must be 8000 to 384000 Hz, got 100"},
       {R"({"duration": -1, "objects": [{)" + obj + R"(}]})", "duration: must be in (0, 3600] s, got -1"},
@@ -87,7 +91,8 @@ TEST(SceneFile, GroundCanBeRemovedOrRaised) {
   Result<Scene> none = parseScene(R"({"ground": null, "objects": )" + obj + "}", "s.json");
   ASSERT_TRUE(none) << none.error().message;
   EXPECT_FALSE(none->has_ground);
-  Result<Scene> raised = parseScene(R"({"ground": {"height": 0.75, "material": "wood"}, "objects": )" + obj + "}", "s.json");
+  Result<Scene> raised =
+      parseScene(R"({"ground": {"height": 0.75, "material": "wood"}, "objects": )" + obj + "}", "s.json");
   ASSERT_TRUE(raised) << raised.error().message;
   EXPECT_EQ(raised->ground_height_m, 0.75);
   EXPECT_EQ(raised->ground_material.name, "wood");

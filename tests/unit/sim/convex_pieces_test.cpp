@@ -21,12 +21,12 @@ struct Surface {
 Surface tray(double a, double h, double t) {
   Surface s;
   const double o = a / 2, b = a / 2 - t;
-  const double pts[16][3] = {{-o, -o, 0}, {o, -o, 0}, {o, o, 0}, {-o, o, 0}, {-o, -o, h}, {o, -o, h},
-                             {o, o, h},   {-o, o, h}, {-b, -b, h}, {b, -b, h}, {b, b, h},  {-b, b, h},
-                             {-b, -b, t}, {b, -b, t}, {b, b, t},  {-b, b, t}};
+  const double pts[16][3] = {{-o, -o, 0}, {o, -o, 0}, {o, o, 0},   {-o, o, 0}, {-o, -o, h}, {o, -o, h},
+                             {o, o, h},   {-o, o, h}, {-b, -b, h}, {b, -b, h}, {b, b, h},   {-b, b, h},
+                             {-b, -b, t}, {b, -b, t}, {b, b, t},   {-b, b, t}};
   for (const auto& p : pts) s.xyz.insert(s.xyz.end(), {p[0], p[1], p[2]});
-  const uint32_t quads[14][4] = {{0, 3, 2, 1},    {0, 1, 5, 4},    {1, 2, 6, 5},     {2, 3, 7, 6},    {3, 0, 4, 7},
-                                 {4, 5, 9, 8},    {5, 6, 10, 9},   {6, 7, 11, 10},   {7, 4, 8, 11},   {12, 8, 9, 13},
+  const uint32_t quads[14][4] = {{0, 3, 2, 1},    {0, 1, 5, 4},     {1, 2, 6, 5},    {2, 3, 7, 6},    {3, 0, 4, 7},
+                                 {4, 5, 9, 8},    {5, 6, 10, 9},    {6, 7, 11, 10},  {7, 4, 8, 11},   {12, 8, 9, 13},
                                  {13, 9, 10, 14}, {14, 10, 11, 15}, {15, 11, 8, 12}, {12, 13, 14, 15}};
   for (const auto& q : quads) s.triangles.insert(s.triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
   return s;
@@ -80,7 +80,8 @@ TEST(ConvexPieces, SameInputSamePieces) {
   ConvexPiecesSettings settings;
   settings.max_concavity_m = 0.002;
   settings.max_edge_m = 0.025;
-  EXPECT_EQ(convexPieces(s.xyz, s.triangles, settings).hull_points, convexPieces(s.xyz, s.triangles, settings).hull_points);
+  EXPECT_EQ(convexPieces(s.xyz, s.triangles, settings).hull_points,
+            convexPieces(s.xyz, s.triangles, settings).hull_points);
 }
 
 // A convex body is one piece: nothing to cut.

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "strike/sim.hpp"
 #include "common/same_bytes.hpp"
+#include "strike/sim.hpp"
 
 namespace strike {
 namespace {
@@ -71,8 +71,7 @@ void orientOutward(SimBodyDesc& body, const Vec3& inside) {
 
 /// A solid box of size l with its centre at `offset` and its edges along the columns of `axes`,
 /// all in the mesh frame; exact mass properties for uniform density.
-SimBodyDesc makeBox(const std::string& name, Vec3 l, double mass_kg, Vec3 offset = {0, 0, 0},
-                    Mat3 axes = identity()) {
+SimBodyDesc makeBox(const std::string& name, Vec3 l, double mass_kg, Vec3 offset = {0, 0, 0}, Mat3 axes = identity()) {
   SimBodyDesc body;
   body.name = name;
   for (int v = 0; v < 8; ++v) {
@@ -105,12 +104,12 @@ SimBodyDesc makeBall(const std::string& name, double r, double mass_kg) {
   SimBodyDesc body;
   body.name = name;
   const double phi = (1 + std::sqrt(5.0)) / 2, s = r / std::sqrt(1 + phi * phi);
-  const double v[12][3] = {{-1, phi, 0}, {1, phi, 0}, {-1, -phi, 0}, {1, -phi, 0}, {0, -1, phi}, {0, 1, phi},
-                           {0, -1, -phi}, {0, 1, -phi}, {phi, 0, -1}, {phi, 0, 1}, {-phi, 0, -1}, {-phi, 0, 1}};
+  const double v[12][3] = {{-1, phi, 0},  {1, phi, 0},  {-1, -phi, 0}, {1, -phi, 0}, {0, -1, phi},  {0, 1, phi},
+                           {0, -1, -phi}, {0, 1, -phi}, {phi, 0, -1},  {phi, 0, 1},  {-phi, 0, -1}, {-phi, 0, 1}};
   for (const auto& p : v) body.surface_positions.insert(body.surface_positions.end(), {s * p[0], s * p[1], s * p[2]});
-  body.surface_triangles = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7,
-                            6, 7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10,
-                            8, 6, 7, 9, 8, 1};
+  body.surface_triangles = {0, 11, 5,  0, 5,  1, 0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
+                            4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3,  4,  2, 3, 2, 6, 3,
+                            6, 8,  3,  8, 9,  4, 9, 5, 2, 4, 11, 6,  2, 10, 8,  6, 7, 9, 8, 1};
   orientOutward(body, {0, 0, 0});
   body.mass_kg = mass_kg;
   const double i = 0.4 * mass_kg * r * r;
@@ -138,7 +137,8 @@ SimBodyDesc makeSphere(const std::string& name, double r, double mass_kg, int le
     };
     std::vector<uint32_t> finer;
     for (size_t t = 0; t < body.surface_triangles.size(); t += 3) {
-      const uint32_t a = body.surface_triangles[t], b = body.surface_triangles[t + 1], c = body.surface_triangles[t + 2];
+      const uint32_t a = body.surface_triangles[t], b = body.surface_triangles[t + 1],
+                     c = body.surface_triangles[t + 2];
       const uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
       finer.insert(finer.end(), {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca});
     }
@@ -156,16 +156,16 @@ SimBodyDesc makeTray(const std::string& name, double a, double h, double t, doub
   SimBodyDesc body;
   body.name = name;
   const double o = a / 2, b = a / 2 - t;
-  const double pts[16][3] = {{-o, -o, 0}, {o, -o, 0}, {o, o, 0}, {-o, o, 0},  // outer bottom
-                             {-o, -o, h}, {o, -o, h}, {o, o, h}, {-o, o, h},  // outer rim
-                             {-b, -b, h}, {b, -b, h}, {b, b, h}, {-b, b, h},  // inner rim
-                             {-b, -b, t}, {b, -b, t}, {b, b, t}, {-b, b, t}}; // inner floor
+  const double pts[16][3] = {{-o, -o, 0}, {o, -o, 0}, {o, o, 0}, {-o, o, 0},   // outer bottom
+                             {-o, -o, h}, {o, -o, h}, {o, o, h}, {-o, o, h},   // outer rim
+                             {-b, -b, h}, {b, -b, h}, {b, b, h}, {-b, b, h},   // inner rim
+                             {-b, -b, t}, {b, -b, t}, {b, b, t}, {-b, b, t}};  // inner floor
   for (const auto& p : pts) body.surface_positions.insert(body.surface_positions.end(), {p[0], p[1], p[2]});
-  const uint32_t quads[14][4] = {{0, 3, 2, 1},                                              // bottom
-                                 {0, 1, 5, 4},     {1, 2, 6, 5},   {2, 3, 7, 6},   {3, 0, 4, 7},      // outer walls
-                                 {4, 5, 9, 8},     {5, 6, 10, 9},  {6, 7, 11, 10}, {7, 4, 8, 11},     // rim
-                                 {12, 8, 9, 13},   {13, 9, 10, 14}, {14, 10, 11, 15}, {15, 11, 8, 12},  // inner walls
-                                 {12, 13, 14, 15}};                                         // floor
+  const uint32_t quads[14][4] = {{0, 3, 2, 1},                                                         // bottom
+                                 {0, 1, 5, 4},    {1, 2, 6, 5},    {2, 3, 7, 6},     {3, 0, 4, 7},     // outer walls
+                                 {4, 5, 9, 8},    {5, 6, 10, 9},   {6, 7, 11, 10},   {7, 4, 8, 11},    // rim
+                                 {12, 8, 9, 13},  {13, 9, 10, 14}, {14, 10, 11, 15}, {15, 11, 8, 12},  // inner walls
+                                 {12, 13, 14, 15}};                                                    // floor
   for (const auto& q : quads) {
     body.surface_triangles.insert(body.surface_triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
   }
@@ -430,11 +430,13 @@ SimBodyDesc makeCoin(const std::string& name, double r, double h, double mass_kg
   body.name = name;
   for (int k = 0; k < n; ++k) {
     const double a = 2 * M_PI * k / n;
-    for (double z : {-h / 2, h / 2}) body.surface_positions.insert(body.surface_positions.end(), {r * std::cos(a), r * std::sin(a), z});
+    for (double z : {-h / 2, h / 2})
+      body.surface_positions.insert(body.surface_positions.end(), {r * std::cos(a), r * std::sin(a), z});
   }
   for (uint32_t k = 0; k < uint32_t(n); ++k) {
     const uint32_t next = (k + 1) % uint32_t(n);
-    body.surface_triangles.insert(body.surface_triangles.end(), {2 * k, 2 * next, 2 * next + 1, 2 * k, 2 * next + 1, 2 * k + 1});
+    body.surface_triangles.insert(body.surface_triangles.end(),
+                                  {2 * k, 2 * next, 2 * next + 1, 2 * k, 2 * next + 1, 2 * k + 1});
     if (k >= 2) {  // fans over the two faces
       body.surface_triangles.insert(body.surface_triangles.end(), {0, 2 * k, 2 * (k - 1)});
       body.surface_triangles.insert(body.surface_triangles.end(), {1, 2 * (k - 1) + 1, 2 * k + 1});
@@ -505,7 +507,7 @@ void expectBallInTray(bool tray_static, SimBodyDesc::Shape shape, SimBodyDesc::S
   SimBodyDesc ball = makeBall("ball", 0.02, 0.05);
   ball.position_m = {0.02, -0.01, 0.3};
   ball.restitution = 0.3;
-  const char* label = tray_static                                    ? "ball into static tray"
+  const char* label = tray_static                                     ? "ball into static tray"
                       : expected_shape == SimBodyDesc::Shape::Concave ? "ball into GImpact tray"
                                                                       : "ball into tray of convex pieces";
   const SimResult r = run({tray, ball}, settingsFor(1.5), label);
@@ -532,7 +534,9 @@ void expectBallInTray(bool tray_static, SimBodyDesc::Shape shape, SimBodyDesc::S
 
 using Shape = SimBodyDesc::Shape;
 TEST(SimConcave, BallLandsInsideDynamicTray) { expectBallInTray(false, Shape::Concave, Shape::Concave); }
-TEST(SimConcave, BallLandsInsideDynamicTrayOfConvexPieces) { expectBallInTray(false, Shape::Auto, Shape::ConvexPieces); }
+TEST(SimConcave, BallLandsInsideDynamicTrayOfConvexPieces) {
+  expectBallInTray(false, Shape::Auto, Shape::ConvexPieces);
+}
 TEST(SimConcave, BallLandsInsideStaticTray) { expectBallInTray(true, Shape::Auto, Shape::Concave); }
 
 TEST(SimShape, AutoPicksHullForConvexAndConcaveForTray) {
@@ -546,7 +550,7 @@ TEST(SimShape, AutoPicksHullForConvexAndConcaveForTray) {
   const SimResult r = run({box, tray, fixed_tray}, settingsFor(0.01), "shape choice");
   EXPECT_EQ(r.shape_used[0], SimBodyDesc::Shape::ConvexHull);
   EXPECT_EQ(r.shape_used[1], SimBodyDesc::Shape::ConvexPieces);  // a moving concave body
-  EXPECT_GE(r.collision_pieces[1], 5u);  // a floor and four walls at least
+  EXPECT_GE(r.collision_pieces[1], 5u);                          // a floor and four walls at least
   EXPECT_EQ(r.shape_used[2], SimBodyDesc::Shape::Concave);       // a static one: its exact mesh
   EXPECT_GT(r.collision_margin_m[0], 0.0);
   // A small hull (polyhedral contacts on its bare points): 0.1% of the thinnest extent.
@@ -578,8 +582,8 @@ TEST(SimDeterminism, TwoRunsGiveIdenticalEvents) {
   for (size_t k = 0; k < a.events.size(); ++k) {
     const ContactEvent& x = a.events[k];
     const ContactEvent& y = b.events[k];
-    ASSERT_TRUE(x.time_s == y.time_s && x.step_time_s == y.step_time_s && x.body_a == y.body_a && x.body_b == y.body_b &&
-                x.point_a_mesh == y.point_a_mesh && x.point_b_mesh == y.point_b_mesh &&
+    ASSERT_TRUE(x.time_s == y.time_s && x.step_time_s == y.step_time_s && x.body_a == y.body_a &&
+                x.body_b == y.body_b && x.point_a_mesh == y.point_a_mesh && x.point_b_mesh == y.point_b_mesh &&
                 x.impulse_on_a_mesh == y.impulse_on_a_mesh && x.impulse_on_b_mesh == y.impulse_on_b_mesh &&
                 x.point_world == y.point_world && x.normal_world == y.normal_world &&
                 x.normal_impulse_n_s == y.normal_impulse_n_s && x.friction_impulse_n_s == y.friction_impulse_n_s &&
@@ -692,7 +696,6 @@ TEST(Sim, ContactEventCapNamesTheFlag) {
   EXPECT_TRUE(simulate({box}, settings).ok());
 }
 
-
 /// Radius of the sphere the simulator puts in a geodesic mesh's place: the sphere of equal volume.
 double volumeRadius(const SimBodyDesc& body) {
   double six_v = 0.0;
@@ -746,7 +749,8 @@ TEST(SimImpactTime, DropFromRestMeetsTheGroundAtTheClosedFormTime) {
   }
   // The substep's own time misses by most of a step at some height: the test can tell.
   EXPECT_GT(worst_step, 0.5e-3);
-  std::printf("[ impact   ] worst error: stamped %.2f us, substep start %.1f us\n", 1e6 * worst_stamp, 1e6 * worst_step);
+  std::printf("[ impact   ] worst error: stamped %.2f us, substep start %.1f us\n", 1e6 * worst_stamp,
+              1e6 * worst_step);
 }
 
 // Two balls of equal mass meet head-on without gravity: they touch when the gap between their

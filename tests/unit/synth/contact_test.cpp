@@ -87,8 +87,8 @@ TEST(ModalProjection, ContactProjectorMatchesTheLocatorWhileRemembering) {
   const SurfaceLocator locator(mb);
   ContactProjector projector(mb, 2);
   const double j[3] = {0.1, -0.2, 0.3};
-  const std::array<double, 3> points[] = {{0.2, 0.3, 0.0}, {0.7, 0.8, 0.05}, {0.2, 0.3, 0.0}, {0.5, 0.1, -0.3},
-                                          {0.7, 0.8, 0.05}, {0.2, 0.3, 0.0}, {0.2, 0.3, 0.0}, {2.0, 0.5, 0.0}};
+  const std::array<double, 3> points[] = {{0.2, 0.3, 0.0},  {0.7, 0.8, 0.05}, {0.2, 0.3, 0.0}, {0.5, 0.1, -0.3},
+                                          {0.7, 0.8, 0.05}, {0.2, 0.3, 0.0},  {0.2, 0.3, 0.0}, {2.0, 0.5, 0.0}};
   for (int pass = 0; pass < 2; ++pass)
     for (const auto& p : points) {
       double from_projector[3], from_locator[3];

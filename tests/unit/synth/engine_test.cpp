@@ -135,7 +135,8 @@ std::vector<float> restingBox(const Scenario& sc, EngineStats* stats = nullptr) 
   std::vector<float> out(static_cast<size_t>(sc.duration_s * kRate));
   size_t rendered = 0;
   const double m = 1.0, g = 9.81;
-  const std::array<std::array<double, 3>, 4> corners = {{{-0.05, -0.05, 0}, {0.05, -0.05, 0}, {-0.05, 0.05, 0}, {0.05, 0.05, 0}}};
+  const std::array<std::array<double, 3>, 4> corners = {
+      {{-0.05, -0.05, 0}, {0.05, -0.05, 0}, {-0.05, 0.05, 0}, {0.05, 0.05, 0}}};
   int frame = 0;
   for (double t = sc.frame_s; t <= sc.duration_s + 1e-9; t += sc.frame_s, ++frame) {
     engine.beginStep(t, sc.frame_s);
@@ -403,7 +404,8 @@ TEST(Listener, EachBounceIsHeardWithTheDelayAndLevelOfItsDistance) {
     // 1/d: the rms of its first 20 ms relative to the first strike's, within 0.05 dB.
     const double level = rms(arrival + 1e-3, arrival + 21e-3);
     if (k == 0) first_level = level;
-    EXPECT_NEAR(20 * std::log10(level / first_level), 20 * std::log10(distances[0] / distances[k]), 0.05) << "strike " << k;
+    EXPECT_NEAR(20 * std::log10(level / first_level), 20 * std::log10(distances[0] / distances[k]), 0.05)
+        << "strike " << k;
   }
 }
 

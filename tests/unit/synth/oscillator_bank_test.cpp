@@ -23,7 +23,10 @@ struct KernelCase {
 };
 
 std::vector<KernelCase> allKernels() {
-  return {{SimdLevel::Auto, false}, {SimdLevel::Scalar, false}, {SimdLevel::Avx2, false}, {SimdLevel::Avx512, false},
+  return {{SimdLevel::Auto, false},
+          {SimdLevel::Scalar, false},
+          {SimdLevel::Avx2, false},
+          {SimdLevel::Avx512, false},
           {SimdLevel::Auto, true}};
 }
 
@@ -97,8 +100,13 @@ TEST(OscillatorBank, DegenerateDampingIsExactAndFinite) {
   const double rate = 48000.0, w0 = 2 * M_PI * 500.0, lambda = w0 * w0;
   // (c, label): critical, over-damped, just either side of critical, the switch between the two
   // representations (w_d = 0.1 c/2), and a lightly damped one.
-  const std::vector<double> cs = {2 * w0, 6 * w0, 2 * w0 * (1 + 1e-9), 2 * w0 * (1 - 1e-9), 2 * w0 / std::sqrt(1.01),
-                                  2 * w0 / std::sqrt(1.01) * (1 + 1e-12), 2 * w0 / std::sqrt(1.01) * (1 - 1e-12),
+  const std::vector<double> cs = {2 * w0,
+                                  6 * w0,
+                                  2 * w0 * (1 + 1e-9),
+                                  2 * w0 * (1 - 1e-9),
+                                  2 * w0 / std::sqrt(1.01),
+                                  2 * w0 / std::sqrt(1.01) * (1 + 1e-12),
+                                  2 * w0 / std::sqrt(1.01) * (1 - 1e-12),
                                   0.5 * w0};
   for (bool dp : {false, true}) {
     for (double c : cs) {
@@ -204,7 +212,8 @@ TEST(OscillatorBank, LinearityIsExactForPowerOfTwoScaling) {
     bank.addImpact(hit);
     outs[k] = test::renderAll(bank, 9600);
   }
-  for (size_t n = 0; n < outs[0].size(); ++n) ASSERT_EQ(2.0f * outs[0][n], outs[1][n]) << n << " diff " << (2.0 * outs[0][n] - outs[1][n]);
+  for (size_t n = 0; n < outs[0].size(); ++n)
+    ASSERT_EQ(2.0f * outs[0][n], outs[1][n]) << n << " diff " << (2.0 * outs[0][n] - outs[1][n]);
 }
 
 TEST(OscillatorBank, StrikeAtANodeDoesNotExciteTheMode) {
@@ -213,8 +222,8 @@ TEST(OscillatorBank, StrikeAtANodeDoesNotExciteTheMode) {
   mb.eigenvalues = {std::pow(2 * M_PI * 300.0, 2), std::pow(2 * M_PI * 700.0, 2)};
   mb.surface_positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
   mb.surface_triangles = {0, 1, 2};
-  mb.shapes = {0, 0, 1, 0, 0, 0.5f, 0, 0, 0.2f,   // mode 0
-               0, 0, 0, 0, 0, 1, 0, 0, -1};       // mode 1: node at vertex 0
+  mb.shapes = {0, 0, 1, 0, 0, 0.5f, 0, 0, 0.2f,  // mode 0
+               0, 0, 0, 0, 0, 1,    0, 0, -1};   // mode 1: node at vertex 0
   const double j[3] = {0, 0, 1};
   const std::vector<double> g = projectImpulseAtVertex(mb, 0, j);
   ASSERT_EQ(g.size(), 2u);
@@ -243,8 +252,12 @@ TEST(OscillatorBank, SampleAccurateInsertionIndependentOfCallSizes) {
   struct Hit {
     double t, tau;
   };
-  const std::vector<Hit> hits = {{0.0, 0.0}, {130.25 / rate, 0.0}, {255.5 / rate, 3.7 / rate},
-                                 {1000.0 / rate, 200.3 / rate}, {1023.9 / rate, 1e-4}, {2047.0 / rate, 0.0}};
+  const std::vector<Hit> hits = {{0.0, 0.0},
+                                 {130.25 / rate, 0.0},
+                                 {255.5 / rate, 3.7 / rate},
+                                 {1000.0 / rate, 200.3 / rate},
+                                 {1023.9 / rate, 1e-4},
+                                 {2047.0 / rate, 0.0}};
   for (bool dp : {false, true}) {
     auto run = [&](const std::vector<size_t>& chunks) {
       SynthSettings s;

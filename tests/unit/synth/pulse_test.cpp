@@ -36,7 +36,8 @@ struct GaussLegendre {
 
 // Output at time t of a mode (R = g = 1) driven by the unit-area half-sine on [t0, t0 + tau]:
 // integral of h_acc(t - s) f(s) ds, composite 12-point Gauss-Legendre on 64 panels.
-double pulseReference(double lambda, double c, double t0, double tau, double t, PulseShape shape = PulseShape::HalfSine) {
+double pulseReference(double lambda, double c, double t0, double tau, double t,
+                      PulseShape shape = PulseShape::HalfSine) {
   static const GaussLegendre gl(12);
   const double b = std::min(t, t0 + tau);
   if (b <= t0) return 0.0;
@@ -56,8 +57,8 @@ double pulseReference(double lambda, double c, double t0, double tau, double t, 
   return sum;
 }
 
-std::vector<float> renderPulse(double f0, double c, double t0, double tau, bool dp, size_t frames, double rate = 48000.0,
-                               PulseShape shape = PulseShape::HalfSine) {
+std::vector<float> renderPulse(double f0, double c, double t0, double tau, bool dp, size_t frames,
+                               double rate = 48000.0, PulseShape shape = PulseShape::HalfSine) {
   SynthSettings s;
   s.sample_rate_hz = rate;
   s.double_precision = dp;
@@ -76,7 +77,8 @@ TEST(ContactPulse, MatchesQuadratureOfTheConvolution) {
     double f0, c;
   };
   // Ringing (light and heavy damping), critically damped, over-damped.
-  const ModeCase modes[] = {{3000.0, 50.0}, {9000.0, 8000.0}, {500.0, 2 * 2 * M_PI * 500.0}, {500.0, 6 * 2 * M_PI * 500.0}};
+  const ModeCase modes[] = {
+      {3000.0, 50.0}, {9000.0, 8000.0}, {500.0, 2 * 2 * M_PI * 500.0}, {500.0, 6 * 2 * M_PI * 500.0}};
   for (const ModeCase& m : modes) {
     const double lambda = std::pow(2 * M_PI * m.f0, 2);
     for (double tau_samples : {0.3, 3.7, 50.2, 200.0}) {
@@ -99,7 +101,8 @@ TEST(ContactPulse, MatchesQuadratureOfTheConvolution) {
 
 TEST(ContactPulse, BoxPulseMatchesQuadratureOfTheConvolution) {
   const double rate = 48000.0, h = 1.0 / rate;
-  const double modes[][2] = {{3000.0, 50.0}, {9000.0, 8000.0}, {500.0, 2 * 2 * M_PI * 500.0}, {500.0, 6 * 2 * M_PI * 500.0}};
+  const double modes[][2] = {
+      {3000.0, 50.0}, {9000.0, 8000.0}, {500.0, 2 * 2 * M_PI * 500.0}, {500.0, 6 * 2 * M_PI * 500.0}};
   for (const auto& m : modes) {
     const double lambda = std::pow(2 * M_PI * m[0], 2);
     for (double tau_samples : {0.3, 3.7, 24.0, 200.0}) {

@@ -82,7 +82,7 @@ Status plateStudy(std::vector<FemRow>& rows) {
   reference_settings.error_estimate = false;
   Result<PrecomputeResult> reference = computeModeBank(reference_settings);
   if (!reference) return reference.error();
-  const std::pair<int, double> runs[] = {{1, 0.01}, {1, 0.02 / 3}, {1, 0.005}, {1, 0.01 / 3},
+  const std::pair<int, double> runs[] = {{1, 0.01}, {1, 0.02 / 3}, {1, 0.005},    {1, 0.01 / 3},
                                          {2, 0.02}, {2, 0.01},     {2, 0.02 / 3}, {2, 0.005}};
   for (const auto& [order, edge] : runs) {
     Result<PrecomputeResult> r = computeModeBank(settings(order, edge));
@@ -104,8 +104,8 @@ Result<std::vector<FemRow>> femStudy(bool plate) {
   const test::BarProperties bar{2.0e11, 0.29, 7850, 0.3, 0.02, 0.02};
   const std::vector<double> reference = test::timoshenkoFreeFreeHz(bar, 3);
   std::vector<FemRow> rows;
-  const std::pair<int, double> runs[] = {{1, 0.01},  {1, 0.02 / 3}, {1, 0.005}, {1, 0.0025},
-                                         {2, 0.02},  {2, 0.01},     {2, 0.02 / 3}, {2, 0.005}};
+  const std::pair<int, double> runs[] = {{1, 0.01}, {1, 0.02 / 3}, {1, 0.005},    {1, 0.0025},
+                                         {2, 0.02}, {2, 0.01},     {2, 0.02 / 3}, {2, 0.005}};
   for (const auto& [order, edge] : runs) {
     PrecomputeSettings s;
     s.mesh_spec = "box:0.3,0.02,0.02";
@@ -148,7 +148,8 @@ Result<std::vector<FemRow>> femStudy(bool plate) {
   sphere_material.poisson = 0.25;
   sphere_material.density_kg_m3 = 7850;
   const double R = 0.05;
-  const double cs = std::sqrt(sphere_material.youngs_pa / (2 * (1 + sphere_material.poisson)) / sphere_material.density_kg_m3);
+  const double cs =
+      std::sqrt(sphere_material.youngs_pa / (2 * (1 + sphere_material.poisson)) / sphere_material.density_kg_m3);
   const std::vector<double> etas = test::lambSphereEtas(sphere_material.poisson, 7.0);
   for (int order : {1, 2})
     for (double edge : {0.03, 0.02, 0.015, 0.01}) {
@@ -162,7 +163,8 @@ Result<std::vector<FemRow>> femStudy(bool plate) {
       s.error_estimate = true;
       Result<PrecomputeResult> r = computeModeBank(s);
       if (!r) return r.error();
-      FemRow row{"sphere", order, edge, r->report.dofs, r->bank.total_seconds, r->report.error_estimate_seconds, {}, {}};
+      FemRow row{"sphere", order, edge, r->report.dofs, r->bank.total_seconds, r->report.error_estimate_seconds,
+                 {},       {}};
       const size_t groups[][2] = {{0, 5}, {5, 10}, {10, 13}, {13, 20}, {20, 27}};
       for (const auto& g : groups) {
         double worst = 0, est = 0;
@@ -189,16 +191,19 @@ std::string femSvg(const std::vector<FemRow>& rows) {
   double tmin = 1e9, tmax = 0, emin = 1e9, emax = 0;
   for (const FemRow& r : rows) {
     const double e = std::max(*std::max_element(r.true_error.begin(), r.true_error.end()), 1e-7);
-    tmin = std::min(tmin, r.seconds), tmax = std::max(tmax, r.seconds), emin = std::min(emin, e), emax = std::max(emax, e);
+    tmin = std::min(tmin, r.seconds), tmax = std::max(tmax, r.seconds), emin = std::min(emin, e),
+    emax = std::max(emax, e);
   }
   const double lt0 = std::floor(std::log10(tmin)), lt1 = std::ceil(std::log10(tmax));
   const double le0 = std::floor(std::log10(emin)), le1 = std::ceil(std::log10(emax));
   auto x = [&](double t) { return L + (std::log10(t) - lt0) / std::max(1.0, lt1 - lt0) * (W - L - R); };
   auto y = [&](double e) { return H - B - (std::log10(e) - le0) / std::max(1.0, le1 - le0) * (H - T - B); };
   std::ostringstream s;
-  s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H << "' font-family='sans-serif' font-size='12'>\n"
+  s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H
+    << "' font-family='sans-serif' font-size='12'>\n"
     << "<rect width='100%' height='100%' fill='white'/>\n"
-    << "<text x='" << L << "' y='18'>worst mode frequency error vs precompute time (free-free bar, sphere, plate)</text>\n";
+    << "<text x='" << L
+    << "' y='18'>worst mode frequency error vs precompute time (free-free bar, sphere, plate)</text>\n";
   for (double d = lt0; d <= lt1; ++d)
     s << "<line x1='" << x(std::pow(10, d)) << "' y1='" << T << "' x2='" << x(std::pow(10, d)) << "' y2='" << H - B
       << "' stroke='#ddd'/><text x='" << x(std::pow(10, d)) - 12 << "' y='" << H - B + 16 << "'>1e" << d << "</text>\n";
@@ -209,18 +214,25 @@ std::string femSvg(const std::vector<FemRow>& rows) {
   const char* colours[3] = {"", "#c0392b", "#2471a3"};
   int line = 0;
   for (const char* object : {"bar", "sphere", "plate"})
-  for (int order : {1, 2}) {
-    ++line;
-    const std::string name = object;
-    if (std::none_of(rows.begin(), rows.end(), [&](const FemRow& r) { return r.object == name; })) continue;
-    const char* dashes = name == "bar" ? "" : name == "sphere" ? " stroke-dasharray='6,4'" : " stroke-dasharray='2,3'";
-    s << "<polyline fill='none' stroke='" << colours[order] << "' stroke-width='2'" << dashes << " points='";
-    for (const FemRow& r : rows)
-      if (r.order == order && r.object == object)
-        s << x(r.seconds) << "," << y(std::max(*std::max_element(r.true_error.begin(), r.true_error.end()), 1e-7)) << " ";
-    s << "'/>\n<text x='" << W - 150 << "' y='" << T + 18 * line << "' fill='" << colours[order] << "'>" << object
-      << " Tet" << (order == 2 ? 10 : 4) << (name == "bar" ? "" : name == "sphere" ? " (dashed)" : " (dotted)") << "</text>\n";
-  }
+    for (int order : {1, 2}) {
+      ++line;
+      const std::string name = object;
+      if (std::none_of(rows.begin(), rows.end(), [&](const FemRow& r) { return r.object == name; })) continue;
+      const char* dashes = name == "bar"      ? ""
+                           : name == "sphere" ? " stroke-dasharray='6,4'"
+                                              : " stroke-dasharray='2,3'";
+      s << "<polyline fill='none' stroke='" << colours[order] << "' stroke-width='2'" << dashes << " points='";
+      for (const FemRow& r : rows)
+        if (r.order == order && r.object == object)
+          s << x(r.seconds) << "," << y(std::max(*std::max_element(r.true_error.begin(), r.true_error.end()), 1e-7))
+            << " ";
+      s << "'/>\n<text x='" << W - 150 << "' y='" << T + 18 * line << "' fill='" << colours[order] << "'>" << object
+        << " Tet" << (order == 2 ? 10 : 4)
+        << (name == "bar"      ? ""
+            : name == "sphere" ? " (dashed)"
+                               : " (dotted)")
+        << "</text>\n";
+    }
   s << "</svg>\n";
   return s.str();
 }
@@ -307,13 +319,12 @@ int benchAccuracy(const std::string& dir, bool plate) {
   const char* sphere_groups[] = {"T2", "S2", "S1", "T3", "S3"};
   for (const FemRow& r : *fem)
     for (size_t m = 0; m < r.true_error.size(); ++m)
-      csv << r.object << "," << (r.order == 2 ? "Tet10" : "Tet4") << "," << r.edge_m << "," << r.dofs << "," << r.seconds
-          << "," << r.estimate_seconds << ","
+      csv << r.object << "," << (r.order == 2 ? "Tet10" : "Tet4") << "," << r.edge_m << "," << r.dofs << ","
+          << r.seconds << "," << r.estimate_seconds << ","
           << (r.object == "bar"      ? "bending" + std::to_string(m + 1)
               : r.object == "sphere" ? std::string(sphere_groups[m])
                                      : "mode" + std::to_string(m + 1))
-          << ","
-          << r.true_error[m] << "," << r.estimate[m] << "\n";
+          << "," << r.true_error[m] << "," << r.estimate[m] << "\n";
   csv.close();
   std::ofstream svg;
   if (Status ok = open("accuracy-fem.svg", svg); !ok) return reportError("bench", ok.error());
@@ -379,10 +390,10 @@ int benchAccuracy(const std::string& dir, bool plate) {
   euler << "# symplectic Euler unstable above " << lo << " Hz at " << rate << " Hz (fs/pi = " << rate / kPi
         << "); the exact update is stable at every frequency\n";
   euler.close();
-  std::fprintf(stderr, "strike bench: wrote %s/accuracy-{fem.csv,fem.svg,synth.csv,euler.csv}; Euler unstable above %.0f Hz\n",
+  std::fprintf(stderr,
+               "strike bench: wrote %s/accuracy-{fem.csv,fem.svg,synth.csv,euler.csv}; Euler unstable above %.0f Hz\n",
                dir.c_str(), lo);
   return 0;
 }
-
 
 }  // namespace strike::cli

@@ -15,7 +15,8 @@ namespace {
 
 CommandSpec benchSpec() {
   CommandSpec spec;
-  spec.usage = "strike bench accuracy -o DIR | strike bench leftout SCENE.json -o DIR | strike bench render SCENE.json -o DIR";
+  spec.usage =
+      "strike bench accuracy -o DIR | strike bench leftout SCENE.json -o DIR | strike bench render SCENE.json -o DIR";
   spec.summary =
       "Runs the accuracy study and writes DIR/accuracy-fem.csv (+ .svg plot), accuracy-synth.csv and\n"
       "accuracy-euler.csv: FEM frequency error against precompute time (Tet4, Tet10, 4 sizes, free-free\n"
@@ -25,8 +26,9 @@ CommandSpec benchSpec() {
       "cache), writes DIR/leftout.csv and prints the time ratios and the audio difference.\n"
       "`render` times a render phase by phase against a baseline run (see `strike bench render --help`).";
   spec.options = {{"-o", "DIR", "output folder; created if missing"},
-                  {"--plate", "", "accuracy: also the free thick plate (Tet4/Tet10 at 4 sizes against a fine Tet10\n"
-                                  "reference; ~45 s more, 1.9 GB peak)"}};
+                  {"--plate", "",
+                   "accuracy: also the free thick plate (Tet4/Tet10 at 4 sizes against a fine Tet10\n"
+                   "reference; ~45 s more, 1.9 GB peak)"}};
   spec.examples = "  strike bench accuracy -o study/\n  strike bench leftout examples/scenes/bar-drop.json -o study/\n";
   spec.min_positional = 1;
   spec.max_positional = 2;
@@ -48,7 +50,8 @@ int runBench(const std::vector<std::string>& raw_args) {
   const std::string dir = parsed->text("-o");
   const std::string& study = parsed->positional[0];
   if (study != "leftout" && (study != "accuracy" || parsed->positional.size() != 1))
-    return reportError("bench", badInput("unknown study '" + study + "' (known: accuracy, leftout SCENE.json, render SCENE.json)"));
+    return reportError(
+        "bench", badInput("unknown study '" + study + "' (known: accuracy, leftout SCENE.json, render SCENE.json)"));
   // The folder is made (or refused) before the study runs, not after it.
   if (Status ok = prepareOutputDir("-o", dir); !ok) return reportError("bench", ok.error());
   if (study == "leftout") {
@@ -57,7 +60,8 @@ int runBench(const std::vector<std::string>& raw_args) {
     return ok ? 0 : reportError("bench", ok.error());
   }
   if (study != "accuracy" || parsed->positional.size() != 1)
-    return reportError("bench", badInput("unknown study '" + study + "' (known: accuracy, leftout SCENE.json, render SCENE.json)"));
+    return reportError(
+        "bench", badInput("unknown study '" + study + "' (known: accuracy, leftout SCENE.json, render SCENE.json)"));
   return benchAccuracy(dir, parsed->has("--plate"));
 }
 

@@ -79,26 +79,31 @@ Status benchLeftOut(const std::string& scene_path, const std::string& dir) {
     diff2 += d * d;
   }
   const double rms_diff = n ? std::sqrt(diff2 / double(n)) : 0.0;
-  auto dbSpl = [](double full_scale) { return 20 * std::log10(std::max(full_scale * kFullScalePascal, 1e-30) / 20e-6); };
+  auto dbSpl = [](double full_scale) {
+    return 20 * std::log10(std::max(full_scale * kFullScalePascal, 1e-30) / 20e-6);
+  };
   const SpectralDifference spectral = spectralDifference(all, normal);
   csv << "# normal vs everything: max |difference| " << max_diff / std::max(peak, 1e-30) << " of peak ("
-      << dbSpl(max_diff) << " dB SPL), rms difference " << dbSpl(rms_diff) << " dB SPL; spectral peaks: "
-      << spectral.peaks << " compared, " << spectral.unmatched_peaks << " unmatched, frequency within "
-      << spectral.max_freq_rel << ", level within " << spectral.max_level_db << " dB\n";
+      << dbSpl(max_diff) << " dB SPL), rms difference " << dbSpl(rms_diff)
+      << " dB SPL; spectral peaks: " << spectral.peaks << " compared, " << spectral.unmatched_peaks
+      << " unmatched, frequency within " << spectral.max_freq_rel << ", level within " << spectral.max_level_db
+      << " dB\n";
 
   const RenderReport &e = runs[0].report, &o = runs[1].report, &c = runs[2].report;
   std::fprintf(stderr,
                "strike bench leftout: %s\n"
-               "  everything  %zu objects sounded, %llu modes, %.3g mode-samples; modes %.2f s, synthesize %.2f s, total %.2f s\n"
-               "  normal      %zu objects sounded, %llu modes, %.3g mode-samples; modes %.2f s, synthesize %.2f s, total %.2f s\n"
+               "  everything  %zu objects sounded, %llu modes, %.3g mode-samples; modes %.2f s, synthesize %.2f s, "
+               "total %.2f s\n"
+               "  normal      %zu objects sounded, %llu modes, %.3g mode-samples; modes %.2f s, synthesize %.2f s, "
+               "total %.2f s\n"
                "  cached      modes %.2f s, synthesize %.2f s, total %.2f s\n"
                "  saved       everything / normal: %.2fx total (modes %.2fx, synthesis %.2fx, work %.2fx); "
                "everything / cached: %.2fx total\n"
                "  difference  max %.2g of peak (%.1f dB SPL), rms %.1f dB SPL; %zu spectral peaks, %zu unmatched, "
                "frequency within %.2g, level within %.3f dB\n"
                "strike bench: wrote %s/leftout.csv\n",
-               scene_path.c_str(), e.objects_sounded, static_cast<unsigned long long>(e.modes_total), double(e.mode_samples),
-               e.precompute_seconds, e.synthesize_seconds, e.total_seconds, o.objects_sounded,
+               scene_path.c_str(), e.objects_sounded, static_cast<unsigned long long>(e.modes_total),
+               double(e.mode_samples), e.precompute_seconds, e.synthesize_seconds, e.total_seconds, o.objects_sounded,
                static_cast<unsigned long long>(o.modes_total), double(o.mode_samples), o.precompute_seconds,
                o.synthesize_seconds, o.total_seconds, c.precompute_seconds, c.synthesize_seconds, c.total_seconds,
                e.total_seconds / o.total_seconds, e.precompute_seconds / std::max(o.precompute_seconds, 1e-9),

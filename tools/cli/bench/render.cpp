@@ -27,7 +27,8 @@ CommandSpec benchRenderSpec() {
   spec.summary =
       "Renders the scene N times with the baseline settings (0.5 ms physics step) and N times with the\n"
       "current ones (1 ms), alternating, and writes DIR/render.csv: per run the load, simulate, modes (read\n"
-      "the shapes where contacts landed, or eigen-solve), synthesize and total wall times, the process CPU time, the real-time factor (audio seconds per wall second)\n"
+      "the shapes where contacts landed, or eigen-solve), synthesize and total wall times, the process CPU time, the "
+      "real-time factor (audio seconds per wall second)\n"
       "and the 1-minute load average. Prints the medians and current/baseline ratios. Reads banks from\n"
       "the cache and computes missing ones (the first run then reports their eigen-solves).";
   spec.options = {{"-o", "DIR", "output folder; created if missing"},
@@ -81,7 +82,8 @@ int runBenchRender(const std::vector<std::string>& raw_args) {
   const std::string csv_path = parsed->text("-o") + "/render.csv";
   std::ofstream csv(csv_path);
   if (!csv) return reportError("bench", badInput(csv_path + ": error: cannot create file"));
-  csv << "run,config,substep_s,load_s,simulate_s,modes_s,synthesize_s,other_s,total_s,cpu_s,realtime_factor,loadavg_1min\n";
+  csv << "run,config,substep_s,load_s,simulate_s,modes_s,synthesize_s,other_s,total_s,cpu_s,realtime_factor,loadavg_"
+         "1min\n";
 
   struct Config {
     const char* name;
@@ -102,14 +104,21 @@ int runBenchRender(const std::vector<std::string>& raw_args) {
       const RenderReport& rep = result->report;
       const double audio_s = result->audio.frames() / result->audio.sample_rate_hz;
       // Time in none of the phases: sorting out what was struck, the audio buffer's peak scan.
-      const double other = rep.total_seconds - rep.load_seconds - rep.simulate_seconds - rep.precompute_seconds -
-                           rep.synthesize_seconds;
-      const Run run{rep.load_seconds, rep.simulate_seconds, rep.precompute_seconds, rep.synthesize_seconds, other,
-                    rep.total_seconds, cpu, audio_s / rep.total_seconds, loadavg};
+      const double other =
+          rep.total_seconds - rep.load_seconds - rep.simulate_seconds - rep.precompute_seconds - rep.synthesize_seconds;
+      const Run run{rep.load_seconds,
+                    rep.simulate_seconds,
+                    rep.precompute_seconds,
+                    rep.synthesize_seconds,
+                    other,
+                    rep.total_seconds,
+                    cpu,
+                    audio_s / rep.total_seconds,
+                    loadavg};
       runs[c].push_back(run);
       csv << r << "," << configs[c].name << "," << configs[c].substep_s << "," << run.load_s << "," << run.simulate_s
-          << "," << run.modes_s << "," << run.synthesize_s << "," << run.other_s << "," << run.total_s << "," << run.cpu_s << ","
-          << run.realtime << "," << run.loadavg << "\n";
+          << "," << run.modes_s << "," << run.synthesize_s << "," << run.other_s << "," << run.total_s << ","
+          << run.cpu_s << "," << run.realtime << "," << run.loadavg << "\n";
       std::fprintf(stderr, "  %-8s run %lld: total %.3f s, cpu %.3f s, %.1fx real time (load average %.2f)\n",
                    configs[c].name, r, run.total_s, run.cpu_s, run.realtime, run.loadavg);
     }
@@ -122,10 +131,10 @@ int runBenchRender(const std::vector<std::string>& raw_args) {
     return median(values);
   };
   const std::pair<const char*, double Run::*> fields[] = {
-      {"load s", &Run::load_s},   {"simulate s", &Run::simulate_s}, {"modes s", &Run::modes_s},
-      {"synthesize s", &Run::synthesize_s},
-      {"other s", &Run::other_s}, {"total s", &Run::total_s},       {"cpu s", &Run::cpu_s},
-      {"x real time", &Run::realtime}};
+      {"load s", &Run::load_s},   {"simulate s", &Run::simulate_s},
+      {"modes s", &Run::modes_s}, {"synthesize s", &Run::synthesize_s},
+      {"other s", &Run::other_s}, {"total s", &Run::total_s},
+      {"cpu s", &Run::cpu_s},     {"x real time", &Run::realtime}};
   std::printf("strike bench render: %s, %lld runs each (medians), wrote %s\n", parsed->positional[0].c_str(), *repeat,
               csv_path.c_str());
   std::printf("%-14s %12s %12s %16s\n", "", "baseline", "current", "current/baseline");

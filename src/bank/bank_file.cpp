@@ -534,6 +534,7 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
 
 void BankFile::decodeRows(const uint8_t* bytes, size_t count, float* out) const {
   const size_t values = count * bank_.modeCount() * 3;
+  if (values == 0) return;  // a bank with no modes: nothing to copy (and out may be null)
   if (!int16_shapes_) {
     std::memcpy(out, bytes, values * sizeof(float));
     return;

@@ -224,6 +224,26 @@ TEST(BankFile, ReadsFormatOneAndTwoFiles) {
 
 // A BankFile opens without reading shapes, then reads rows equal to the whole bank's, and checks
 // only the blocks it reads: damage in one block is found when (and only when) that block is read.
+// A body too small or stiff to ring below its cut-off has a bank with no modes: reading it whole
+// (what `strike render --via-library` does) gives the surface and no shapes, without touching a
+// null buffer (UBSan found memcpy(nullptr, ..., 0) here).
+TEST(BankFile, ABankWithNoModesReadsWhole) {
+  ModeBank bank = makeTestBank();
+  bank.eigenvalues.clear();
+  bank.shapes.clear();
+  bank.frequency_error_estimate.clear();
+  for (ShapeEncoding encoding : {ShapeEncoding::Float32, ShapeEncoding::Int16}) {
+    const std::vector<uint8_t> bytes = encodeBank(bank, encoding);
+    Result<BankFile> file = BankFile::openBytes(bytes.data(), bytes.size(), "silent.modes");
+    ASSERT_TRUE(file) << file.error().message;
+    Result<ModeBank> all = file->readAll();
+    ASSERT_TRUE(all) << all.error().message;
+    EXPECT_EQ(all->modeCount(), 0u);
+    EXPECT_TRUE(all->shapes.empty());
+    EXPECT_EQ(all->surface_positions, bank.surface_positions);
+  }
+}
+
 TEST(BankFile, ReadsShapeRowsCheckingOnlyTheirBlocks) {
   const ModeBank bank = makeBigBank();
   const std::vector<uint8_t> bytes = encodeBank(bank);

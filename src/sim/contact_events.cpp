@@ -121,6 +121,7 @@ void Simulation::postTick() {
         *mesh_points[k] = fromBt(meshes[k]);
       }
       ev.normal_speed_m_s = std::max(0.0, -(point_velocity[0] - point_velocity[1]).dot(normal));
+      contactState(ev, index, point_world, normal);
       if (ev.normal_speed_m_s > settings_.impact_speed_m_s) {
         // An impact is stamped with the moment its surfaces met (timeImpacts; for a CCD point,
         // from its leading point's height above B's surface at the start of the substep).

@@ -191,7 +191,11 @@ TEST(CliContact, BadContactKeysNameTheKeyAndValue) {
       {R"({"contacts": [{"objects": ["a", "lid"], "friction": 0.2}], "objects": [{"name": "a", "mesh": "box:0.1,0.1,0.1", "material": "steel"}]})",
        "contacts[0].objects[1]: no object named \"lid\""},
       {R"({"contacts": [{"objects": ["a", "ground"]}], "objects": [{"name": "a", "mesh": "box:0.1,0.1,0.1", "material": "steel"}]})",
-       "contacts[0]: needs \"restitution\" or \"friction\""},
+       "contacts[0]: needs \"restitution\", \"friction\" or \"rolling_resistance\""},
+      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "steel", "rolling_resistance": -0.01}]})",
+       "objects[0].rolling_resistance: must be >= 0, got -0.01"},
+      {R"({"ground": {"rolling_resistance": "low"}, "objects": [{"mesh": "box:0.1,0.1,0.1", "material": "steel"}]})",
+       "ground.rolling_resistance: expected a number"},
   };
   int n = 0;
   for (const Case& c : cases) {

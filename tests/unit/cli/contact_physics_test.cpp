@@ -169,12 +169,12 @@ TEST(CliContact, RestitutionFromTheSceneSetsTheBounceIntervals) {
 TEST(CliContact, ListMaterialsShowsRestitutionAndFriction) {
   CliResult r = runCli("modes --list-materials");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("     e     mu  source"), std::string::npos) << r.out;
-  // steel: restitution 0.6, friction 0.4 in assets/materials.json
+  EXPECT_NE(r.out.find("     e     mu    c_rr  source"), std::string::npos) << r.out;
+  // steel: restitution 0.6, friction 0.4, rolling resistance 0.001 in assets/materials.json
   const size_t steel = r.out.find("\nsteel ");
   ASSERT_NE(steel, std::string::npos) << r.out;
   const std::string line = r.out.substr(steel + 1, r.out.find('\n', steel + 1) - steel - 1);
-  EXPECT_NE(line.find(" 0.60   0.40  "), std::string::npos) << line;
+  EXPECT_NE(line.find(" 0.60   0.40  0.0010  "), std::string::npos) << line;
   EXPECT_NE(r.out.find("geometric mean"), std::string::npos) << r.out;
 }
 

@@ -117,6 +117,32 @@ TEST(SimRolling, WithoutRollingResistanceASphereRollsOn) {
   EXPECT_NEAR(r->final_position_m[0][0], 3.0 * v0, 1e-3 * 3.0 * v0);
 }
 
+// Spinning friction: a sphere spinning about the vertical on the ground, not rolling. Coulomb
+// friction over its Hertz patch (radius a under m g) resists with the torque (3 pi / 16) mu m g a
+// [Johnson 1985, sec. 7.4], so omega falls linearly at that torque / I: half of omega0 is left
+// after t = I omega0 / (2 (3 pi / 16) mu m g a). Bullet applies it only where rolling friction is
+// on, hence a rolling resistance here (it has no effect on a sphere that does not roll).
+TEST(SimRolling, SpinningSphereSpinsDownAtTheHertzPatchTorque) {
+  const double mass = 0.26, mu = 0.5, omega0 = 2.0;
+  Sphere s = sphere(0.02, mass);
+  s.body.rolling_resistance = 0.001;
+  s.body.friction = mu;
+  s.body.angular_velocity_rad_s = {0, 0, omega0};
+  SimSettings settings = flatGround(1.0);
+  settings.ground_friction = mu;
+  settings.ground_rolling_resistance = 0.001;
+  const double a = std::cbrt(3.0 * mass * kG * s.radius_m * (kSteelCompliance + kGlassCompliance) / 4.0);
+  const double torque = 3.0 * M_PI / 16.0 * mu * mass * kG * a;
+  settings.duration_s = std::round(s.body.inertia_kg_m2[8] * omega0 / (2.0 * torque) / 1e-3) * 1e-3;
+  const Result<SimResult> r = simulateOrFail({s.body}, settings);
+  ASSERT_TRUE(r.ok());
+  const double expected = omega0 - torque / s.body.inertia_kg_m2[8] * settings.duration_s;
+  std::printf("[ spinning ] after %.3f s: omega %.4f rad/s, closed form %.4f rad/s (patch %.3e m)\n",
+              settings.duration_s, r->final_angular_velocity_rad_s[0][2], expected, a);
+  EXPECT_NEAR(r->final_angular_velocity_rad_s[0][2], expected, 0.02 * omega0);
+  EXPECT_NEAR(r->final_position_m[0][0], 0.0, 1e-6);  // it spins in place
+}
+
 // Combination: the compliance-weighted mean (sim.hpp, combineContact).
 TEST(SimRolling, CombinationRule) {
   // One material on itself keeps its own value, whatever the compliances.

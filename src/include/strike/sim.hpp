@@ -33,6 +33,7 @@ struct SimBodyDesc {
   double friction = 0.5;
   /// Coefficient of rolling resistance c_rr = F_resist / N (dimensionless) of its material on
   /// itself; see combineContact. Acts where a sphere-shaped body touches (docs/contact.md).
+  /// 0: none, and a sphere rolls for ever (a render takes it from the material table).
   double rolling_resistance = 0.0;
   /// Radius of the sphere of equal volume, m, for the Hertz contact patch (ContactEvent::
   /// patch_radius_m). 0: computed from the surface mesh. Ignored for a static body (flat).

@@ -211,6 +211,13 @@ py::object eventsArray(const RenderResult& r) {
   vector3("point_a_mesh", &ContactEvent::point_a_mesh);
   vector3("point_b_mesh", &ContactEvent::point_b_mesh);
   vector3("impulse_on_a_mesh", &ContactEvent::impulse_on_a_mesh);
+  // Contact state (docs/contact.md), appended after the fields above.
+  scalar("normal_force_n", [](const ContactEvent& e) { return e.normal_force_n; });
+  vector3("slip_velocity_m_s", &ContactEvent::slip_velocity_m_s);
+  scalar("rolling_speed_m_s", [](const ContactEvent& e) { return e.rolling_speed_m_s; });
+  scalar("track_speed_a_m_s", [](const ContactEvent& e) { return e.track_speed_a_m_s; });
+  scalar("track_speed_b_m_s", [](const ContactEvent& e) { return e.track_speed_b_m_s; });
+  scalar("patch_radius_m", [](const ContactEvent& e) { return e.patch_radius_m; });
   py::object array = np.attr("zeros")(n, np.attr("dtype")(fields));
   for (auto item : columns) array[item.first] = item.second;
   return array;

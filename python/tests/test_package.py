@@ -64,6 +64,16 @@ def test_render_equals_the_cli_byte_for_byte(repo, cli, cache_dir, tmp_path):
     np.testing.assert_allclose(result.events["time_s"], [float(row[0]) for row in rows], rtol=1e-8)
     np.testing.assert_allclose(result.events["point_world"][:, 2], [float(row[9]) for row in rows], rtol=1e-8, atol=1e-12)
     assert all((e["body_b"] == -1) == (row[2] == "ground") for e, row in zip(result.events, rows))
+    # The contact state columns come after step_time_s (docs/contact.md), in the same order.
+    header = csv.read_text().splitlines()[0].split(",")
+    assert header.index("step_time_s") == 19 and header[20:] == [
+        "normal_force_n", "slip_x_m_s", "slip_y_m_s", "slip_z_m_s", "rolling_speed_m_s",
+        "track_speed_a_m_s", "track_speed_b_m_s", "patch_radius_m"]
+    np.testing.assert_allclose(result.events["normal_force_n"], [float(row[20]) for row in rows], rtol=1e-8)
+    np.testing.assert_allclose(result.events["slip_velocity_m_s"][:, 0], [float(row[21]) for row in rows], rtol=1e-8, atol=1e-12)
+    np.testing.assert_allclose(result.events["patch_radius_m"], [float(row[27]) for row in rows], rtol=1e-8)
+    # 1 ms steps: the normal force is the normal impulse over the step.
+    np.testing.assert_allclose(result.events["normal_force_n"], result.events["normal_impulse_n_s"] / 1e-3, rtol=1e-12)
 
 
 def test_modes_and_hit_equal_the_cli(cli, tmp_path):

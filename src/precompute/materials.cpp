@@ -105,9 +105,9 @@ Result<MaterialTable> parseMaterialTable(const std::string& json_text, const std
     }
     for (const auto& field : entry.items()) {
       const std::string& key = field.key();
-      static const char* const kKnown[] = {
-          "youngs_pa",     "poisson", "density_kg_m3", "loss_factor", "rayleigh_stiffness",
-          "rayleigh_mass", "source",  "restitution",   "friction"};
+      static const char* const kKnown[] = {"youngs_pa",          "poisson",           "density_kg_m3", "loss_factor",
+                                           "rayleigh_stiffness", "rayleigh_mass",     "source",        "restitution",
+                                           "friction",           "rolling_resistance"};
       if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return key == k; }) ==
           std::end(kKnown))
         return badInput(where + ": unknown key '" + key + "'");
@@ -120,6 +120,10 @@ Result<MaterialTable> parseMaterialTable(const std::string& json_text, const std
       return badInput(where + ".restitution must be a number in [0, 1]");
     if (entry.contains("friction") && (!number("friction", contact.friction) || !(contact.friction >= 0)))
       return badInput(where + ".friction must be a number >= 0");
+    if (entry.contains("rolling_resistance") &&
+        (!number("rolling_resistance", contact.rolling_resistance) || !(contact.rolling_resistance >= 0) ||
+         !std::isfinite(contact.rolling_resistance)))
+      return badInput(where + ".rolling_resistance must be a number >= 0");
     table.contact[m.name] = contact;
     if (entry.contains("source") && entry["source"].is_string())
       table.sources[m.name] = entry["source"].get<std::string>();

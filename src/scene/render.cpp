@@ -196,7 +196,10 @@ SimBodyDesc simBody(const Body& body) {
   const ContactProperties contact = table.contactProperties(body.bank.material.name);
   desc.restitution = std::isnan(object.restitution) ? contact.restitution : object.restitution;
   desc.friction = std::isnan(object.friction) ? contact.friction : object.friction;
+  desc.rolling_resistance =
+      std::isnan(object.rolling_resistance) ? contact.rolling_resistance : object.rolling_resistance;
   desc.compliance_per_pa = compliance(body.bank.material);
+  desc.contact_radius_m = body.contact_radius_m;
   desc.shape = object.shape == "convex"    ? SimBodyDesc::Shape::ConvexHull
                : object.shape == "concave" ? SimBodyDesc::Shape::Concave
                : object.shape == "pieces"  ? SimBodyDesc::Shape::ConvexPieces
@@ -314,6 +317,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   const ContactProperties ground_contact = builtinMaterials().contactProperties(scene.ground_material.name);
   sim.ground_restitution = std::isnan(scene.ground_restitution) ? ground_contact.restitution : scene.ground_restitution;
   sim.ground_friction = std::isnan(scene.ground_friction) ? ground_contact.friction : scene.ground_friction;
+  sim.ground_rolling_resistance =
+      std::isnan(scene.ground_rolling_resistance) ? ground_contact.rolling_resistance : scene.ground_rolling_resistance;
   sim.ground_compliance_per_pa = compliance(scene.ground_material);
   for (const ContactPairSpec& pair : scene.contact_pairs) {
     // An object's name first; "ground" is the ground unless an object has that name.
@@ -322,7 +327,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
         if (scene.objects[i].name == name) return uint32_t(i);
       return kGroundBody;
     };
-    sim.contact_pairs.push_back({indexOf(pair.object_a), indexOf(pair.object_b), pair.restitution, pair.friction});
+    sim.contact_pairs.push_back(
+        {indexOf(pair.object_a), indexOf(pair.object_b), pair.restitution, pair.friction, pair.rolling_resistance});
   }
   sim.progress = settings.progress;
   Result<SimResult> simulated = simulate(sim_bodies, sim);
@@ -526,15 +532,21 @@ Status writeEventsCsv(const std::string& path, const RenderResult& result) {
   std::string csv =
       "time_s,body_a,body_b,new_contact,normal_speed_m_s,normal_impulse_n_s,friction_impulse_n_s,"
       "point_x_m,point_y_m,point_z_m,normal_x,normal_y,normal_z,"
-      "point_a_mesh_x,point_a_mesh_y,point_a_mesh_z,point_b_mesh_x,point_b_mesh_y,point_b_mesh_z,step_time_s\n";
+      "point_a_mesh_x,point_a_mesh_y,point_a_mesh_z,point_b_mesh_x,point_b_mesh_y,point_b_mesh_z,step_time_s,"
+      "normal_force_n,slip_x_m_s,slip_y_m_s,slip_z_m_s,rolling_speed_m_s,track_speed_a_m_s,track_speed_b_m_s,"
+      "patch_radius_m\n";
   auto name = [&](uint32_t index) { return index == kGroundBody ? std::string("ground") : result.body_names[index]; };
-  char line[512];
+  char line[1024];
   for (const ContactEvent& e : result.events) {
-    std::snprintf(
-        line, sizeof line, ",%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n",
-        e.new_contact ? 1 : 0, e.normal_speed_m_s, e.normal_impulse_n_s, e.friction_impulse_n_s, e.point_world[0],
-        e.point_world[1], e.point_world[2], e.normal_world[0], e.normal_world[1], e.normal_world[2], e.point_a_mesh[0],
-        e.point_a_mesh[1], e.point_a_mesh[2], e.point_b_mesh[0], e.point_b_mesh[1], e.point_b_mesh[2], e.step_time_s);
+    std::snprintf(line, sizeof line,
+                  ",%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g"
+                  ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n",
+                  e.new_contact ? 1 : 0, e.normal_speed_m_s, e.normal_impulse_n_s, e.friction_impulse_n_s,
+                  e.point_world[0], e.point_world[1], e.point_world[2], e.normal_world[0], e.normal_world[1],
+                  e.normal_world[2], e.point_a_mesh[0], e.point_a_mesh[1], e.point_a_mesh[2], e.point_b_mesh[0],
+                  e.point_b_mesh[1], e.point_b_mesh[2], e.step_time_s, e.normal_force_n, e.slip_velocity_m_s[0],
+                  e.slip_velocity_m_s[1], e.slip_velocity_m_s[2], e.rolling_speed_m_s, e.track_speed_a_m_s,
+                  e.track_speed_b_m_s, e.patch_radius_m);
     char time[64];
     std::snprintf(time, sizeof time, "%.9g,", e.time_s);
     csv += time + name(e.body_a) + "," + name(e.body_b) + line;

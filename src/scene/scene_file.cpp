@@ -157,8 +157,10 @@ Result<Material> material(const json& value, const Where& where) {
   return m;
 }
 
-/// Optional "restitution" (0 to 1) and "friction" (>= 0) of an object, the ground or a pair.
-Status contactCoefficients(const json& value, const Where& where, double& restitution, double& friction) {
+/// Optional "restitution" (0 to 1), "friction" (>= 0) and "rolling_resistance" (>= 0) of an
+/// object, the ground or a pair.
+Status contactCoefficients(const json& value, const Where& where, double& restitution, double& friction,
+                           double& rolling_resistance) {
   if (value.contains("restitution")) {
     Result<double> e = number(value["restitution"], where.at("restitution"));
     if (!e) return e.error();
@@ -170,6 +172,12 @@ Status contactCoefficients(const json& value, const Where& where, double& restit
     if (!mu) return mu.error();
     if (*mu < 0) return where.at("friction").error("must be >= 0, got " + show(value["friction"]));
     friction = *mu;
+  }
+  if (value.contains("rolling_resistance")) {
+    Result<double> c = number(value["rolling_resistance"], where.at("rolling_resistance"));
+    if (!c) return c.error();
+    if (*c < 0) return where.at("rolling_resistance").error("must be >= 0, got " + show(value["rolling_resistance"]));
+    rolling_resistance = *c;
   }
   return {};
 }
@@ -191,9 +199,9 @@ Result<ContactPairSpec> contactPair(const json& value, const Where& where, const
   }
   if (pair.object_a == pair.object_b)
     return where.at("objects").error("names one object twice: " + show(value["objects"]));
-  if (!value.contains("restitution") && !value.contains("friction"))
-    return where.error("needs \"restitution\" or \"friction\" (or both)");
-  Status coefficients = contactCoefficients(value, where, pair.restitution, pair.friction);
+  if (!value.contains("restitution") && !value.contains("friction") && !value.contains("rolling_resistance"))
+    return where.error("needs \"restitution\", \"friction\" or \"rolling_resistance\" (or several)");
+  Status coefficients = contactCoefficients(value, where, pair.restitution, pair.friction, pair.rolling_resistance);
   if (!coefficients) return coefficients.error();
   return pair;
 }
@@ -299,7 +307,7 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
                  std::to_string(norm) + ")");
     for (int i = 0; i < 4; ++i) o.orientation_wxyz[i] = (*q)[i] / norm;
   }
-  Status coefficients = contactCoefficients(value, where, o.restitution, o.friction);
+  Status coefficients = contactCoefficients(value, where, o.restitution, o.friction, o.rolling_resistance);
   if (!coefficients) return coefficients.error();
   return o;
 }
@@ -312,11 +320,11 @@ const std::vector<SceneKeyTable>& sceneKeyTables() {
        {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes",
         "contact_damping", "contacts"}},
       {"listener", {"position"}},
-      {"contacts[]", {"objects", "restitution", "friction"}},
-      {"ground", {"material", "height", "restitution", "friction"}},
+      {"contacts[]", {"objects", "restitution", "friction", "rolling_resistance"}},
+      {"ground", {"material", "height", "restitution", "friction", "rolling_resistance"}},
       {"objects[]",
        {"name", "mesh", "units", "bank", "material", "order", "size", "static", "shape", "position", "orientation",
-        "velocity", "angular_velocity", "restitution", "friction"}},
+        "velocity", "angular_velocity", "restitution", "friction", "rolling_resistance"}},
       {"material",
        {"name", "youngs_pa", "poisson", "density_kg_m3", "loss_factor", "rayleigh_stiffness", "rayleigh_mass"}},
   };
@@ -413,7 +421,8 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
         if (!h) return h.error();
         scene.ground_height_m = *h;
       }
-      Status coefficients = contactCoefficients(ground, where, scene.ground_restitution, scene.ground_friction);
+      Status coefficients = contactCoefficients(ground, where, scene.ground_restitution, scene.ground_friction,
+                                                scene.ground_rolling_resistance);
       if (!coefficients) return coefficients.error();
     }
   }

@@ -54,11 +54,10 @@ Status checkSettings(const SimSettings& settings) {
                       " (must be finite)");
     }
   }
-  const std::pair<const char*, double> scalars[] = {{"ground_height_m", settings.ground_height_m},
-                                                    {"ground_restitution", settings.ground_restitution},
-                                                    {"ground_friction", settings.ground_friction},
-                                                    {"min_impulse_n_s", settings.min_impulse_n_s},
-                                                    {"impact_speed_m_s", settings.impact_speed_m_s}};
+  const std::pair<const char*, double> scalars[] = {
+      {"ground_height_m", settings.ground_height_m}, {"ground_restitution", settings.ground_restitution},
+      {"ground_friction", settings.ground_friction}, {"ground_rolling_resistance", settings.ground_rolling_resistance},
+      {"min_impulse_n_s", settings.min_impulse_n_s}, {"impact_speed_m_s", settings.impact_speed_m_s}};
   for (const auto& [name, value] : scalars) {
     if (!std::isfinite(value) || (value < 0.0 && std::string(name) != "ground_height_m")) {
       return badInput(std::string("sim settings: ") + name + " = " + fmt(value) + " (must be finite and >= 0)");
@@ -75,6 +74,9 @@ Status checkSettings(const SimSettings& settings) {
       return badInput(where + ".restitution = " + fmt(pair.restitution) + " (must be in [0, 1])");
     if (!std::isnan(pair.friction) && !(pair.friction >= 0.0 && std::isfinite(pair.friction)))
       return badInput(where + ".friction = " + fmt(pair.friction) + " (must be finite and >= 0)");
+    if (!std::isnan(pair.rolling_resistance) &&
+        !(pair.rolling_resistance >= 0.0 && std::isfinite(pair.rolling_resistance)))
+      return badInput(where + ".rolling_resistance = " + fmt(pair.rolling_resistance) + " (must be finite and >= 0)");
   }
   if (!(settings.ground_compliance_per_pa >= 0.0 && std::isfinite(settings.ground_compliance_per_pa)))
     return badInput("sim settings: ground_compliance_per_pa = " + fmt(settings.ground_compliance_per_pa) +
@@ -126,6 +128,8 @@ Status checkBody(const SimBodyDesc& body, size_t index, btQuaternion& orientatio
   orientation = btQuaternion(q[1] / norm, q[2] / norm, q[3] / norm, q[0] / norm);  // Bullet is (x, y, z, w)
   for (const auto& [name, value] : {std::pair<const char*, double>{"restitution", body.restitution},
                                     std::pair<const char*, double>{"friction", body.friction},
+                                    std::pair<const char*, double>{"rolling_resistance", body.rolling_resistance},
+                                    std::pair<const char*, double>{"contact_radius_m", body.contact_radius_m},
                                     std::pair<const char*, double>{"compliance_per_pa", body.compliance_per_pa}}) {
     if (!std::isfinite(value) || value < 0.0) {
       return badInput(label + ": " + name + " = " + fmt(value) + " (must be finite and >= 0)");

@@ -53,17 +53,21 @@ void Simulation::postTick() {
   for (int m = 0; m < manifold_count; ++m) {
     const btPersistentManifold* manifold = dispatcher_->getManifoldByIndexInternal(m);
     const btCollisionObject* objects[2] = {manifold->getBody0(), manifold->getBody1()};
-    int index[2] = {objects[0]->getUserIndex(), objects[1]->getUserIndex()};
+    const int manifold_index[2] = {objects[0]->getUserIndex(), objects[1]->getUserIndex()};
     // A sleeping island is not solved this substep: its stale impulses are not forces.
     bool any_active = false;
     for (int k = 0; k < 2; ++k) {
-      if (index[k] >= 0 && !bodies_[size_t(index[k])]->is_static && objects[k]->isActive()) any_active = true;
+      if (manifold_index[k] >= 0 && !bodies_[size_t(manifold_index[k])]->is_static && objects[k]->isActive())
+        any_active = true;
     }
     if (!any_active) continue;
     const bool predictive = world_->isPredictive(manifold);
     for (int p = 0; p < manifold->getNumContacts(); ++p) {
       const btManifoldPoint& pt = manifold->getContactPoint(p);
       if (!(pt.m_appliedImpulse > settings_.min_impulse_n_s)) continue;
+      // Per point: the canonical order below swaps it (a copy per manifold swapped the first
+      // point's pair and left the next points of a swapped manifold labelled the wrong way).
+      int index[2] = {manifold_index[0], manifold_index[1]};
       btVector3 normal = pt.m_normalWorldOnB;  // from B to A; the impulse on A is along +normal
       btVector3 friction = pt.m_lateralFrictionDir1 * pt.m_appliedImpulseLateral1 +
                            pt.m_lateralFrictionDir2 * pt.m_appliedImpulseLateral2;
@@ -121,6 +125,7 @@ void Simulation::postTick() {
         *mesh_points[k] = fromBt(meshes[k]);
       }
       ev.normal_speed_m_s = std::max(0.0, -(point_velocity[0] - point_velocity[1]).dot(normal));
+      contactState(ev, index, point_world, normal);
       if (ev.normal_speed_m_s > settings_.impact_speed_m_s) {
         // An impact is stamped with the moment its surfaces met (timeImpacts; for a CCD point,
         // from its leading point's height above B's surface at the start of the substep).

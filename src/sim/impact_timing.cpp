@@ -61,6 +61,7 @@ void Simulation::timeImpacts() {
       manifold->getContactPoint(p).m_combinedRestitution = restitution;
       manifold->getContactPoint(p).m_combinedFriction = pair.friction;
     }
+    setRollingResistance(*manifold, pair);
     // A CCD predictive point is left to Bullet: its distance is a swept sphere's, whose time of
     // impact Bullet finds only to about half a millimetre (a 2 mm plate landing at 1.5 m/s).
     if (world_->isPredictive(manifold)) continue;

@@ -105,6 +105,14 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   const btVector3 extent = hi - lo;
   state->size_m = std::max({extent.x(), extent.y(), extent.z()});
   state->min_extent_m = std::min({extent.x(), extent.y(), extent.z()});
+  state->compliance_per_pa = desc.compliance_per_pa;
+  // The Hertz patch takes each body as the sphere of its volume (as the render's contact time
+  // does); a static body is flat.
+  state->contact_radius_m =
+      desc.is_static ? 0.0
+      : desc.contact_radius_m > 0.0
+          ? desc.contact_radius_m
+          : std::cbrt(3.0 * std::abs(meshVolume(state->body_xyz, desc.surface_triangles)) / (4.0 * M_PI));
   if (!(state->size_m > 0.0)) {
     return badInput(bodyLabel(desc, index) + ": all " + std::to_string(vertex_count) +
                     " surface vertices coincide (zero size)");
@@ -157,6 +165,7 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
       const double radius =
           std::cbrt(3.0 * std::abs(meshVolume(state->body_xyz, desc.surface_triangles)) / (4.0 * M_PI));
       state->shape = std::make_unique<btSphereShape>(radius > 0 ? radius : radius_mean);
+      state->sphere_radius_m = radius > 0 ? radius : radius_mean;
       state->margin_m = state->shape->getMargin();
     } else {
       auto convex = std::make_unique<btConvexHullShape>();

@@ -82,9 +82,10 @@ ContactCoefficients Simulation::coefficients(int index_a, int index_b) const {
   // Bullet's user index: the body, or -1 for the ground.
   auto side = [&](int index) {
     if (index < 0)
-      return ContactSide{settings_.ground_restitution, settings_.ground_friction, settings_.ground_compliance_per_pa};
+      return ContactSide{settings_.ground_restitution, settings_.ground_friction, settings_.ground_compliance_per_pa,
+                         settings_.ground_rolling_resistance};
     const SimBodyDesc& d = descs_[size_t(index)];
-    return ContactSide{d.restitution, d.friction, d.compliance_per_pa};
+    return ContactSide{d.restitution, d.friction, d.compliance_per_pa, d.rolling_resistance};
   };
   ContactCoefficients c = combineContact(side(index_a), side(index_b));
   const uint32_t a = index_a < 0 ? kGroundBody : uint32_t(index_a), b = index_b < 0 ? kGroundBody : uint32_t(index_b);
@@ -92,6 +93,7 @@ ContactCoefficients Simulation::coefficients(int index_a, int index_b) const {
     if (!((pair.body_a == a && pair.body_b == b) || (pair.body_a == b && pair.body_b == a))) continue;
     if (!std::isnan(pair.restitution)) c.restitution = pair.restitution;
     if (!std::isnan(pair.friction)) c.friction = pair.friction;
+    if (!std::isnan(pair.rolling_resistance)) c.rolling_resistance = pair.rolling_resistance;
   }
   return c;
 }
@@ -253,6 +255,7 @@ ContactCoefficients combineContact(const ContactSide& a, const ContactSide& b) {
   ContactCoefficients c;
   c.restitution = std::sqrt(std::clamp(1.0 - loss, 0.0, 1.0));
   c.friction = std::sqrt(a.friction * b.friction);
+  c.rolling_resistance = wa * a.rolling_resistance + (1.0 - wa) * b.rolling_resistance;
   return c;
 }
 

@@ -35,6 +35,16 @@ constexpr uint64_t kNotStill = ~uint64_t(0);
 inline btVector3 toBt(const Vec3& v) { return btVector3(v[0], v[1], v[2]); }
 inline Vec3 fromBt(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 
+/// Bullet's rolling and spinning friction coefficients (lengths, m) for a contact point
+/// (contact_state.cpp): see docs/contact.md.
+struct RollingFriction {
+  double rolling_m = 0.0, spinning_m = 0.0;
+};
+/// sphere_radius_a/b: a sphere shape's radius, 0 for any other shape; patch_radius_m: the Hertz
+/// patch under the point's load.
+RollingFriction rollingFriction(double rolling_resistance, double friction, double sphere_radius_a_m,
+                                double sphere_radius_b_m, double patch_radius_m);
+
 /// A number for a message, "%.9g" (checks.cpp).
 std::string fmt(double value);
 /// "body INDEX \"NAME\"", how messages name a body (checks.cpp).
@@ -63,6 +73,9 @@ struct BodyState {
   double size_m = 0.0;        // largest extent of the body-frame bounding box
   double min_extent_m = 0.0;  // smallest extent
   double margin_m = 0.0;
+  double sphere_radius_m = 0.0;    // a sphere shape's radius (about the centre of mass); 0: not a sphere
+  double contact_radius_m = 0.0;   // for the Hertz patch (SimBodyDesc::contact_radius_m); 0: flat
+  double compliance_per_pa = 0.0;  // (1 - nu^2) / E of its material
   SimBodyDesc::Shape shape_used = SimBodyDesc::Shape::ConvexHull;
   bool is_static = false;
   // Storage for concave shapes (btTriangleIndexVertexArray points into these).
@@ -152,6 +165,8 @@ class Simulation {
   void hastenSleep();
   void recordStates(std::vector<SimBodyState>& states) const;
   ContactCoefficients coefficients(int index_a, int index_b) const;
+  void setRollingResistance(btPersistentManifold& manifold, const ContactCoefficients& pair) const;
+  void contactState(ContactEvent& ev, const int index[2], const btVector3& point_world, const btVector3& normal) const;
   static void preTickThunk(btDynamicsWorld* world, btScalar) {
     static_cast<Simulation*>(world->getWorldUserInfo())->preTick();
   }

@@ -79,21 +79,24 @@ CommandSpec modesSpec() {
 
 int listMaterials() {
   const MaterialTable& table = builtinMaterials();
-  std::printf("%-14s %11s %7s %9s %11s %11s %6s %6s  %s\n", "material", "E (Pa)", "nu", "rho", "a1 (s)", "a2 (1/s)",
-              "e", "mu", "source");
+  std::printf("%-14s %11s %7s %9s %11s %11s %6s %6s %7s  %s\n", "material", "E (Pa)", "nu", "rho", "a1 (s)", "a2 (1/s)",
+              "e", "mu", "c_rr", "source");
   for (const auto& [name, m] : table.materials) {
     auto source = table.sources.find(name);
     const ContactProperties contact = table.contactProperties(name);
-    std::printf("%-14s %11.3g %7.3f %9.0f %11.3g %11.3g %6.2f %6.2f  %s\n", name.c_str(), m.youngs_pa, m.poisson,
+    std::printf("%-14s %11.3g %7.3f %9.0f %11.3g %11.3g %6.2f %6.2f %7.4f  %s\n", name.c_str(), m.youngs_pa, m.poisson,
                 m.density_kg_m3, m.rayleigh_stiffness, m.rayleigh_mass, contact.restitution, contact.friction,
-                source == table.sources.end() ? "" : source->second.c_str());
+                contact.rolling_resistance, source == table.sources.end() ? "" : source->second.c_str());
   }
   std::printf(
       "\ne, mu: restitution and friction of the material on itself (rigid-body simulation only; rough typical\n"
       "values). Two bodies combine theirs: restitution by compliance-weighted energy loss, 1 - e^2 =\n"
       "(k1 (1 - e1^2) + k2 (1 - e2^2)) / (k1 + k2), k = (1 - nu^2) / E (the softer body decides; Hertz, Johnson\n"
       "1985); friction by the geometric mean sqrt(mu1 mu2) (Box2D). A scene overrides them per object\n"
-      "(\"restitution\", \"friction\"), for the ground, and per pair (\"contacts\"): see docs/contact.md.\n");
+      "(\"restitution\", \"friction\"), for the ground, and per pair (\"contacts\"): see docs/contact.md.\n"
+      "c_rr: coefficient of rolling resistance (rolling force / load) of the material on itself, where a sphere\n"
+      "rolls; two bodies combine theirs by the compliance-weighted mean (k1 c1 + k2 c2) / (k1 + k2)\n"
+      "(\"rolling_resistance\" in a scene).\n");
   return 0;
 }
 

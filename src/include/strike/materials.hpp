@@ -15,6 +15,8 @@ namespace strike {
 struct ContactProperties {
   double restitution = 0.5;
   double friction = 0.5;
+  /// Coefficient of rolling resistance c_rr = F / N, dimensionless (docs/contact.md).
+  double rolling_resistance = 0.001;
 };
 
 struct MaterialTable {

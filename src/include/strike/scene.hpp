@@ -30,16 +30,16 @@ struct SceneObject {
   std::array<double, 4> orientation_wxyz{1, 0, 0, 0};
   std::array<double, 3> velocity_m_s{};
   std::array<double, 3> angular_velocity_rad_s{};
-  /// Own contact coefficients, overriding the material's ("restitution", "friction"); NaN: the
-  /// material's. Two bodies combine theirs (docs/contact.md).
-  double restitution = NAN, friction = NAN;
+  /// Own contact coefficients, overriding the material's ("restitution", "friction",
+  /// "rolling_resistance"); NaN: the material's. Two bodies combine theirs (docs/contact.md).
+  double restitution = NAN, friction = NAN, rolling_resistance = NAN;
 };
 
 /// A scene's "contacts" entry: coefficients for one pair of objects ("ground" names the ground),
 /// used as they are (no combination). NaN: not overridden.
 struct ContactPairSpec {
   std::string object_a, object_b;
-  double restitution = NAN, friction = NAN;
+  double restitution = NAN, friction = NAN, rolling_resistance = NAN;
 };
 
 struct Scene {
@@ -52,6 +52,7 @@ struct Scene {
   Material ground_material;  ///< concrete unless given
   double ground_height_m = 0.0;
   double ground_restitution = NAN, ground_friction = NAN;  ///< NaN: the ground material's
+  double ground_rolling_resistance = NAN;                  ///< NaN: the ground material's
   std::vector<ContactPairSpec> contact_pairs;
   /// Extra amplitude decay (1/s) of a body's modes while it rests on or slides along something:
   /// the vibration it loses into its support. A phenomenological model (the support's impedance

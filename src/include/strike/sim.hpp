@@ -31,6 +31,13 @@ struct SimBodyDesc {
   std::array<double, 3> angular_velocity_rad_s{};      ///< world
   double restitution = 0.5;                            ///< the body's own (its material on itself); see combineContact
   double friction = 0.5;
+  /// Coefficient of rolling resistance c_rr = F_resist / N (dimensionless) of its material on
+  /// itself; see combineContact. Acts where a sphere-shaped body touches (docs/contact.md).
+  /// 0: none, and a sphere rolls for ever (a render takes it from the material table).
+  double rolling_resistance = 0.0;
+  /// Radius of the sphere of equal volume, m, for the Hertz contact patch (ContactEvent::
+  /// patch_radius_m). 0: computed from the surface mesh. Ignored for a static body (flat).
+  double contact_radius_m = 0.0;
   /// (1 - nu^2) / E of its material, 1/Pa: weights its restitution when two bodies meet
   /// (combineContact). 0: unknown (both bodies weigh the same).
   double compliance_per_pa = 0.0;
@@ -51,12 +58,13 @@ struct SimSettings {
   bool ground = true;               ///< a static plane z = ground_height_m (silent)
   double ground_height_m = 0.0;
   double ground_restitution = 0.5, ground_friction = 0.6;
-  double ground_compliance_per_pa = 0.0;  ///< as SimBodyDesc::compliance_per_pa
+  double ground_rolling_resistance = 0.0;  ///< as SimBodyDesc::rolling_resistance
+  double ground_compliance_per_pa = 0.0;   ///< as SimBodyDesc::compliance_per_pa
   /// Contact coefficients for particular pairs of bodies (body_b may be kGroundBody), overriding
   /// combineContact; a NaN coefficient is not overridden.
   struct ContactPair {
     uint32_t body_a = 0, body_b = 0;
-    double restitution = NAN, friction = NAN;
+    double restitution = NAN, friction = NAN, rolling_resistance = NAN;
   };
   std::vector<ContactPair> contact_pairs;
   /// Contacts whose normal impulse is below this are not recorded, N s.
@@ -104,10 +112,10 @@ struct ConvexPiecesRecipe {
 
 /// One body's side of a contact: its own coefficients and compliance (SimBodyDesc's).
 struct ContactSide {
-  double restitution = 0.5, friction = 0.5, compliance_per_pa = 0.0;
+  double restitution = 0.5, friction = 0.5, compliance_per_pa = 0.0, rolling_resistance = 0.0;
 };
 struct ContactCoefficients {
-  double restitution = 0.0, friction = 0.0;
+  double restitution = 0.0, friction = 0.0, rolling_resistance = 0.0;
 };
 
 /// The coefficients of two bodies in contact. A material's own restitution and friction are
@@ -122,6 +130,11 @@ struct ContactCoefficients {
 ///  - Friction: the geometric mean sqrt(mu1 mu2), Box2D's mixing law [Catto, Box2D
 ///    b2MixFriction]: a slippery surface makes the pair slippery (the product: steel 0.4 on
 ///    steel 0.4 gave 0.16).
+///  - Rolling resistance: the compliance-weighted mean c = (k1 c1 + k2 c2) / (k1 + k2). Rolling
+///    resistance on smooth solids is hysteresis in the material the contact deforms [Tabor 1955,
+///    Proc. R. Soc. A 229, 198-220; Johnson 1985, ch. 9], and each body takes the share
+///    k / (k1 + k2) of the deformation (as for restitution): a steel ball on rubber rolls as on
+///    rubber, and one material on itself keeps its own value.
 ContactCoefficients combineContact(const ContactSide& a, const ContactSide& b);
 
 /// One contact point during one substep.
@@ -148,7 +161,31 @@ struct ContactEvent {
   /// (docs/cli.md) and of the Python events table. The renderer does not read it; it tells an
   /// impact from sustained contact by normal_speed_m_s against SimSettings::impact_speed_m_s.
   bool new_contact = false;
+  // Contact state, for continuous (rolling, sliding, scraping) contact sounds (docs/contact.md).
+  // The path a contact point travels over a surface is the sequence of point_a_mesh (or
+  // point_b_mesh) of the pair's successive events: the same spot of a surface has the same
+  // mesh-frame coordinates whenever it is touched.
+  double normal_force_n = 0.0;  ///< normal_impulse_n_s / substep: the mean normal force over the substep, N
+  /// Relative velocity of a's surface to b's at the contact point, in the tangent plane, world,
+  /// m/s, after the substep's solve: 0 while the surfaces stick (rolling without slip, resting).
+  std::array<double, 3> slip_velocity_m_s{};
+  /// How fast the contact point travels over each body's surface, m/s: a ball rolling at speed v
+  /// on the ground, v over both; a block sliding at v, 0 over the block and v over the ground.
+  double track_speed_a_m_s = 0.0, track_speed_b_m_s = 0.0;
+  /// The rolling speed: the part of the contact point's travel common to both surfaces,
+  /// min(track_speed_a, track_speed_b), m/s. A ball rolling without slip: v; sliding: 0.
+  double rolling_speed_m_s = 0.0;
+  /// Radius of the Hertz contact patch under normal_force_n, m (hertzPatchRadius); 0 when the
+  /// materials' stiffness is unknown (compliance 0).
+  double patch_radius_m = 0.0;
 };
+
+/// The radius of the Hertz contact circle of two elastic bodies pressed together by force_n:
+/// a = (3 F R* / (4 E*))^(1/3), 1/R* = 1/R1 + 1/R2, 1/E* = k1 + k2 with k = (1 - nu^2) / E
+/// [Johnson 1985, Contact Mechanics, eqs. 4.22-4.23]. A radius of 0 or infinity is flat. 0 when
+/// both are flat, the force is not positive, or k1 + k2 is 0 (unknown).
+double hertzPatchRadius(double force_n, double radius_a_m, double radius_b_m, double compliance_a_per_pa,
+                        double compliance_b_per_pa);
 
 /// A body after a substep, as a game engine reports it every frame.
 struct SimBodyState {

@@ -169,12 +169,12 @@ TEST(CliContact, RestitutionFromTheSceneSetsTheBounceIntervals) {
 TEST(CliContact, ListMaterialsShowsRestitutionAndFriction) {
   CliResult r = runCli("modes --list-materials");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("     e     mu  source"), std::string::npos) << r.out;
-  // steel: restitution 0.6, friction 0.4 in assets/materials.json
+  EXPECT_NE(r.out.find("     e     mu    c_rr  source"), std::string::npos) << r.out;
+  // steel: restitution 0.6, friction 0.4, rolling resistance 0.001 in assets/materials.json
   const size_t steel = r.out.find("\nsteel ");
   ASSERT_NE(steel, std::string::npos) << r.out;
   const std::string line = r.out.substr(steel + 1, r.out.find('\n', steel + 1) - steel - 1);
-  EXPECT_NE(line.find(" 0.60   0.40  "), std::string::npos) << line;
+  EXPECT_NE(line.find(" 0.60   0.40  0.0010  "), std::string::npos) << line;
   EXPECT_NE(r.out.find("geometric mean"), std::string::npos) << r.out;
 }
 
@@ -191,7 +191,11 @@ TEST(CliContact, BadContactKeysNameTheKeyAndValue) {
       {R"({"contacts": [{"objects": ["a", "lid"], "friction": 0.2}], "objects": [{"name": "a", "mesh": "box:0.1,0.1,0.1", "material": "steel"}]})",
        "contacts[0].objects[1]: no object named \"lid\""},
       {R"({"contacts": [{"objects": ["a", "ground"]}], "objects": [{"name": "a", "mesh": "box:0.1,0.1,0.1", "material": "steel"}]})",
-       "contacts[0]: needs \"restitution\" or \"friction\""},
+       "contacts[0]: needs \"restitution\", \"friction\" or \"rolling_resistance\""},
+      {R"({"objects": [{"mesh": "box:0.1,0.1,0.1", "material": "steel", "rolling_resistance": -0.01}]})",
+       "objects[0].rolling_resistance: must be >= 0, got -0.01"},
+      {R"({"ground": {"rolling_resistance": "low"}, "objects": [{"mesh": "box:0.1,0.1,0.1", "material": "steel"}]})",
+       "ground.rolling_resistance: expected a number"},
   };
   int n = 0;
   for (const Case& c : cases) {

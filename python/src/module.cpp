@@ -151,6 +151,7 @@ py::dict reportDict(const PyRenderResult& r) {
   d["banks_cached"] = s.banks_cached;
   d["banks_computed"] = s.banks_computed;
   d["banks_shared"] = s.banks_shared;
+  d["banks_scaled"] = s.banks_scaled;
   d["events"] = s.events;
   d["impacts"] = s.impacts;
   d["sustained_contacts"] = s.sustained_contacts;

@@ -11,6 +11,7 @@
 #include "strike/error_estimate.hpp"
 #include "strike/materials.hpp"
 #include "strike/mesh.hpp"
+#include "strike/normalized_problem.hpp"
 #include "strike/parse_size.hpp"
 #include "strike/precompute.hpp"
 
@@ -63,6 +64,10 @@ CommandSpec modesSpec() {
       {"--compact", "",
        "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
        "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
+      {"--similar", "",
+       "solve the shape at unit size with a reference material and scale the bank to the object,\n"
+       "as `strike render --similar` does: the bank that render uses (frequencies equal to a\n"
+       "direct solve's to ~1e-12; some shapes of opposite sign). Not with --tolerance"},
       {"--quiet", "", "no progress or summary on stderr"},
       {"--list-materials", "",
        "print the material table (elastic constants, damping, restitution, friction) with sources and exit"},
@@ -349,8 +354,12 @@ int runModes(const std::vector<std::string>& raw_args) {
   const bool quiet = args.has("--quiet");
   ProgressReporter progress(quiet);
   settings.progress = progress.callback();
-  Result<PrecomputeResult> result =
-      args.has("--tolerance") ? computeToTolerance(args, settings, quiet) : computeModeBank(settings);
+  if (args.has("--similar") && args.has("--tolerance"))
+    return reportError("modes",
+                       badInput("--similar and --tolerance cannot be combined (the refinement solves directly)"));
+  Result<PrecomputeResult> result = args.has("--tolerance") ? computeToTolerance(args, settings, quiet)
+                                    : args.has("--similar") ? computeSimilarModeBank(settings)
+                                                            : computeModeBank(settings);
   progress.finish();
   if (!result) return reportError("modes", result.error());
   if (!quiet)
@@ -363,6 +372,11 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (!quiet) {
     printSummary(settings, *result, output);
     if (!order_reason.empty()) std::fprintf(stderr, "  order       %s\n", order_reason.c_str());
+    if (args.has("--similar")) {
+      const NormalizedProblem problem = normalizeProblem(settings);
+      std::fprintf(stderr, "  similar     scaled from a solve of %s (x %.9g m, cut-off %.9g Hz there)\n",
+                   problem.settings.mesh_spec.c_str(), problem.scale, problem.settings.max_freq_hz);
+    }
   }
   return 0;
 }

@@ -41,19 +41,6 @@ std::string twelveDigits(double v) {
 
 }  // namespace
 
-double normalizedCutoffHz(double hz) {
-  // Grid point k: 2^(k/2) = ldexp(k odd ? sqrt(2) : 1, floor(k/2)); both factors exact or
-  // correctly rounded, and only compared, so every machine picks the same k.
-  auto point = [](int k) {
-    const int half = k >= 0 ? k / 2 : -((1 - k) / 2);
-    return std::ldexp((k - 2 * half) != 0 ? M_SQRT2 : 1.0, half);
-  };
-  int k = 0;
-  while (point(k) < hz && k < 2000) ++k;
-  while (k > -2000 && point(k - 1) >= hz) --k;
-  return point(k);
-}
-
 NormalizedProblem normalizeProblem(const PrecomputeSettings& actual) {
   NormalizedProblem problem;
   PrecomputeSettings& n = problem.settings;
@@ -71,12 +58,10 @@ NormalizedProblem normalizeProblem(const PrecomputeSettings& actual) {
   }
   n.target_edge_m = actual.target_edge_m / problem.scale;  // 0 (automatic) stays 0: relative already
   n.material = Material{"normalized", kNormalizedYoungs_pa, actual.material.poisson, kNormalizedDensity_kg_m3, 0, 0};
-  // lambda_actual = lambda_normalized * factor (similar_bank.hpp), so the actual cut-off is
-  // f / sqrt(factor) in normalized units; a hair above it so that the grid point, scaled back,
-  // never falls short of the actual cut-off by a rounding.
-  const double factor = (actual.material.youngs_pa / kNormalizedYoungs_pa) /
-                        ((actual.material.density_kg_m3 / kNormalizedDensity_kg_m3) * problem.scale * problem.scale);
-  n.max_freq_hz = normalizedCutoffHz(actual.max_freq_hz / std::sqrt(factor) * (1 + 1e-12));
+  // No cut-off: the lowest max_modes modes. Every object of this shape keeps a prefix of them
+  // (its modes below its own cut-off, at most max_modes), whatever its size and material, so
+  // one solve serves them all, the same one whichever object came first.
+  n.max_freq_hz = kNormalizedNoCutoffHz;
   // Rigid modes by the solver's own scale (a fraction of its shift), not by 1 Hz, which would
   // mean a different frequency in every normalized problem.
   n.rigid_freq_hz = 0.0;

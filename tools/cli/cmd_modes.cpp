@@ -384,8 +384,8 @@ int runModes(const std::vector<std::string>& raw_args) {
     if (!order_reason.empty()) std::fprintf(stderr, "  order       %s\n", order_reason.c_str());
     if (args.has("--similar")) {
       const NormalizedProblem problem = normalizeProblem(settings);
-      std::fprintf(stderr, "  similar     scaled from a solve of %s (x %.9g m, cut-off %.9g Hz there)%s%s\n",
-                   problem.settings.mesh_spec.c_str(), problem.scale, problem.settings.max_freq_hz,
+      std::fprintf(stderr, "  similar     scaled from a solve of %s (x %.9g m, its lowest %d modes)%s%s\n",
+                   problem.settings.mesh_spec.c_str(), problem.scale, problem.settings.max_modes,
                    similar_source.cache_entry.empty() ? ""
                    : similar_source.from_cache        ? ", from the cache "
                                                       : ", cached as ",

@@ -78,12 +78,12 @@ struct RenderSettings {
   bool leave_nothing_out = false;
   /// Exact similarity reuse (`strike render --similar`; src/include/strike/normalized_problem.hpp):
   /// every object's bank is the solve of its normalized problem (unit size, a reference material
-  /// of its Poisson ratio, the cut-off rounded up to a half-octave grid), scaled; the cache keys
-  /// that solve, so objects of one shape at other sizes and materials share one eigen-solve, and
-  /// the output does not depend on what the cache holds. Off by default: a solve to the grid's
-  /// cut-off has other eigenvector signs than one to the object's own (see leave_nothing_out), so
-  /// its renders differ from those without it in the polarity of some modes (the same modes,
-  /// frequencies equal to 1e-12) and the committed golden renders would not match.
+  /// of its Poisson ratio, its lowest max_modes modes), scaled and cut at the object's cut-off; the
+  /// cache keys that solve, so objects of one shape at other sizes and materials share one
+  /// eigen-solve, and the output does not depend on what the cache holds. Off by default: that
+  /// solve has other eigenvector signs than one to the object's own cut-off (see
+  /// leave_nothing_out), so its renders differ from those without it in the polarity of some modes
+  /// (the same modes, frequencies equal to 2e-12) and the committed golden renders would not match.
   bool similar_reuse = false;
   /// Physics step, s (at most 1 ms, what the issue allows). Contact times fall on this grid, so an
   /// impact is placed within one step (48 samples at 48 kHz); 1 ms halves the simulation cost of

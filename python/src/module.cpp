@@ -151,6 +151,7 @@ py::dict reportDict(const PyRenderResult& r) {
   d["banks_cached"] = s.banks_cached;
   d["banks_computed"] = s.banks_computed;
   d["banks_shared"] = s.banks_shared;
+  d["banks_scaled"] = s.banks_scaled;
   d["events"] = s.events;
   d["impacts"] = s.impacts;
   d["sustained_contacts"] = s.sustained_contacts;
@@ -224,7 +225,7 @@ py::object eventsArray(const RenderResult& r) {
 }
 
 PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration, double gain,
-                            const std::string& cache_dir, int64_t max_tets, int64_t max_events) {
+                            const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar) {
   Scene scene = take(std::move(parsed));
   RenderSettings settings;
   settings.sample_rate_hz = rate;
@@ -233,6 +234,7 @@ PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration
   settings.cache_dir = cache_dir;
   settings.max_tets = max_tets;
   settings.max_events = static_cast<size_t>(max_events);
+  settings.similar_reuse = similar;
   std::optional<Result<RenderResult>> result;
   {
     py::gil_scoped_release released;
@@ -401,12 +403,12 @@ PYBIND11_MODULE(_strike, m) {
           py::arg("path"));
 
   m.def("render_file", [](const std::string& path, double rate, double duration, double gain,
-                          const std::string& cache_dir, int64_t max_tets, int64_t max_events) {
-    return renderParsed(loadScene(path), rate, duration, gain, cache_dir, max_tets, max_events);
+                          const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar) {
+    return renderParsed(loadScene(path), rate, duration, gain, cache_dir, max_tets, max_events, similar);
   });
   m.def("render_text", [](const std::string& text, const std::string& path, double rate, double duration, double gain,
-                          const std::string& cache_dir, int64_t max_tets, int64_t max_events) {
-    return renderParsed(parseScene(text, path), rate, duration, gain, cache_dir, max_tets, max_events);
+                          const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar) {
+    return renderParsed(parseScene(text, path), rate, duration, gain, cache_dir, max_tets, max_events, similar);
   });
   m.def("default_cache_dir", &defaultCacheDir);
   m.def("default_max_tets", []() { return static_cast<int64_t>(kDefaultMaxTets); });

@@ -251,7 +251,7 @@ def similar(bank: Bank, scale: float = 1.0, material: Union[str, Mapping[str, An
 def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[float] = None,
            duration: Optional[float] = None, gain: float = 1.0, cache: Union[str, os.PathLike, None, bool] = True,
            base_dir: Union[str, os.PathLike, None] = None, max_tets: Optional[int] = None,
-           max_events: Optional[int] = None) -> RenderResult:
+           max_events: Optional[int] = None, similar: bool = False) -> RenderResult:
     """Renders a collision scene, as ``strike render SCENE.json -o OUT.wav`` does (same engine,
     same samples; :meth:`RenderResult.save` writes the CLI's bytes).
 
@@ -260,6 +260,9 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
     rate, duration: override the scene's sample_rate and duration.
     cache: the mode bank cache folder; True (default): :func:`default_cache_dir`; None or False:
         no cache (``--no-cache``).
+    similar: exact similarity reuse (``--similar``, docs/datasets.md): one eigen-solve per shape at
+        unit size, scaled to every size and material of its Poisson ratio; the same bytes as
+        ``strike render --similar``, which differ from a render without it in some modes' polarity.
     The GIL is released during the render.
     """
     rate_hz = 0.0 if rate is None else _number("rate", rate, 8000, 384000, "must be 8000 to 384000 Hz")
@@ -283,10 +286,11 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
         scene = dict(scene)
         # Why a file name: it anchors relative paths and names the source in messages.
         anchor = os.path.join(os.path.abspath(os.fspath(base_dir or ".")), "<scene dict>")
-        native = _strike.render_text(json.dumps(scene), anchor, rate_hz, duration_s, gain, cache_dir, max_tets, max_events)
+        native = _strike.render_text(json.dumps(scene), anchor, rate_hz, duration_s, gain, cache_dir, max_tets, max_events,
+                                     bool(similar))
         return RenderResult(native, scene)
     path = os.fspath(scene)
-    native = _strike.render_file(path, rate_hz, duration_s, gain, cache_dir, max_tets, max_events)
+    native = _strike.render_file(path, rate_hz, duration_s, gain, cache_dir, max_tets, max_events, bool(similar))
     return RenderResult(native, path)
 
 

@@ -2,7 +2,7 @@
 """strike batch: a manifest of renders on a Dask cluster, a local one, or one shard with no Dask.
 
     python3 -m strike.batch MANIFEST.jsonl -o DIR [--workers N | --scheduler ADDRESS | --shard K/N]
-                            [--cache DIR] [--quiet]
+                            [--cache DIR] [--similar] [--quiet]
 
 (also `strike batch ...` and `strike-batch ...`). The manifest format is in strike/manifest.py and
 docs/datasets.md. For each line, DIR gets ID.wav (32-bit float) and, beside it, ID.json: every
@@ -48,14 +48,19 @@ def _paths(out_dir: str, job_id: str) -> tuple:
     return os.path.join(out_dir, job_id + ".wav"), os.path.join(out_dir, job_id + ".json")
 
 
-def is_done(job, out_dir: str) -> bool:
+def job_key(job, similar: bool = False) -> str:
+    """The job's key, told apart when rendered with --similar (other bytes: docs/datasets.md)."""
+    return job.key() if not similar else hashlib.sha256((job.key() + " similar").encode()).hexdigest()
+
+
+def is_done(job, out_dir: str, similar: bool = False) -> bool:
     """ID.json and ID.wav exist, and ID.json was written for these inputs."""
     wav, meta = _paths(out_dir, job.id)
     if not (os.path.isfile(wav) and os.path.isfile(meta)):
         return False
     try:
         with open(meta, encoding="utf-8") as f:
-            return json.load(f).get("job_key") == job.key()
+            return json.load(f).get("job_key") == job_key(job, similar)
     except (OSError, ValueError):
         return False
 
@@ -76,20 +81,20 @@ def _sha256(path: str) -> str:
     return h.hexdigest()
 
 
-def render_job(job, out_dir: str, cache_dir: str, manifest: str = "") -> dict:
+def render_job(job, out_dir: str, cache_dir: str, manifest: str = "", similar: bool = False) -> dict:
     """Renders one job into out_dir (skipping it if done). Runs on a worker; returns a summary
     dict: id, status (done, skipped, failed), error, seconds."""
     import strike  # on the worker
 
     start = time.perf_counter()
-    if is_done(job, out_dir):
+    if is_done(job, out_dir, similar):
         return {"id": job.id, "status": "skipped", "seconds": 0.0}
     host, pid = socket.gethostname(), os.getpid()
     partial = os.path.join(out_dir, _PARTIAL, f"{host}-{pid}-{job.id}")
     os.makedirs(partial, exist_ok=True)
     try:
         result = strike.render(job.scene, rate=job.rate, duration=job.duration, gain=job.gain, cache=cache_dir,
-                               base_dir=job.base_dir)
+                               base_dir=job.base_dir, similar=similar)
         rendered = time.perf_counter()
         wav, meta = _paths(out_dir, job.id)
         partial_wav = os.path.join(partial, job.id + ".wav")
@@ -104,7 +109,8 @@ def render_job(job, out_dir: str, cache_dir: str, manifest: str = "") -> dict:
             "seed": job.seed,
             "scene": job.scene,
             "base_dir": job.base_dir,
-            "job_key": job.key(),
+            "job_key": job_key(job, similar),
+            "similar": similar,
             "strike_version": strike.__version__,
             "audio": {"file": job.id + ".wav", "format": "float", "rate": result.rate, "frames": int(result.audio.shape[0]),
                       "sha256": _sha256(partial_wav)},
@@ -213,6 +219,8 @@ def main(argv: Optional[list] = None) -> int:
     where.add_argument("--scheduler", metavar="ADDRESS", help="use a running Dask cluster, e.g. tcp://head:8786")
     where.add_argument("--shard", metavar="K/N", help="render lines K, K+N, ... here, with no Dask (Slurm arrays)")
     parser.add_argument("--cache", metavar="DIR", help="bank cache folder shared by the workers; default $STRIKE_CACHE_DIR or ~/.cache/strike")
+    parser.add_argument("--similar", action="store_true",
+                        help="one eigen-solve per shape at unit size, scaled to every size and material (docs/datasets.md)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
 
@@ -236,7 +244,7 @@ def main(argv: Optional[list] = None) -> int:
     out_dir = os.path.abspath(args.out_dir)
     os.makedirs(out_dir, exist_ok=True)
     remove_dead_partials(out_dir)
-    todo = [job for job in jobs if not is_done(job, out_dir)]
+    todo = [job for job in jobs if not is_done(job, out_dir, args.similar)]
     progress = Progress(len(jobs), len(jobs) - len(todo), args.quiet)
     failures = []
     start = time.perf_counter()
@@ -249,7 +257,7 @@ def main(argv: Optional[list] = None) -> int:
 
     if shard or not todo:
         for job in todo:
-            record(render_job(job, out_dir, cache_dir, args.manifest))
+            record(render_job(job, out_dir, cache_dir, args.manifest, args.similar))
     else:
         from distributed import Client, LocalCluster, as_completed
         cluster = None
@@ -265,7 +273,7 @@ def main(argv: Optional[list] = None) -> int:
         progress.start = time.perf_counter()  # the rate counts renders, not the cluster's start
         try:
             futures = client.map(render_job, todo, out_dir=out_dir, cache_dir=cache_dir, manifest=args.manifest,
-                                 pure=False)
+                                 similar=args.similar, pure=False)
             by_future = dict(zip(futures, todo))
             for future in as_completed(futures):
                 job = by_future[future]

@@ -53,3 +53,30 @@ def test_similarity_refuses_what_it_cannot_derive():
         strike.similar(reference, 2.0)
     half = strike.similar(reference, 2.0, max_freq=3000)
     np.testing.assert_allclose(half.frequencies_hz, reference.frequencies_hz[:half.mode_count] / 2, rtol=1e-12)
+
+
+TWO_BARS = {
+    "sample_rate": 48000, "duration": 0.4, "gravity": [0, 0, -9.81],
+    "listener": {"position": [0.0, -1.0, 0.5]}, "ground": {"material": "concrete"}, "max_modes": 30,
+    "objects": [
+        {"name": "steel", "mesh": "box:0.3,0.02,0.02", "material": "steel", "order": 2,
+         "position": [0, 0, 0.1], "orientation": [0.99996, 0.0, 0.00873, 0.0]},
+        # 1.4 x as long, softer and lighter, steel's Poisson ratio: the same normalized problem.
+        {"name": "other", "mesh": "box:0.42,0.028,0.028", "order": 2,
+         "material": {"name": "other", "youngs_pa": 1.1e11, "poisson": 0.29, "density_kg_m3": 4000,
+                      "loss_factor": 3e-4},
+         "position": [0, 0.2, 0.12], "orientation": [0.99996, 0.00873, 0.0, 0.0]},
+    ],
+}
+
+
+def test_render_similar_solves_one_shape_once_and_the_cache_changes_no_byte(tmp_path):
+    cold = strike.render(TWO_BARS, cache=tmp_path / "cache", similar=True)
+    assert cold.metadata["objects_sounded"] == 2
+    assert (cold.metadata["banks_computed"], cold.metadata["banks_scaled"]) == (1, 1)
+    warm = strike.render(TWO_BARS, cache=tmp_path / "cache", similar=True)
+    assert (warm.metadata["banks_computed"], warm.metadata["banks_cached"], warm.metadata["banks_scaled"]) == (0, 1, 1)
+    assert cold.audio.tobytes() == warm.audio.tobytes()
+    # Without --similar each bar is its own solve.
+    direct = strike.render(TWO_BARS, cache=None)
+    assert direct.metadata["banks_computed"] == 2

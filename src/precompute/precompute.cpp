@@ -164,6 +164,7 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
   ModalSettings modal;
   modal.max_freq_hz = settings.max_freq_hz;
   modal.max_modes = settings.max_modes;
+  modal.rigid_freq_hz = settings.rigid_freq_hz;
   modal.progress = settings.progress;
   Result<ModalResult> modes = solveModesExclusive(K, M, modal);
   if (!modes) return modes.error();

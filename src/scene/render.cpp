@@ -23,6 +23,7 @@
 #include "strike/bank.hpp"
 #include "strike/bank_cache.hpp"
 #include "strike/materials.hpp"
+#include "strike/normalized_problem.hpp"
 #include "strike/precompute.hpp"
 #include "strike/scene_checks.hpp"
 #include "strike/synth.hpp"
@@ -57,6 +58,12 @@ struct Body {
   bool silent = false;            ///< ...but no mode in the synthesized band
   std::optional<ShapeRows> rows;  ///< shapes read at the struck vertices only (readStruckShapes)
   double contact_radius_m = 0.0;  ///< radius of the sphere of equal volume, for Hertz
+  // With RenderSettings::similar_reuse: cache_key, file, from_cache and mesh are the normalized
+  // solve's, and bank its scaled copy (geometry only until phase 2).
+  NormalizedProblem normal;   ///< the solve the bank is scaled from (normalized_problem.hpp)
+  uint64_t identity_key = 0;  ///< of the object itself: equal for identical objects
+  uint64_t normal_mesh_hash = 0;
+  ModeBank normal_bank;  ///< the normalized solve: mass and surface, header, or whole once read
 };
 
 std::string hex(uint64_t value) {
@@ -92,6 +99,148 @@ bool openCached(const std::string& cache_dir, Body& body, RenderReport& report) 
   return true;
 }
 
+// ---- RenderSettings::similar_reuse: every bank a normalized solve, scaled ---------------------
+
+/// The body's normalized solve from the cache (header now, shapes in phase 2), if there and of
+/// the same mesh; counted in the report.
+bool openCachedSolve(const std::string& cache_dir, Body& body, RenderReport& report) {
+  const std::string path = cachePath(cache_dir, body.cache_key, ".modes");
+  if (!std::filesystem::is_regular_file(path)) return false;
+  Result<BankFile> cached = BankFile::open(path);
+  // A damaged cache entry is recomputed, not trusted (damaged shapes are found in phase 2).
+  if (!cached || cached->bank().mesh_hash != body.normal_mesh_hash) return false;
+  body.normal_bank = cached->bank();
+  body.file = std::move(*cached);
+  body.has_modes = true;
+  body.from_cache = true;
+  ++report.banks_cached;
+  report.precompute_saved_seconds += body.normal_bank.factorize_seconds + body.normal_bank.lanczos_seconds;
+  return true;
+}
+
+/// The body's mass and surface for the simulator: its normalized solve's, scaled, so they are
+/// the very numbers of the bank phase 2 scales, whether the solve was cached or not.
+Status scaleGeometry(Body& body) {
+  ModeBank geometry = body.normal_bank;
+  geometry.eigenvalues.clear();
+  geometry.shapes.clear();
+  geometry.radiation_m2.clear();
+  geometry.frequency_error_estimate.clear();
+  Result<ModeBank> scaled = scaleNormalizedBank(geometry, body.normal, body.precompute, body.mesh_hash);
+  if (!scaled) return badInput("objects \"" + body.object->name + "\": " + scaled.error().message);
+  body.bank = std::move(*scaled);
+  return {};
+}
+
+/// Loads the normalized mesh (to solve, and for mass and surface until then).
+Status loadNormalMesh(Body& body) {
+  Result<LoadedMesh> loaded = loadTetMesh(body.normal.settings.mesh_spec, meshOptionsFor(body.normal.settings));
+  if (!loaded) return badInput("objects \"" + body.object->name + "\": " + loaded.error().message);
+  body.mesh = std::move(*loaded);
+  return {};
+}
+
+/// Phase 1 for one object with similar_reuse: keys, and the scaled mass and surface.
+Status prepareSimilarBody(const RenderSettings& settings, uint64_t mesh_hash, Body& body,
+                          std::map<uint64_t, const Body*>& loaded_by_key, RenderReport& report) {
+  body.mesh_hash = mesh_hash;
+  body.identity_key = bankCacheKey(mesh_hash, body.precompute);
+  body.normal = normalizeProblem(body.precompute);
+  const std::string& normal_spec = body.normal.settings.mesh_spec;
+  body.normal_mesh_hash = isPrimitiveSpec(normal_spec) ? fnv1a64(normal_spec.data(), normal_spec.size()) : mesh_hash;
+  body.cache_key = normalizedBankCacheKey(body.normal_mesh_hash, body.normal);
+  if (auto same = loaded_by_key.find(body.cache_key); same != loaded_by_key.end()) {
+    body.normal_bank = same->second->normal_bank;  // an object of the same shape was read or meshed already
+    body.file = same->second->file;
+    body.has_modes = same->second->has_modes;
+    if (!body.has_modes) body.mesh = same->second->mesh;
+    return scaleGeometry(body);
+  }
+  if (!settings.cache_dir.empty() && openCachedSolve(settings.cache_dir, body, report)) return scaleGeometry(body);
+  if (Status loaded = loadNormalMesh(body); !loaded) return loaded;
+  body.normal_bank = massAndSurfaceBank(*body.mesh, body.normal.settings);
+  return scaleGeometry(body);
+}
+
+/// Reads the whole cached normalized solve (a scaled bank needs every shape: its radiation is
+/// recomputed from them). False when the entry is damaged.
+bool readCachedSolve(Body& body, RenderReport& report) {
+  Result<ModeBank> all = body.file->readAll();
+  if (!all) return false;
+  body.normal_bank = std::move(*all);
+  body.file.reset();
+  report.shape_vertices_read += body.normal_bank.surfaceVertexCount();
+  report.shape_vertices_total += body.normal_bank.surfaceVertexCount();
+  return true;
+}
+
+/// Undoes openCachedSolve() for an entry found damaged: it is solved again.
+void forgetCachedSolve(Body& body, RenderReport& report) {
+  body.file.reset();
+  body.has_modes = false;
+  if (body.from_cache) {
+    --report.banks_cached;
+    report.precompute_saved_seconds -= body.normal_bank.factorize_seconds + body.normal_bank.lanczos_seconds;
+  }
+  body.from_cache = false;
+}
+
+/// The body's bank from its whole normalized solve, which it then holds for the others.
+Status scaleSolve(Body& body, size_t index, std::map<uint64_t, size_t>& solved_by_key) {
+  Result<ModeBank> scaled = scaleNormalizedBank(body.normal_bank, body.normal, body.precompute, body.mesh_hash);
+  if (!scaled) return badInput("objects \"" + body.object->name + "\": " + scaled.error().message);
+  body.bank = std::move(*scaled);
+  body.has_modes = true;
+  body.mesh.reset();
+  solved_by_key[body.cache_key] = index;
+  return {};
+}
+
+/// Phase 2 for one sounding body with similar_reuse: its shape's solve (shared with an earlier
+/// body, read from the cache, or solved now and cached), scaled to it.
+template <class Warn>
+Status similarPhase2(std::vector<Body>& bodies, size_t i, const RenderSettings& settings,
+                     std::map<uint64_t, size_t>& solved_by_key, RenderReport& report, Warn& warn) {
+  Body& body = bodies[i];
+  if (auto shared = solved_by_key.find(body.cache_key); shared != solved_by_key.end()) {
+    const Body& holder = bodies[shared->second];
+    ++(holder.identity_key == body.identity_key ? report.banks_shared : report.banks_scaled);
+    Result<ModeBank> scaled = scaleNormalizedBank(holder.normal_bank, body.normal, body.precompute, body.mesh_hash);
+    if (!scaled) return badInput("objects \"" + body.object->name + "\": " + scaled.error().message);
+    body.bank = std::move(*scaled);
+    body.file.reset();
+    body.mesh.reset();
+    return {};
+  }
+  if (body.file) {
+    if (readCachedSolve(body, report)) return scaleSolve(body, i, solved_by_key);
+    forgetCachedSolve(body, report);  // damaged shapes are recomputed, not trusted
+  }
+  // Held until the solve is in the cache: a render elsewhere that needs it waits, then reads it.
+  CacheEntryLock lock;
+  if (!settings.cache_dir.empty()) {
+    lock = CacheEntryLock(cachePath(settings.cache_dir, body.cache_key, ".lock"));
+    // Solved by whoever held the lock while this render simulated or waited.
+    if (lock.held() && openCachedSolve(settings.cache_dir, body, report)) {
+      if (readCachedSolve(body, report)) return scaleSolve(body, i, solved_by_key);
+      forgetCachedSolve(body, report);
+    }
+  }
+  if (!body.mesh)
+    if (Status loaded = loadNormalMesh(body); !loaded) return loaded;
+  if (settings.progress) settings.progress("modes " + body.object->name, -1.0);
+  Result<PrecomputeResult> computed = computeModeBankForMesh(*body.mesh, body.normal.settings);
+  if (!computed) return badInput("objects \"" + body.object->name + "\": " + computed.error().message);
+  for (const MeshWarning& w : computed->report.warnings) warn("objects \"" + body.object->name + "\": " + w.message);
+  body.normal_bank = std::move(computed->bank);
+  ++report.banks_computed;
+  if (!settings.cache_dir.empty()) {
+    // A failed cache write costs the next render time, never this one its result.
+    (void)writeBank(cachePath(settings.cache_dir, body.cache_key, ".modes"), body.normal_bank);
+  }
+  return scaleSolve(body, i, solved_by_key);
+}
+
 /// Phase 1 for one object: a bank with at least mass properties and surface.
 Status prepareBody(const Scene& scene, const RenderSettings& settings, double max_freq_hz, Body& body,
                    std::map<uint64_t, const Body*>& loaded_by_key, RenderReport& report) {
@@ -116,6 +265,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   body.precompute.progress = settings.progress;
   Result<uint64_t> hash = meshHash(object.mesh);
   if (!hash) return hash.error();
+  if (settings.similar_reuse) return prepareSimilarBody(settings, *hash, body, loaded_by_key, report);
   body.cache_key = bankCacheKey(*hash, body.precompute);
   body.mesh_hash = *hash;
   if (auto same = loaded_by_key.find(body.cache_key); same != loaded_by_key.end()) {
@@ -376,6 +526,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       warn(neverStruckWarning(scene, sim_bodies[i], duration));
   const auto precompute_start = std::chrono::steady_clock::now();
   std::map<uint64_t, size_t> computed_by_key;  // identical objects share one eigen-solve
+  std::map<uint64_t, size_t> solved_by_key;    // similar_reuse: objects of one shape share one solve
   for (size_t i = 0; i < bodies.size(); ++i) {
     Body& body = bodies[i];
     if (body.max_velocity_change_m_s == 0.0 && !settings.leave_nothing_out) continue;
@@ -385,6 +536,10 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       continue;
     }
     body.sounded = true;
+    if (settings.similar_reuse && body.object->bank.empty()) {
+      if (Status made = similarPhase2(bodies, i, settings, solved_by_key, report, warn); !made) return made.error();
+      continue;
+    }
     if (body.file) {
       Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), report);
       if (read) continue;

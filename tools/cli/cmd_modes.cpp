@@ -5,14 +5,17 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "modes_similar.hpp"
 #include "output_check.hpp"
 #include "progress_reporter.hpp"
 #include "strike/element_order.hpp"
 #include "strike/error_estimate.hpp"
 #include "strike/materials.hpp"
 #include "strike/mesh.hpp"
+#include "strike/normalized_problem.hpp"
 #include "strike/parse_size.hpp"
 #include "strike/precompute.hpp"
+#include "strike/render.hpp"
 
 namespace strike::cli {
 namespace {
@@ -63,6 +66,14 @@ CommandSpec modesSpec() {
       {"--compact", "",
        "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
        "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
+      {"--similar", "",
+       "solve the shape at unit size with a reference material and scale the bank to the object,\n"
+       "as `strike render --similar` does: the bank that render uses (frequencies equal to a\n"
+       "direct solve's to ~1e-12; some shapes of opposite sign). Not with --tolerance"},
+      {"--cache", "DIR",
+       "with --similar: the bank cache render uses, for the normalized solve (read if there,\n"
+       "else solved and put there); default $STRIKE_CACHE_DIR or ~/.cache/strike"},
+      {"--no-cache", "", "with --similar: solve, read and write no cache"},
       {"--quiet", "", "no progress or summary on stderr"},
       {"--list-materials", "",
        "print the material table (elastic constants, damping, restitution, friction) with sources and exit"},
@@ -352,8 +363,16 @@ int runModes(const std::vector<std::string>& raw_args) {
   const bool quiet = args.has("--quiet");
   ProgressReporter progress(quiet);
   settings.progress = progress.callback();
-  Result<PrecomputeResult> result =
-      args.has("--tolerance") ? computeToTolerance(args, settings, quiet) : computeModeBank(settings);
+  if (!args.has("--similar") && (args.has("--cache") || args.has("--no-cache")))
+    return reportError("modes", badInput("--cache and --no-cache go with --similar (a direct solve is not cached)"));
+  const std::string cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
+  SimilarSource similar_source;
+  if (args.has("--similar") && args.has("--tolerance"))
+    return reportError("modes",
+                       badInput("--similar and --tolerance cannot be combined (the refinement solves directly)"));
+  Result<PrecomputeResult> result = args.has("--tolerance") ? computeToTolerance(args, settings, quiet)
+                                    : args.has("--similar") ? similarModeBank(settings, cache_dir, similar_source)
+                                                            : computeModeBank(settings);
   progress.finish();
   if (!result) return reportError("modes", result.error());
   if (!quiet)
@@ -366,6 +385,15 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (!quiet) {
     printSummary(settings, *result, output);
     if (!order_reason.empty()) std::fprintf(stderr, "  order       %s\n", order_reason.c_str());
+    if (args.has("--similar")) {
+      const NormalizedProblem problem = normalizeProblem(settings);
+      std::fprintf(stderr, "  similar     scaled from a solve of %s (x %.9g m, its lowest %d modes)%s%s\n",
+                   problem.settings.mesh_spec.c_str(), problem.scale, problem.settings.max_modes,
+                   similar_source.cache_entry.empty() ? ""
+                   : similar_source.from_cache        ? ", from the cache "
+                                                      : ", cached as ",
+                   similar_source.cache_entry.c_str());
+    }
   }
   return 0;
 }

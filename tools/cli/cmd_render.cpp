@@ -41,6 +41,10 @@ CommandSpec renderSpec() {
        "after the render, remove the least recently used banks until the cache fits\n"
        "in SIZE (e.g. 500M, 2G; 0 = no cap); default 2G. See `strike cache`"},
       {"--max-tets", "N", "refuse object meshes with more tets than this (memory cap); default 2000000"},
+      {"--similar", "",
+       "exact similarity reuse: solve each shape once at unit size and scale it to every size and\n"
+       "material (same Poisson ratio) of the scene and the cache (docs/datasets.md); changes the\n"
+       "polarity of some modes against a render without it"},
       {"--max-events", "N", "stop if the simulation records more contact events (memory cap); default 20000000"},
       {"--simd", "KERNEL", kSimdHelp},
       {"--via-library", "",
@@ -74,8 +78,9 @@ void printSummary(const RenderResult& result, const std::string& output, double 
                r.objects, r.objects_struck, r.objects_sounded, r.objects_silent, r.objects_inaudible,
                r.objects - r.objects_struck);
   std::fprintf(stderr,
-               "  banks       %zu given, %zu from the cache, %zu computed, %zu shared between identical objects\n",
-               r.banks_given, r.banks_cached, r.banks_computed, r.banks_shared);
+               "  banks       %zu given, %zu from the cache, %zu computed, %zu shared between identical objects, "
+               "%zu scaled from a solve of the same shape\n",
+               r.banks_given, r.banks_cached, r.banks_computed, r.banks_shared, r.banks_scaled);
   if (r.shape_vertices_total > 0)
     std::fprintf(stderr,
                  "  shapes      read at %zu of the bank files' %zu surface vertices (%.1f%%: where contacts landed)\n",
@@ -176,6 +181,7 @@ int runRender(const std::vector<std::string>& raw_args) {
   if (!simd) return reportError("render", simd.error());
   settings.simd = *simd;
   if (args.has("--via-library")) settings.output = libraryOutput(settings.gain);
+  settings.similar_reuse = args.has("--similar");
   settings.cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
   if (args.has("--cache-max-size")) {
     Result<uint64_t> cap = parseByteSize(args.text("--cache-max-size"), "--cache-max-size");

@@ -21,6 +21,9 @@ struct PrecomputeSettings {
   double mesh_scale = 1.0;   ///< metres per unit of a mesh file (MeshOptions::scale); primitives ignore it
   double max_freq_hz = 20000.0;
   int max_modes = 200;
+  /// Modes below this are rigid-body modes (ModalSettings::rigid_freq_hz). Normalized solves
+  /// use 0: the solver's own scale decides (src/include/strike/normalized_problem.hpp).
+  double rigid_freq_hz = 1.0;
   int64_t max_tets = kDefaultMaxTets;  ///< size cap of the tet mesh (--max-tets), see MeshOptions
   ProgressFn progress;                 ///< optional
   /// Estimate each mode's frequency error (src/precompute/error_estimate.cpp) at extra cost;

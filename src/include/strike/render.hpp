@@ -76,6 +76,15 @@ struct RenderSettings {
   /// radiation weight (an rms over directions, without sign) does not undo, so the two renders
   /// would differ by that arbitrariness rather than by what was left out (README).
   bool leave_nothing_out = false;
+  /// Exact similarity reuse (`strike render --similar`; src/include/strike/normalized_problem.hpp):
+  /// every object's bank is the solve of its normalized problem (unit size, a reference material
+  /// of its Poisson ratio, its lowest max_modes modes), scaled and cut at the object's cut-off; the
+  /// cache keys that solve, so objects of one shape at other sizes and materials share one
+  /// eigen-solve, and the output does not depend on what the cache holds. Off by default: that
+  /// solve has other eigenvector signs than one to the object's own cut-off (see
+  /// leave_nothing_out), so its renders differ from those without it in the polarity of some modes
+  /// (the same modes, frequencies equal to 2e-12) and the committed golden renders would not match.
+  bool similar_reuse = false;
   /// Physics step, s (at most 1 ms, what the issue allows). Contact times fall on this grid, so an
   /// impact is placed within one step (48 samples at 48 kHz); 1 ms halves the simulation cost of
   /// the 0.5 ms step used before (`strike bench render` measures both).
@@ -97,6 +106,9 @@ struct RenderReport {
   size_t objects_silent = 0;     ///< struck audibly, but no mode in the synthesized band (warnings say why)
   size_t objects_inaudible = 0;  ///< struck, but too softly to hear: no eigen-solve
   size_t banks_given = 0, banks_cached = 0, banks_computed = 0, banks_shared = 0;
+  /// Banks scaled from a solve of the same shape made in this render for an object of another
+  /// size or material (every computed bank is a normalized solve, scaled: normalized_problem.hpp).
+  size_t banks_scaled = 0;
   /// Surface vertices whose mode shapes were read from given or cached bank files, of all theirs
   /// (a render reads shapes only where its contacts land).
   size_t shape_vertices_read = 0, shape_vertices_total = 0;

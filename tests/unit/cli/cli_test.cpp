@@ -3,6 +3,7 @@
 // good input gives banks and sounds whose numbers match theory.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -114,6 +115,45 @@ nlohmann::json jsonOf(const CliResult& r) {
   nlohmann::json j = nlohmann::json::parse(r.out, nullptr, false);
   EXPECT_FALSE(j.is_discarded()) << r.out;
   return j;
+}
+
+TEST(CliModes, SimilarWritesTheObjectsOwnBankScaledFromTheCachedSolveOfItsShape) {
+  const std::string cache = temp("modes-similar-cache-" + std::to_string(getpid()));
+  std::filesystem::remove_all(cache);
+  const std::string common = " --order 1 --max-modes 12 --no-error-estimate";
+  const std::string direct = temp("modes-direct.modes"), steel = temp("modes-similar.modes"),
+                    other = temp("modes-similar-other.modes");
+  ASSERT_EQ(runCli("modes box:0.2,0.03,0.01 --material steel" + common + " -o '" + direct + "' --quiet").exit_code, 0);
+  CliResult cold = runCli("modes box:0.2,0.03,0.01 --material steel" + common + " --similar --cache '" + cache +
+                          "' -o '" + steel + "'");
+  ASSERT_EQ(cold.exit_code, 0) << cold.err;
+  EXPECT_NE(cold.err.find("scaled from a solve of box:1,0.15,0.05 (x 0.2 m, its lowest 12 modes), cached as"),
+            std::string::npos)
+      << cold.err;
+  // 1.4 x the size, another E and rho at steel's Poisson ratio: the same solve, from the cache.
+  CliResult warm = runCli("modes box:0.28,0.042,0.014 --youngs 1.5e11 --poisson 0.29 --density 6000" + common +
+                          " --similar --cache '" + cache + "' -o '" + other + "'");
+  ASSERT_EQ(warm.exit_code, 0) << warm.err;
+  EXPECT_NE(warm.err.find("(x 0.28 m, its lowest 12 modes), from the cache"), std::string::npos) << warm.err;
+
+  const nlohmann::json d = jsonOf(runCli("info --json '" + direct + "'"));
+  const nlohmann::json s = jsonOf(runCli("info --json '" + steel + "'"));
+  const nlohmann::json o = jsonOf(runCli("info --json '" + other + "'"));
+  // A normal bank of the object asked for: its mesh, material and cut-off, and a direct solve's modes.
+  EXPECT_EQ(s["mesh"]["source"], d["mesh"]["source"]);
+  EXPECT_EQ(s["mesh"]["hash"], d["mesh"]["hash"]);
+  EXPECT_EQ(s["material"], d["material"]);
+  EXPECT_EQ(s["cutoff"]["max_freq_hz"], d["cutoff"]["max_freq_hz"]);
+  EXPECT_NEAR(s["mass_kg"].get<double>() / d["mass_kg"].get<double>(), 1.0, 1e-12);
+  const std::vector<double> fd = d["frequencies_hz"], fs = s["frequencies_hz"], fo = o["frequencies_hz"];
+  ASSERT_EQ(fs.size(), fd.size());
+  for (size_t i = 0; i < fd.size(); ++i) EXPECT_NEAR(fs[i] / fd[i], 1.0, 1e-9) << i;
+  // The other object's frequencies: sqrt(E / rho) / L times the steel bar's, to rounding.
+  const double ratio = std::sqrt((1.5e11 / 6000) / (kSteelE / kSteelRho)) / 1.4;
+  ASSERT_GE(fo.size(), fs.size());  // lower: at least as many below the cut-off
+  for (size_t i = 0; i < fs.size(); ++i) EXPECT_NEAR(fo[i] / (fs[i] * ratio), 1.0, 1e-12) << i;
+  EXPECT_EQ(o["mesh"]["source"], "box:0.28,0.042,0.014");
+  std::filesystem::remove_all(cache);
 }
 
 /// The free-free steel bar of the issue, computed once for the suite.

@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: MIT
+#include "modes_similar.hpp"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "strike/bank.hpp"
+#include "strike/hash.hpp"
+#include "strike/normalized_problem.hpp"
+#include "strike/read_file.hpp"
+
+namespace strike::cli {
+namespace {
+
+/// The hash a loaded mesh records (LoadedMesh::source_hash): of the spec text for a primitive,
+/// of the file's bytes otherwise; as `strike render` computes it.
+Result<uint64_t> specHash(const std::string& spec) {
+  if (isPrimitiveSpec(spec)) return fnv1a64(spec.data(), spec.size());
+  Result<std::string> bytes = readWholeFile(spec, uint64_t(1) << 31);
+  if (!bytes) return bytes.error();
+  return fnv1a64(bytes->data(), bytes->size());
+}
+
+}  // namespace
+
+Result<PrecomputeResult> similarModeBank(const PrecomputeSettings& settings, const std::string& cache_dir,
+                                         SimilarSource& source) {
+  if (cache_dir.empty()) return computeSimilarModeBank(settings);
+  Result<uint64_t> actual_hash = specHash(settings.mesh_spec);
+  if (!actual_hash) return actual_hash.error();
+  const NormalizedProblem problem = normalizeProblem(settings);
+  Result<uint64_t> normal_hash = specHash(problem.settings.mesh_spec);
+  if (!normal_hash) return normal_hash.error();
+  char name[32];
+  std::snprintf(name, sizeof name, "/%016llx.modes",
+                static_cast<unsigned long long>(normalizedBankCacheKey(*normal_hash, problem)));
+  source.cache_entry = cache_dir + name;
+  if (std::filesystem::is_regular_file(source.cache_entry)) {
+    Result<ModeBank> cached = readBank(source.cache_entry);
+    // A damaged or foreign entry, or one without the error estimate asked for, is solved again.
+    if (cached && cached->mesh_hash == *normal_hash &&
+        (!settings.error_estimate || cached->frequency_error_estimate.size() == cached->modeCount())) {
+      Result<ModeBank> scaled = scaleNormalizedBank(*cached, problem, settings, *actual_hash);
+      if (!scaled) return scaled.error();
+      PrecomputeResult result;
+      result.bank = std::move(*scaled);
+      result.report.capped_by_max_modes = cached->modeCount() >= cached->max_modes;
+      source.from_cache = true;
+      return result;
+    }
+  }
+  Result<PrecomputeResult> solved = computeModeBank(problem.settings);
+  if (!solved) return solved.error();
+  std::error_code ignored;
+  std::filesystem::create_directories(cache_dir, ignored);
+  (void)writeBank(source.cache_entry, solved->bank);  // a failed cache write costs the next run time
+  Result<ModeBank> scaled = scaleNormalizedBank(solved->bank, problem, settings, *actual_hash);
+  if (!scaled) return scaled.error();
+  solved->bank = std::move(*scaled);
+  return solved;
+}
+
+}  // namespace strike::cli

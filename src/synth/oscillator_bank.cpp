@@ -301,6 +301,15 @@ struct OscillatorBank::Impl {
     }
   }
 
+  // The object's extra (contact) damping in force at `sample`: pulses and the oscillators they
+  // feed must use the same pole.
+  static double extraDampingAt(const ObjectInfo& obj, uint64_t sample) {
+    const auto& schedule = obj.damping_schedule;
+    auto after =
+        std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(sample, static_cast<double>(INFINITY)));
+    return after != schedule.begin() ? std::prev(after)->second : 0.0;
+  }
+
   // no_alloc: fail with NoCapacity rather than grow a record or the pool.
   ImpactResult addImpact(const ImpactDesc& desc, bool no_alloc) {
     if (desc.object >= objects.size()) return ImpactResult::BadObject;
@@ -346,13 +355,7 @@ struct OscillatorBank::Impl {
 
     // Contact damping scheduled for this object at the pulse's start (setExtraDamping is called
     // before the impacts it covers), so pulses and the oscillators they feed use the same pole.
-    double extra_damping = 0.0;
-    {
-      const auto& schedule = obj.damping_schedule;
-      auto after = std::upper_bound(schedule.begin(), schedule.end(),
-                                    std::make_pair(start_sample, static_cast<double>(INFINITY)));
-      if (after != schedule.begin()) extra_damping = std::prev(after)->second;
-    }
+    const double extra_damping = extraDampingAt(obj, start_sample);
     for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
       const double g = desc.modal_impulse[j];
       if (g == 0.0 || !std::isfinite(g)) continue;
@@ -454,14 +457,8 @@ struct OscillatorBank::Impl {
   ImpactResult addBoxAsSteps(const ImpactDesc& desc, double t0, double tau) {
     const ObjectInfo& obj = objects[desc.object];
     const double tau_s = tau * h;
-    double extra_damping = 0.0;
-    {
-      const auto& schedule = obj.damping_schedule;
-      const uint64_t first = std::max<uint64_t>(static_cast<uint64_t>(std::ceil(t0 - 1e-7)), pos);
-      auto after =
-          std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(first, static_cast<double>(INFINITY)));
-      if (after != schedule.begin()) extra_damping = std::prev(after)->second;
-    }
+    const double extra_damping =
+        extraDampingAt(obj, std::max<uint64_t>(static_cast<uint64_t>(std::ceil(t0 - 1e-7)), pos));
     // With ramped edges (the box convolved with a unit box of r), each edge is two ramps and
     // the ringing part is e^{pU} / (p^2 tau r) at t0, t0 + r, t0 + tau, t0 + tau + r with signs
     // + - - +; the polynomial parts again cancel the feedthrough g R f. min_freq_hz >= 20 Hz keeps
@@ -535,14 +532,8 @@ struct OscillatorBank::Impl {
       for (size_t k = 0; k < records; ++k)
         if (pool[free_records[free_records.size() - 1 - k]].hits.capacity() < obj.mode_count)
           return ImpactResult::NoCapacity;
-    double extra_damping = 0.0;
-    {
-      const auto& schedule = obj.damping_schedule;
-      const uint64_t first = std::max<uint64_t>(static_cast<uint64_t>(std::ceil(t0 - 1e-7)), pos);
-      auto after =
-          std::upper_bound(schedule.begin(), schedule.end(), std::make_pair(first, static_cast<double>(INFINITY)));
-      if (after != schedule.begin()) extra_damping = std::prev(after)->second;
-    }
+    const double extra_damping =
+        extraDampingAt(obj, std::max<uint64_t>(static_cast<uint64_t>(std::ceil(t0 - 1e-7)), pos));
     ++stats.impacts;
     bool audible = false;
     auto schedule = [&](Impact& im, uint32_t record) {

@@ -3,6 +3,7 @@
 // fall asleep and go silent, and restitution and friction come from the scene (issue 15 items
 // 4, 8 and 12).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -23,7 +24,10 @@ namespace {
 using test::CliResult;
 using test::runCli;
 
-std::string temp(const std::string& name) { return testing::TempDir() + "/" + name; }
+// Per process: two test runs on one machine must not share (or delete) each other's folders.
+std::string temp(const std::string& name) {
+  return testing::TempDir() + "/" + name + "-" + std::to_string(static_cast<long>(getpid()));
+}
 const std::string kGlass = std::string(STRIKE_SOURCE_DIR) + "/assets/meshes/glass.obj";
 
 /// One row of `render --events`: time, the two body names, the other fields as numbers.

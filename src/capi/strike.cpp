@@ -52,8 +52,6 @@ uint32_t nextPow2(uint32_t v) {
   return p;
 }
 
-bool poseFrom(const double* position, const double* quat, Pose& pose) { return pose.set(position, quat); }
-
 /// Why a config is refused, naming the field and its value; empty when it is valid.
 std::string rejectedField(const strike_context_config& c) {
   char why[256];
@@ -527,7 +525,7 @@ STRIKE_API strike_status STRIKE_CALL strike_object_add(strike_context ctx, const
     if (!c.bank || c.bank->context != ctx)
       return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: bank is NULL or from another context");
     Pose pose;
-    if (!poseFrom(c.position, c.orientation, pose))
+    if (!pose.set(c.position, c.orientation))
       return fail(ctx, STRIKE_ERR_INVALID_ARG,
                   "strike_object_add: position/orientation not finite, or orientation is a zero quaternion");
     if (!(c.gain >= 0.0f) || !std::isfinite(c.gain))
@@ -627,7 +625,7 @@ STRIKE_API strike_status STRIKE_CALL strike_object_set_pose(strike_context ctx, 
     cmd.type = CommandType::SetPose;
     cmd.index = id.index;
     cmd.generation = id.generation;
-    if (!poseFrom(position, orientation, cmd.pose))
+    if (!cmd.pose.set(position, orientation))
       return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_set_pose: NULL, non-finite, or zero quaternion");
     if (!sendCommand(ctx, cmd)) return fail(ctx, STRIKE_ERR_QUEUE_FULL, "strike_object_set_pose: command queue full");
     return STRIKE_OK;
@@ -661,7 +659,7 @@ STRIKE_API strike_status STRIKE_CALL strike_listener_set_pose(strike_context ctx
     collect(ctx);
     Command cmd{};
     cmd.type = CommandType::SetListener;
-    if (!poseFrom(position, orientation, cmd.pose))
+    if (!cmd.pose.set(position, orientation))
       return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_listener_set_pose: NULL, non-finite, or zero quaternion");
     if (!sendCommand(ctx, cmd)) return fail(ctx, STRIKE_ERR_QUEUE_FULL, "strike_listener_set_pose: command queue full");
     return STRIKE_OK;

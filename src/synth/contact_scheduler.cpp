@@ -61,16 +61,7 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
   impact.duration_s = duration_s;
   impact.shape = shape;
   impact.modal_impulse = modal;
-  if (!settings_.realtime) {
-    const SynthStats before = v.synth_.stats();
-    v.synth_.addImpact(impact);
-    if (v.synth_.stats().impacts_inaudible > before.impacts_inaudible)
-      ++stats_.impacts_inaudible;
-    else
-      ++stats_.impacts;
-    return;
-  }
-  switch (v.synth_.addImpactNoAlloc(impact)) {
+  switch (settings_.realtime ? v.synth_.addImpactNoAlloc(impact) : v.synth_.addImpact(impact)) {
     case ImpactResult::Scheduled: ++stats_.impacts; break;
     case ImpactResult::Inaudible: ++stats_.impacts_inaudible; break;
     case ImpactResult::NoCapacity:
@@ -164,12 +155,11 @@ void SoundEngine::contact(const EngineContact& c) {
 void SoundEngine::endStep() {
   if (!step_.open) return;
   for (uint32_t slot = 0; slot < slots_.size(); ++slot)
-    if (slots_[slot]) endStepFor(*slots_[slot], slot);
+    if (slots_[slot]) endStepFor(*slots_[slot]);
   step_.open = false;
 }
 
-void SoundEngine::endStepFor(Voice& v, uint32_t slot) {
-  (void)slot;
+void SoundEngine::endStepFor(Voice& v) {
   // A step's force acts over the step: centred on the step, its change ramps over one step.
   const double step_start_s = step_.end_s - step_.length_s;
   const double change_at_s = step_start_s - 0.5 * step_.length_s;

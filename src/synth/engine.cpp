@@ -101,9 +101,7 @@ void SoundEngine::render(float* const* out, size_t frames) {
       v->synth_.skip(nullptr, frames);  // keeps its clock: its next pulse lands at the right sample
       continue;
     }
-    const SynthStats before = v->synth_.stats();
     v->synth_.render(v->mono_.data(), frames);
-    stats_.mode_samples += v->synth_.stats().mode_samples - before.mode_samples;
     const float inv = 1.0f / static_cast<float>(frames);
     for (uint32_t c = 0; c < channels; ++c) {
       const float g0 = v->cur_gain_[c], dg = (v->target_gain_[c] - g0) * inv;
@@ -163,12 +161,13 @@ void SoundEngine::enforceBudget(uint64_t& active) {
 
 EngineStats SoundEngine::stats() const {
   EngineStats s = stats_;
-  s.modes_total = s.modes_out_of_band = 0;
+  s.modes_total = s.modes_out_of_band = s.mode_samples = 0;
   for (const Voice* v : slots_) {
     if (!v) continue;
     const SynthStats vs = v->synth_.stats();
     s.modes_total += vs.modes_total;
     s.modes_out_of_band += vs.modes_out_of_band;
+    s.mode_samples += vs.mode_samples;
   }
   return s;
 }

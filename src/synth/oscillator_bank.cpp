@@ -929,7 +929,7 @@ OscillatorBank::OscillatorBank(OscillatorBank&&) noexcept = default;
 OscillatorBank& OscillatorBank::operator=(OscillatorBank&&) noexcept = default;
 
 uint32_t OscillatorBank::addObject(const ModalObjectDesc& object) { return impl_->addObject(object); }
-void OscillatorBank::addImpact(const ImpactDesc& impact) { (void)impl_->addImpact(impact, false); }
+ImpactResult OscillatorBank::addImpact(const ImpactDesc& impact) { return impl_->addImpact(impact, false); }
 ImpactResult OscillatorBank::addImpactNoAlloc(const ImpactDesc& impact) { return impl_->addImpact(impact, true); }
 void OscillatorBank::reserveImpacts(size_t max_pending, double max_pulse_s) {
   const double samples = max_pulse_s * impl_->fs;

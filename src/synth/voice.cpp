@@ -44,11 +44,6 @@ std::array<double, 3> Pose::toLocalPoint(const std::array<double, 3>& p) const {
 
 namespace {
 
-SynthSettings voiceSynthSettings(const EngineSettings& settings) {
-  SynthSettings s = settings.synth;
-  return s;
-}
-
 double surfaceExtent(const ModeBank& bank) {
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (size_t v = 0; v < bank.surfaceVertexCount(); ++v)
@@ -63,7 +58,7 @@ double surfaceExtent(const ModeBank& bank) {
 }  // namespace
 
 Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
-    : bank_(desc.bank), synth_(voiceSynthSettings(settings)), projector_(*desc.bank) {
+    : bank_(desc.bank), synth_(settings.synth), projector_(*desc.bank) {
   const ModeBank& bank = *bank_;
   if (desc.use_rows) projector_.useRows(desc.rows);
   ModalObjectDesc modal;

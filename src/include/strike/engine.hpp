@@ -142,7 +142,7 @@ struct EngineStats {
   uint64_t load_holds = 0;          ///< steps a sleeping body's load was kept
   uint64_t modes_culled = 0;        ///< by the budget
   uint64_t stale = 0;               ///< contacts or impacts on an empty slot
-  uint64_t mode_samples = 0;        ///< active modes x samples, all voices
+  uint64_t mode_samples = 0;        ///< active modes x samples, voices installed now
   uint64_t modes_total = 0, modes_out_of_band = 0;
   uint64_t max_active_modes = 0;  ///< of any render call's end, all voices
   uint64_t active_modes = 0;      ///< after the last render call
@@ -234,7 +234,7 @@ class SoundEngine {
     bool open = false;
     double end_s = 0.0, length_s = 0.0;
   };
-  void endStepFor(Voice& v, uint32_t slot);
+  void endStepFor(Voice& v);
   void scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
                       const std::array<double, 3>& world_point);
   void scheduleForceStep(Voice& v, const double* modal_change, double time_s, double ramp_s,

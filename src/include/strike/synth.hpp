@@ -121,7 +121,7 @@ class OscillatorBank {
   /// time (late ones start at the current sample). Copies modal_impulse. Not real-time safe: it
   /// integrates the pulse for every mode of the object (O(modes x pulse samples)) and allocates.
   /// Contributions below audibility_threshold are dropped (the mode is not woken).
-  void addImpact(const ImpactDesc& impact);
+  ImpactResult addImpact(const ImpactDesc& impact);
   /// Preallocates records for max_pending impacts that are scheduled but not yet fully injected,
   /// each able to hold an impact on the largest object (also for objects added later) with a
   /// pulse of up to max_pulse_s. Not real-time safe.

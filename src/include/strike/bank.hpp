@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "strike/acoustic_transfer.hpp"
 #include "strike/hash.hpp"  // fnv1a64: bank checksums, and the cache keys of bank users
 #include "strike/material.hpp"
 #include "strike/result.hpp"
@@ -62,6 +63,9 @@ struct ModeBank {
   /// #modes radiation strengths R_i (m^2 / sqrt(kg)) of the listener model (synth radiation.cpp),
   /// computed once with the modes so renders need not; empty in banks that predate it.
   std::vector<double> radiation_m2;
+  /// Per-mode far field as a function of direction (acoustic_transfer.hpp); empty in banks of
+  /// formats 1-4, which the listener hears through radiation_m2 (direction-averaged) instead.
+  AcousticTransfer transfer;
 
   // The surface: collision shape and where impacts land.
   std::vector<double> surface_positions;     ///< #V * 3, metres, mesh frame
@@ -72,6 +76,7 @@ struct ModeBank {
   // Provenance: what the precompute cost.
   double meshing_seconds = 0.0, assembly_seconds = 0.0, factorize_seconds = 0.0, lanczos_seconds = 0.0,
          total_seconds = 0.0;
+  double transfer_seconds = 0.0;  ///< the acoustic transfer's own phase (included in total_seconds)
   uint32_t rigid_modes_dropped = 0;
   uint32_t above_cutoff_dropped = 0;
   std::string tool_version;

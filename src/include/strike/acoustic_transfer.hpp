@@ -1,0 +1,65 @@
+// SPDX-License-Identifier: MIT
+// Acoustic transfer: what each vibration mode of a body radiates, as a function of direction.
+// The data lives in a ModeBank (bank chunk ACTF, format 5); the solver is in strike_precompute
+// (src/precompute/acoustic_transfer.cpp), the evaluation in strike_bank (C++ standard library
+// only, so libstrike evaluates it at each impact).
+//
+// Conventions. Time dependence e^{-i omega t} (acoustics' usual one). For mode i with modal
+// acceleration q_i''(t) = Re(Q e^{-i omega_i t}), the pressure far from the body is
+//   p(r d) ~= Re( F_i(d) Q e^{i k (r - 0) - i omega_i t} ) / r,   k = omega_i / c_air,
+// r measured from `centre_m` (mesh frame), d the unit direction in the mesh frame, and
+//   F_i(d) = sum_{n=0}^{order_i} sum_{m=-n}^{n} c_{i,n,m} Y_nm(d)
+// with Y_nm the real orthonormal spherical harmonics of realSphericalHarmonics() (index n^2+n+m).
+// F is in Pa m per unit modal acceleration (m/s^2 sqrt(kg)). It is linear in the mode shape, so
+// the arbitrary sign of an eigenvector, and the basis of a degenerate pair, cancel in the sum
+// over modes of F_i(d) phi_i(p).J.
+#pragma once
+
+#include <array>
+#include <complex>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace strike {
+
+struct AcousticTransfer {
+  std::array<double, 3> centre_m{};  ///< expansion centre, mesh frame
+  std::vector<uint32_t> order;       ///< #modes: spherical-harmonic order n_max of each mode
+  std::vector<uint64_t> offset;      ///< #modes + 1: mode i's coefficients are [offset[i], offset[i+1])
+  std::vector<std::complex<float>> coefficients;  ///< c_{i,n,m}, Pa m per unit modal acceleration
+  /// #modes: estimated relative error of F_i over directions (rms of the error / rms of F_i).
+  std::vector<float> relative_error;
+  /// Acceleration noise (rigid translation, compact limit): a rigid acceleration a (m/s^2, mesh
+  /// frame) radiates F(d) = -(i k rho_air / (4 pi)) d . M a, i.e. in time
+  /// p(t) = rho_air / (4 pi c_air r) d . M da/dt. M is symmetric, m^3: the body's volume plus its
+  /// added-mass tensor over rho_air (a sphere of radius a: M = 2 pi a^3 I) [Howe 1998; Chadwick,
+  /// Zheng & James 2012]. Row-major.
+  std::array<double, 9> translation_dipole_m3{};
+  double air_density_kg_m3 = 0.0;  ///< what it was solved for
+  double speed_of_sound_m_s = 0.0;
+  double solve_seconds = 0.0;
+  std::string method;  ///< e.g. "bem-chief, 6 elements per wavelength"
+
+  size_t modeCount() const { return order.size(); }
+  bool empty() const { return order.empty(); }
+  /// Largest order over the modes (what an evaluation's scratch must hold: (n+1)^2 doubles).
+  uint32_t maxOrder() const;
+  /// rms over directions of |F_i|: sqrt(sum |c|^2 / (4 pi)), Pa m per unit modal acceleration.
+  double rmsFarField(size_t mode) const;
+  /// Empty when consistent with `modes` modes, else what is wrong.
+  std::string checkConsistency(size_t modes) const;
+};
+
+/// Real orthonormal spherical harmonics Y_nm(d), n = 0..order, m = -n..n, at unit vector d
+/// (normalized here; a zero vector gives the values at +z). out[n*n + n + m]; (order+1)^2 values.
+/// Y_00 = 1/sqrt(4 pi); Y_1,-1 = sqrt(3/4pi) y, Y_10 = sqrt(3/4pi) z, Y_11 = sqrt(3/4pi) x.
+/// No allocation (real-time safe).
+void realSphericalHarmonics(uint32_t order, const double direction[3], double* out);
+
+/// F_i(d) for every mode into out[0 .. #modes), given Y from realSphericalHarmonics() at
+/// order >= maxOrder(). No allocation (real-time safe).
+void evaluateFarField(const AcousticTransfer& transfer, const double* sh, std::complex<double>* out);
+
+}  // namespace strike

@@ -105,9 +105,18 @@ Result<MaterialTable> parseMaterialTable(const std::string& json_text, const std
     }
     for (const auto& field : entry.items()) {
       const std::string& key = field.key();
-      static const char* const kKnown[] = {"youngs_pa",          "poisson",           "density_kg_m3", "loss_factor",
-                                           "rayleigh_stiffness", "rayleigh_mass",     "source",        "restitution",
-                                           "friction",           "rolling_resistance"};
+      static const char* const kKnown[] = {"youngs_pa",
+                                           "poisson",
+                                           "density_kg_m3",
+                                           "loss_factor",
+                                           "rayleigh_stiffness",
+                                           "rayleigh_mass",
+                                           "source",
+                                           "restitution",
+                                           "friction",
+                                           "rolling_resistance",
+                                           "roughness_rms_m",
+                                           "roughness_correlation_m"};
       if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return key == k; }) ==
           std::end(kKnown))
         return badInput(where + ": unknown key '" + key + "'");
@@ -124,6 +133,12 @@ Result<MaterialTable> parseMaterialTable(const std::string& json_text, const std
         (!number("rolling_resistance", contact.rolling_resistance) || !(contact.rolling_resistance >= 0) ||
          !std::isfinite(contact.rolling_resistance)))
       return badInput(where + ".rolling_resistance must be a number >= 0");
+    for (auto [key, out] : {std::pair<const char*, double*>{"roughness_rms_m", &contact.roughness_rms_m},
+                            {"roughness_correlation_m", &contact.roughness_correlation_m}})
+      if (entry.contains(key) && (!number(key, *out) || !(*out >= 0) || !std::isfinite(*out)))
+        return badInput(where + "." + key + " must be a number >= 0");
+    if (contact.roughness_rms_m > 0.0 && !(contact.roughness_correlation_m > 0.0))
+      return badInput(where + ".roughness_correlation_m must be > 0 when roughness_rms_m is");
     table.contact[m.name] = contact;
     if (entry.contains("source") && entry["source"].is_string())
       table.sources[m.name] = entry["source"].get<std::string>();

@@ -107,6 +107,12 @@ Status play(const Playback& p, SoundOutput& output, AudioBuffer& audio, const Pr
         contact.normal_speed_m_s = event.normal_speed_m_s;
         contact.time_s = event.time_s;
         contact.partner = other == kGroundBody ? p.ground : p.partners[other];
+        // Continuous contact state (rolling, sliding, scraping: contact_sources.cpp).
+        contact.normal_force_n = event.normal_force_n;
+        contact.track_speed_m_s = side == 0 ? event.track_speed_a_m_s : event.track_speed_b_m_s;
+        contact.partner_track_speed_m_s = side == 0 ? event.track_speed_b_m_s : event.track_speed_a_m_s;
+        contact.partner_point = side == 0 ? event.point_b_mesh : event.point_a_mesh;
+        contact.patch_radius_m = event.patch_radius_m;
         output.contact(contact);
       }
     }

@@ -357,6 +357,24 @@ SimBodyDesc simBody(const Body& body) {
   return desc;
 }
 
+// A body's surface for rolling and sliding sound: its material's roughness (or the object's own
+// keys), seeded by its name so that each surface has its own profile, the same in every render.
+SurfaceRoughness surfaceRoughness(const SceneObject& object, const std::string& material) {
+  const ContactProperties contact = builtinMaterials().contactProperties(material);
+  SurfaceRoughness r;
+  r.rms_m = std::isnan(object.roughness_rms_m) ? contact.roughness_rms_m : object.roughness_rms_m;
+  r.correlation_m =
+      std::isnan(object.roughness_correlation_m) ? contact.roughness_correlation_m : object.roughness_correlation_m;
+  r.seed = fnv1a64(object.name.data(), object.name.size());
+  if (!(r.correlation_m > 0.0)) r.rms_m = 0.0;
+  return r;
+}
+
+double bodyRestitution(const SceneObject& object, const std::string& material) {
+  return std::isnan(object.restitution) ? builtinMaterials().contactProperties(material).restitution
+                                        : object.restitution;
+}
+
 double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
@@ -631,6 +649,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     for (double& w : voice.weights) w *= settings.gain / kFullScalePascal;
     voice.is_static = body.object->is_static;
     voice.contact_radius_m = body.contact_radius_m;
+    voice.roughness = surfaceRoughness(*body.object, body.bank.material.name);
+    voice.restitution = bodyRestitution(*body.object, body.bank.material.name);
     if (Status added = output->addVoice(static_cast<uint32_t>(index), voice, body.object->position_m,
                                         body.object->orientation_wxyz, body.object->name);
         !added)
@@ -652,10 +672,19 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     partner.poisson = bodies[i].bank.material.poisson;
     partner.radius_m = bodies[i].contact_radius_m;
     partner.mass_kg = bodies[i].object->is_static ? 0.0 : bodies[i].bank.mass_kg;
+    partner.roughness = surfaceRoughness(*bodies[i].object, bodies[i].bank.material.name);
+    partner.restitution = bodyRestitution(*bodies[i].object, bodies[i].bank.material.name);
   }
   ContactPartner ground;
   ground.youngs_pa = scene.ground_material.youngs_pa;
   ground.poisson = scene.ground_material.poisson;
+  {
+    const ContactProperties ground_surface = builtinMaterials().contactProperties(scene.ground_material.name);
+    ground.roughness.rms_m = ground_surface.roughness_rms_m;
+    ground.roughness.correlation_m = ground_surface.roughness_correlation_m;
+    ground.roughness.seed = fnv1a64("ground", 6);
+    ground.restitution = std::isnan(scene.ground_restitution) ? ground_surface.restitution : scene.ground_restitution;
+  }
   result.audio.sample_rate_hz = rate;
   result.audio.channels = 1;
   result.audio.samples.assign(static_cast<size_t>(std::llround(duration * rate)), 0.0f);

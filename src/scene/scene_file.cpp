@@ -309,6 +309,16 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
   }
   Status coefficients = contactCoefficients(value, where, o.restitution, o.friction, o.rolling_resistance);
   if (!coefficients) return coefficients.error();
+  for (auto [key, out] : {std::pair<const char*, double*>{"roughness_rms_m", &o.roughness_rms_m},
+                          {"roughness_correlation_m", &o.roughness_correlation_m}}) {
+    if (!value.contains(key)) continue;
+    Result<double> r = number(value[key], where.at(key));
+    if (!r) return r.error();
+    if (*r < 0) return where.at(key).error("must be >= 0 metres, got " + show(value[key]));
+    *out = *r;
+  }
+  if (o.roughness_correlation_m == 0.0 && !(o.roughness_rms_m == 0.0))
+    return where.at("roughness_correlation_m").error("must be > 0 metres, got 0");
   return o;
 }
 
@@ -324,7 +334,8 @@ const std::vector<SceneKeyTable>& sceneKeyTables() {
       {"ground", {"material", "height", "restitution", "friction", "rolling_resistance"}},
       {"objects[]",
        {"name", "mesh", "units", "bank", "material", "order", "size", "static", "shape", "position", "orientation",
-        "velocity", "angular_velocity", "restitution", "friction", "rolling_resistance"}},
+        "velocity", "angular_velocity", "restitution", "friction", "rolling_resistance", "roughness_rms_m",
+        "roughness_correlation_m"}},
       {"material",
        {"name", "youngs_pa", "poisson", "density_kg_m3", "loss_factor", "rayleigh_stiffness", "rayleigh_mass"}},
   };

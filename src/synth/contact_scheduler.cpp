@@ -148,6 +148,7 @@ void SoundEngine::contact(const EngineContact& c) {
       v->span_open_ = true;
     }
     v->last_sustained_s_ = t;
+    continuousContact(*v, c, world);  // issue 18: rolling, sliding, scraping (contact_sources.cpp)
   }
   if (own_step) endStep();
 }
@@ -164,6 +165,7 @@ void SoundEngine::endStepFor(Voice& v) {
   const double step_start_s = step_.end_s - step_.length_s;
   const double change_at_s = step_start_s - 0.5 * step_.length_s;
   const std::array<double, 3> centre = v.pose_.toWorld(v.centre_m_);
+  continuousEndStep(v);  // issue 18 (contact_sources.cpp)
   if (v.in_step_) {
     std::array<double, 6> change{};
     for (int k = 0; k < 6; ++k) change[k] = v.step_load_[k] - v.held_load_[k];
@@ -245,6 +247,7 @@ void SoundEngine::reset() {
     v->holding_ = v->in_step_ = v->span_open_ = false;
     v->partner_count_ = 0;
     v->last_sustained_s_ = -1.0;
+    resetContinuous(*v);  // issue 18
     v->fresh_ = true;
   }
   step_ = Step{};

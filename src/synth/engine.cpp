@@ -96,12 +96,13 @@ void SoundEngine::render(float* const* out, size_t frames) {
     if (!v) continue;
     updateGains(*v);
     if (frames == 0) continue;
-    if (v->synth_.idle()) {
+    const bool driven = renderContactForces(*v, frames);  // issue 18: continuous contacts' forces
+    if (!driven && v->synth_.idle()) {
       v->cur_gain_[0] = v->target_gain_[0], v->cur_gain_[1] = v->target_gain_[1];
       v->synth_.skip(nullptr, frames);  // keeps its clock: its next pulse lands at the right sample
       continue;
     }
-    v->synth_.render(v->mono_.data(), frames);
+    v->synth_.render(v->mono_.data(), frames, driven ? v->force_ptrs_.data() : nullptr);
     const float inv = 1.0f / static_cast<float>(frames);
     for (uint32_t c = 0; c < channels; ++c) {
       const float g0 = v->cur_gain_[c], dg = (v->target_gain_[c] - g0) * inv;

@@ -41,6 +41,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <new>
 
 #include "kernels.hpp"
@@ -204,6 +205,42 @@ struct OscillatorBank::Impl {
   };
   std::vector<DampingChange> damping_changes;  // pending, sorted by sample; capacity kDampingReserve per object
   SynthStats stats;
+
+  // ---- continuous force input (issue 18; contact_noise.hpp) --------------------------------
+  // A driven object's ringing modes get a second state, advanced with the force, summed with the
+  // free state by linearity and merged into it after the force stops (forcedMerge). Kept apart so
+  // that impacts, sleeping and the float anchors of the free modes are untouched.
+  static constexpr size_t kForcedLanes = 8;
+  static constexpr size_t kForcedPending = 8;  // weight changes pending per object
+  struct ForcedObject {
+    size_t count = 0, padded = 0;  // ringing modes, and rounded up to kForcedLanes
+    std::vector<uint32_t> mode;    // global mode index per entry
+    std::vector<uint32_t> local;   // object-local index per entry
+    AlignedBuffer<float> y_re, y_im, z_re, z_im;
+    AlignedBuffer<float> w_re, w_im;  // kForceChannels x padded: b g (e^{ph} - 1) / p
+    std::vector<double> g;            // kForceChannels x mode_count: the weights in force
+    double feed[kForceChannels] = {};
+    bool on[kForceChannels] = {};
+    struct Pending {
+      uint64_t sample;
+      uint32_t channel, slot;
+      bool on;
+    };
+    std::vector<Pending> pending;   // sorted by sample; capacity kForcedPending
+    std::vector<double> pending_g;  // kForcedPending x mode_count
+    uint32_t free_slots = (1u << kForcedPending) - 1;
+    bool has_state = false;
+    bool reserved() const { return !mode.empty() || padded > 0; }
+    bool anyOn() const {
+      for (bool b : on)
+        if (b) return true;
+      return false;
+    }
+  };
+  std::vector<std::unique_ptr<ForcedObject>> forced;  // per object once any is reserved
+  AlignedBuffer<float> forced_acc;                    // kBlock x kForcedLanes
+  const float* const* cur_force = nullptr;
+  uint64_t call_start = 0;  // pos at the start of the current render() call
 
   explicit Impl(const SynthSettings& s) : settings(s) {
     fs = (s.sample_rate_hz > 0.0 && std::isfinite(s.sample_rate_hz)) ? s.sample_rate_hz : 48000.0;
@@ -772,6 +809,7 @@ struct OscillatorBank::Impl {
     }
     pending.resize(kept);  // shrinking: no allocation
     if (!use_double) kernels.reduce(acc.data(), s0, s1, mix.data() + s0);
+    if (!forced.empty()) forcedSegment(block_start, s0, s1);  // continuous force input
   }
 
   void endBlock() {
@@ -891,6 +929,15 @@ struct OscillatorBank::Impl {
     while (!damped_mode.empty()) removeDamped(damped_mode.size() - 1);
     for (uint32_t record : pending) free_records.push_back(record);
     pending.clear();
+    for (auto& fp : forced) {
+      ForcedObject& f = *fp;
+      std::fill(f.y_re.data(), f.y_re.data() + f.y_re.size(), 0.0f);
+      std::fill(f.y_im.data(), f.y_im.data() + f.y_im.size(), 0.0f);
+      std::fill(std::begin(f.on), std::end(f.on), false);
+      f.pending.clear();
+      f.free_slots = (1u << kForcedPending) - 1;
+      f.has_state = false;
+    }
     damping_changes.clear();
     for (ObjectInfo& o : objects) o.damping_schedule.clear();
     for (ModeInfo& m : modes) {
@@ -903,8 +950,10 @@ struct OscillatorBank::Impl {
     stats.active_modes = 0;
   }
 
-  void render(float* out, size_t frames) {
+  void render(float* out, size_t frames, const float* const* force = nullptr) {
     DenormalGuard guard;
+    cur_force = force;
+    call_start = pos;
     size_t done = 0;
     while (done < frames) {
       const uint64_t block_start = pos - pos % kBlock;
@@ -916,10 +965,166 @@ struct OscillatorBank::Impl {
       pos = block_start + s1;
       if (s1 == kBlock) {
         endBlock();
+        forcedMerge();
         applyDampingChanges();
       }
     }
+    cur_force = nullptr;
     stats.active_modes = n_active + damped_mode.size();
+  }
+
+  // ---- continuous force input ---------------------------------------------------------------
+  void reserveForceInput(uint32_t object) {
+    if (object >= objects.size()) return;
+    while (forced.size() < objects.size()) forced.push_back(std::make_unique<ForcedObject>());
+    ForcedObject& f = *forced[object];
+    if (f.reserved()) return;
+    const ObjectInfo& obj = objects[object];
+    for (uint32_t j = 0; j < obj.mode_count; ++j)
+      if (modes[obj.first_mode + j].kind == ModeKind::Ringing)
+        f.mode.push_back(obj.first_mode + j), f.local.push_back(j);
+    f.count = f.mode.size();
+    f.padded = std::max<size_t>(roundUp(f.count, kForcedLanes), kForcedLanes);
+    for (auto* b : {&f.y_re, &f.y_im, &f.z_re, &f.z_im}) b->grow(f.padded);
+    f.w_re.grow(kForceChannels * f.padded);
+    f.w_im.grow(kForceChannels * f.padded);
+    f.g.assign(kForceChannels * obj.mode_count, 0.0);
+    f.pending.reserve(kForcedPending);
+    f.pending_g.assign(kForcedPending * obj.mode_count, 0.0);
+    forced_acc.grow(kBlock * kForcedLanes);
+  }
+
+  bool setForceWeights(const ForceWeightsDesc& d) {
+    if (d.object >= forced.size() || d.channel >= kForceChannels || !forced[d.object]->reserved()) return false;
+    ForcedObject& f = *forced[d.object];
+    if (f.free_slots == 0 || f.pending.size() == f.pending.capacity()) return false;
+    const ObjectInfo& obj = objects[d.object];
+    double t = (d.time_s + obj.delay_s) * fs;
+    if (!(t >= static_cast<double>(pos))) t = static_cast<double>(pos);
+    uint64_t sample = static_cast<uint64_t>(std::ceil(t - 1e-7));
+    sample = (sample + kBlock - 1) / kBlock * kBlock;
+    uint32_t slot = 0;
+    while (!(f.free_slots & (1u << slot))) ++slot;
+    f.free_slots &= ~(1u << slot);
+    double* g = f.pending_g.data() + static_cast<size_t>(slot) * obj.mode_count;
+    for (uint32_t j = 0; j < obj.mode_count; ++j) {
+      const double v = d.modal_weight ? d.modal_weight[j] : 0.0;
+      g[j] = std::isfinite(v) ? v : 0.0;
+    }
+    const ForcedObject::Pending p{sample, d.channel, slot, d.modal_weight != nullptr};
+    auto at = std::upper_bound(f.pending.begin(), f.pending.end(), sample,
+                               [](uint64_t s0, const ForcedObject::Pending& q) { return s0 < q.sample; });
+    f.pending.insert(at, p);  // within capacity
+    return true;
+  }
+
+  bool forceDriven() const {
+    for (const auto& f : forced)
+      if (f->has_state || !f->pending.empty()) return true;
+    return false;
+  }
+
+  // At a block start: weight changes due, then the coefficients from the poles in force.
+  void forcedBlockStart(uint32_t object, uint64_t block_start) {
+    ForcedObject& f = *forced[object];
+    const ObjectInfo& obj = objects[object];
+    size_t applied = 0;
+    while (applied < f.pending.size() && f.pending[applied].sample <= block_start) {
+      const ForcedObject::Pending& p = f.pending[applied++];
+      std::copy_n(f.pending_g.data() + static_cast<size_t>(p.slot) * obj.mode_count, obj.mode_count,
+                  f.g.data() + static_cast<size_t>(p.channel) * obj.mode_count);
+      f.on[p.channel] = p.on;
+      f.free_slots |= 1u << p.slot;
+    }
+    f.pending.erase(f.pending.begin(), f.pending.begin() + static_cast<std::ptrdiff_t>(applied));
+    if (!f.anyOn()) return;
+    f.has_state = true;
+    for (uint32_t c = 0; c < kForceChannels; ++c) f.feed[c] = 0.0;
+    for (size_t e = 0; e < f.count; ++e) {
+      const ModeInfo& m = modes[f.mode[e]];
+      f.z_re[e] = static_cast<float>(m.step.real());
+      f.z_im[e] = static_cast<float>(m.step.imag());
+      // Sample-held force F over [n, n + 1): y(n + 1) = e^{ph} y(n) + F (e^{ph} - 1) / p.
+      const Complex d = m.out_weight * (m.step - 1.0) / m.pole;
+      for (uint32_t c = 0; c < kForceChannels; ++c) {
+        const double g = f.on[c] ? f.g[static_cast<size_t>(c) * obj.mode_count + f.local[e]] : 0.0;
+        f.w_re[c * f.padded + e] = static_cast<float>(d.real() * g);
+        f.w_im[c * f.padded + e] = static_cast<float>(d.imag() * g);
+        f.feed[c] += m.radiation * g;
+      }
+    }
+  }
+
+  // Local samples [s0, s1) of the block at block_start: every driven object's forced modes, into mix.
+  void forcedSegment(uint64_t block_start, size_t s0, size_t s1) {
+    for (uint32_t o = 0; o < forced.size(); ++o) {
+      ForcedObject& f = *forced[o];
+      if (!f.reserved()) continue;
+      if (s0 == 0) forcedBlockStart(o, block_start);
+      if (!f.has_state) continue;
+      float force[kForceChannels][kBlock];
+      bool any[kForceChannels] = {};
+      for (uint32_t c = 0; c < kForceChannels; ++c) {
+        const float* src = cur_force ? cur_force[o * kForceChannels + c] : nullptr;
+        any[c] = f.on[c] && src;
+        for (size_t n = s0; n < s1; ++n) force[c][n] = any[c] ? src[block_start + n - call_start] : 0.0f;
+        if (any[c])
+          for (size_t n = s0; n < s1; ++n) mix[n] += f.feed[c] * static_cast<double>(force[c][n]);
+      }
+      float* acc_l = forced_acc.data();
+      std::fill(acc_l + s0 * kForcedLanes, acc_l + s1 * kForcedLanes, 0.0f);
+      for (size_t e0 = 0; e0 < f.padded; e0 += kForcedLanes) {
+        float yr[kForcedLanes], yi[kForcedLanes], zr[kForcedLanes], zi[kForcedLanes];
+        for (size_t l = 0; l < kForcedLanes; ++l)
+          yr[l] = f.y_re[e0 + l], yi[l] = f.y_im[e0 + l], zr[l] = f.z_re[e0 + l], zi[l] = f.z_im[e0 + l];
+        for (size_t n = s0; n < s1; ++n) {
+          float ir[kForcedLanes] = {}, ii[kForcedLanes] = {};
+          for (uint32_t c = 0; c < kForceChannels; ++c) {
+            if (!any[c]) continue;
+            const float F = force[c][n];
+            const float* wr = f.w_re.data() + c * f.padded + e0;
+            const float* wi = f.w_im.data() + c * f.padded + e0;
+            for (size_t l = 0; l < kForcedLanes; ++l) ir[l] += wr[l] * F, ii[l] += wi[l] * F;
+          }
+          float* a = acc_l + n * kForcedLanes;
+          for (size_t l = 0; l < kForcedLanes; ++l) {
+            a[l] += yr[l];
+            const float nr = zr[l] * yr[l] - zi[l] * yi[l] + ir[l];
+            yi[l] = zr[l] * yi[l] + zi[l] * yr[l] + ii[l];
+            yr[l] = nr;
+          }
+        }
+        for (size_t l = 0; l < kForcedLanes; ++l) f.y_re[e0 + l] = yr[l], f.y_im[e0 + l] = yi[l];
+      }
+      for (size_t n = s0; n < s1; ++n) {
+        double sum = 0.0;
+        for (size_t l = 0; l < kForcedLanes; ++l) sum += acc_l[n * kForcedLanes + l];
+        mix[n] += sum;
+      }
+      stats.mode_samples += static_cast<uint64_t>(f.count) * (s1 - s0);
+    }
+  }
+
+  // At a block end: an object no channel drives any more hands its forced state to its free modes.
+  void forcedMerge() {
+    for (auto& fp : forced) {
+      ForcedObject& f = *fp;
+      if (!f.has_state || f.anyOn()) continue;
+      for (size_t e = 0; e < f.count; ++e) {
+        const Complex y(f.y_re[e], f.y_im[e]);
+        f.y_re[e] = f.y_im[e] = 0.0f;
+        if (!(std::abs(y) >= threshold)) continue;
+        ModeInfo& m = modes[f.mode[e]];
+        if (m.slot < 0) activateRinging(f.mode[e]);
+        const size_t i = static_cast<size_t>(m.slot);
+        anc_re[i] += y.real();
+        anc_im[i] += y.imag();
+        st_re[i] = static_cast<float>(anc_re[i]);
+        st_im[i] = static_cast<float>(anc_im[i]);
+        mag2[i] = anc_re[i] * anc_re[i] + anc_im[i] * anc_im[i];
+      }
+      f.has_state = false;
+    }
   }
 };
 
@@ -937,8 +1142,14 @@ void OscillatorBank::reserveImpacts(size_t max_pending, double max_pulse_s) {
   impl_->reserveImpacts(max_pending, transient);
 }
 bool OscillatorBank::idle() const {
-  return impl_->n_active == 0 && impl_->damped_mode.empty() && impl_->pending.empty();
+  return impl_->n_active == 0 && impl_->damped_mode.empty() && impl_->pending.empty() && !impl_->forceDriven();
 }
+void OscillatorBank::reserveForceInput(uint32_t object) { impl_->reserveForceInput(object); }
+bool OscillatorBank::setForceWeights(const ForceWeightsDesc& weights) { return impl_->setForceWeights(weights); }
+void OscillatorBank::render(float* out, size_t frames, const float* const* force) {
+  if (out && frames > 0) impl_->render(out, frames, force);
+}
+bool OscillatorBank::forceDriven() const { return impl_->forceDriven(); }
 size_t OscillatorBank::activeModeCount() const { return impl_->n_active + impl_->damped_mode.size(); }
 size_t OscillatorBank::activeModeLevels(float* level2, size_t capacity) const {
   const size_t n = std::min(capacity, activeModeCount());

@@ -83,6 +83,12 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
   contact_radius_m_ = desc.contact_radius_m > 0.0 ? desc.contact_radius_m : INFINITY;
   pose_ = desc.pose;
   gain_ = desc.gain;
+  // Continuous contacts (contact_sources.cpp): a force channel per possible partner.
+  roughness_ = desc.roughness;
+  restitution_ = desc.restitution;
+  synth_.reserveForceInput(0);
+  for (Source& s : sources_) s.modal.assign(modes, 0.0);
+  force_.assign(static_cast<size_t>(kForceChannels) * std::max<uint32_t>(settings.max_block_frames, 1), 0.0f);
 }
 
 Voice::~Voice() = default;

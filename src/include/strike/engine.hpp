@@ -10,7 +10,10 @@
 //  - sustained contact otherwise: the step's impulses are a force over the step. A force that
 //    stays steady (a body resting) is silent; a change of load is a ramped force step;
 //  - while a body is in sustained contact its modes lose energy into what it touches (contact
-//    damping), and a body that falls asleep keeps its load.
+//    damping), and a body that falls asleep keeps its load;
+//  - a sustained contact whose surfaces move over each other (rolling, sliding, scraping) also
+//    drives the body's modes at audio rate with the force of its rough surfaces
+//    (contact_noise.hpp; contact_sources.cpp): one generator per touching pair and body.
 // Each sounding body is a Voice: its modes in an OscillatorBank, its pose, its gain. The
 // listener model (listener.hpp) gives each voice a level from its distance, ramped over each
 // render call, and each contact a delay from its own distance. render() mixes the voices and
@@ -28,6 +31,7 @@
 #include <vector>
 
 #include "strike/bank.hpp"
+#include "strike/contact_noise.hpp"
 #include "strike/listener.hpp"
 #include "strike/synth.hpp"
 
@@ -95,6 +99,10 @@ struct VoiceDesc {
   double contact_radius_m = 0.0;  ///< curvature radius at contacts; 0 = flat
   Pose pose;
   float gain = 1.0f;
+  /// Its surface's roughness (rolling and sliding sound); rms 0: smooth. The seed names the
+  /// surface: the same seed, the same profile.
+  SurfaceRoughness roughness;
+  double restitution = 0.5;  ///< of its material on itself: damps the contact resonance
 };
 
 /// The other body in a contact, as the Hertz contact time needs it.
@@ -105,6 +113,10 @@ struct ContactPartner {
   double mass_kg = 0.0;   ///< 0: immovable
   /// Its voice, if it is one: a static body keeps carrying a load whose bodies fell asleep.
   uint32_t voice = kNoVoice;
+  /// When it is not a voice: its surface's roughness (the ground's, a silent body's) and
+  /// restitution; a voice partner's come from its VoiceDesc.
+  SurfaceRoughness roughness;
+  double restitution = 0.5;
 };
 
 /// One body's side of one contact point in one physics step.
@@ -118,6 +130,14 @@ struct EngineContact {
   /// surfaces met for an impact; < 0: now. Late times start now.
   double time_s = -1.0;
   ContactPartner partner;
+  // Continuous contact (rolling, sliding, scraping; contact_sources.cpp). normal_force_n 0: none.
+  double normal_force_n = 0.0;           ///< this point's normal load over the step, N
+  double track_speed_m_s = 0.0;          ///< how fast the point moves over this body's surface, m/s
+  double partner_track_speed_m_s = 0.0;  ///< ...and over the partner's
+  /// The point in the partner's mesh frame (the world for the ground or a non-voice body), m:
+  /// where the partner's roughness is read.
+  std::array<double, 3> partner_point{};
+  double patch_radius_m = 0.0;  ///< Hertz contact radius, m; 0: from the load
 };
 
 /// An explicit contact pulse (strike_impact, `strike hit`): no scheduling, no load tracking.
@@ -144,8 +164,12 @@ struct EngineStats {
   uint64_t stale = 0;               ///< contacts or impacts on an empty slot
   uint64_t mode_samples = 0;        ///< active modes x samples, voices installed now
   uint64_t modes_total = 0, modes_out_of_band = 0;
-  uint64_t max_active_modes = 0;  ///< of any render call's end, all voices
-  uint64_t active_modes = 0;      ///< after the last render call
+  uint64_t max_active_modes = 0;         ///< of any render call's end, all voices
+  uint64_t active_modes = 0;             ///< after the last render call
+  uint64_t continuous_contacts = 0;      ///< rolling/sliding contact generators started
+  uint64_t continuous_dropped = 0;       ///< ...not started: the voice's kForceChannels were in use
+  uint64_t continuous_samples = 0;       ///< generator samples computed (cost)
+  uint64_t continuous_lost_samples = 0;  ///< samples in which a rough contact lost contact
 };
 
 /// One sounding body. Built off the audio thread (allocates everything it will need).
@@ -189,6 +213,25 @@ class Voice {
   bool partners_overflow_ = false;  ///< more than 8: a static body keeps no load when they sleep
   double last_sustained_s_ = -1.0;  ///< time of its last sustained contact
   bool span_open_ = false;          ///< contact damping in force
+  // Continuous contacts (contact_sources.cpp): one generator per partner it rolls or slides on,
+  // each a force channel of its oscillator bank.
+  struct Source {
+    bool used = false;
+    uint64_t key = 0;  ///< partner voice, or the partner's surface seed
+    RoughContact generator;
+    double delay_s = 0.0;
+    // This step's contact points, summed.
+    bool stepped = false;
+    double force_n = 0.0, speed_n = 0.0, partner_speed_n = 0.0, patch_n = 0.0;  // * N
+    std::array<double, 3> spot_n{}, partner_spot_n{}, world_n{};                // * N
+    std::vector<double> modal;                                                  ///< #modes: the step's modal impulses
+    ContactPartner partner;
+  };
+  SurfaceRoughness roughness_;
+  double restitution_ = 0.5;
+  std::array<Source, kForceChannels> sources_;
+  std::vector<float> force_;  ///< kForceChannels x max_block_frames
+  std::array<const float*, kForceChannels> force_ptrs_{};
 };
 
 class SoundEngine {
@@ -240,6 +283,11 @@ class SoundEngine {
   void scheduleForceStep(Voice& v, const double* modal_change, double time_s, double ramp_s,
                          const std::array<double, 3>& world_point);
   double hertzDuration(const Voice& v, const ContactPartner& p, double speed) const;
+  // Continuous contacts (contact_sources.cpp).
+  void continuousContact(Voice& v, const EngineContact& c, const std::array<double, 3>& world);
+  void continuousEndStep(Voice& v);
+  bool renderContactForces(Voice& v, size_t frames);
+  void resetContinuous(Voice& v);
   double delayTo(const std::array<double, 3>& world_point) const;
   void updateGains(Voice& v);
   void enforceBudget(uint64_t& active);

@@ -17,6 +17,10 @@ struct ContactProperties {
   double friction = 0.5;
   /// Coefficient of rolling resistance c_rr = F / N, dimensionless (docs/contact.md).
   double rolling_resistance = 0.001;
+  /// Surface roughness for rolling and sliding sound (docs/contact.md): rms height R_q and
+  /// correlation length of the surface profile, m. 0 rms: smooth (silent rolling and sliding).
+  double roughness_rms_m = 0.0;
+  double roughness_correlation_m = 0.0;
 };
 
 struct MaterialTable {

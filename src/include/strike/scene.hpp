@@ -33,6 +33,9 @@ struct SceneObject {
   /// Own contact coefficients, overriding the material's ("restitution", "friction",
   /// "rolling_resistance"); NaN: the material's. Two bodies combine theirs (docs/contact.md).
   double restitution = NAN, friction = NAN, rolling_resistance = NAN;
+  /// Own surface roughness for rolling and sliding sound ("roughness_rms_m",
+  /// "roughness_correlation_m", m); NaN: the material's (docs/contact.md).
+  double roughness_rms_m = NAN, roughness_correlation_m = NAN;
 };
 
 /// A scene's "contacts" entry: coefficients for one pair of objects ("ground" names the ground),

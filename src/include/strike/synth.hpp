@@ -88,6 +88,22 @@ struct ForceStepDesc {
   const double* modal_force_change = nullptr;
 };
 
+/// Continuous force inputs of one object (rolling, sliding, scraping: contact_noise.hpp): each
+/// channel is one contact's force signal, in newtons, driving every ringing mode of the object
+/// with its own weight.
+constexpr uint32_t kForceChannels = 4;
+
+/// A channel's modal weights from a time on (OscillatorBank::setForceWeights).
+struct ForceWeightsDesc {
+  uint32_t object = 0;
+  uint32_t channel = 0;  ///< < kForceChannels
+  double time_s = 0.0;   ///< from the first 128-sample block boundary at or after it (plus the delay)
+  /// One per mode of the object: g_i = phi_i(p) . d, the modal force per newton of the channel's
+  /// signal (d: the direction of the force on the body, its normal plus its friction share),
+  /// 1/sqrt(kg). Copied. Null: the channel stops (its modes ring on freely).
+  const double* modal_weight = nullptr;
+};
+
 /// What addImpactNoAlloc() did with an impact.
 enum class ImpactResult {
   Scheduled,   ///< will sound
@@ -165,6 +181,22 @@ class OscillatorBank {
   /// addForceStep() without allocation [audio-thread]: NoCapacity when fewer than three reserved
   /// impact records are free.
   ImpactResult addForceStepNoAlloc(const ForceStepDesc& step);
+  /// Prepares the object for continuous force input (setForceWeights, render with force). Not
+  /// real-time safe (allocates a state per ringing mode and channel weights).
+  void reserveForceInput(uint32_t object);
+  /// Schedules a channel's weights (ForceWeightsDesc) without allocation [audio-thread]. False
+  /// when the object was not reserved, the channel is out of range, or 4 changes are pending.
+  bool setForceWeights(const ForceWeightsDesc& weights);
+  /// render() with force signals: force[object * kForceChannels + c] (or force itself, or any
+  /// entry, null: zeros) holds `frames` samples of channel c, in newtons, each held over its
+  /// sample. A driven mode advances exactly for the sample-held force, y <- e^{ph} y + F (e^{ph} -
+  /// 1) / p, from a state of its own while any channel is on, summed with the mode's free state by
+  /// linearity and merged into it at the first block end after the last channel stops; its
+  /// output includes the force's feedthrough sum_i R_i g_i F (a slow force then gives the
+  /// acceleration it should: almost none). Same guarantees as render(). [audio-thread]
+  void render(float* out, size_t frames, const float* const* force);
+  /// True while some object has a force channel on or a driven state not yet merged.
+  bool forceDriven() const;
   /// Time of the next sample to be rendered, s.
   double time() const;
   SynthStats stats() const;

@@ -177,12 +177,16 @@ void RoughContact::generate(float* out, size_t frames) {
       continue;
     }
     const double ds_a = va * h_, ds_b = vb * h_;
-    const double patch_len = patchLength(desc_, s.patch_radius_m);
-    // Grid: fine enough for the patch, no finer than a sample's travel (power-of-two spacings,
+    const double N = s.normal_force_n;
+    const bool hertz = std::isfinite(desc_.radius_m) && desc_.radius_m > 0.0 && desc_.modulus_pa > 0.0;
+    double patch = s.patch_radius_m;
+    if (hertz && !(patch > 0.0)) patch = std::cbrt(3.0 * N * desc_.radius_m / (4.0 * desc_.modulus_pa));
+    const double patch_len = patchLength(desc_, patch);
+    // Grid: a quarter of the patch or finer, no finer than half a sample's travel (power-of-two spacings,
     // so a slowly changing load does not keep moving the grid).
     if ((pos_ & 63) == 0 || level_ == -1000) {
-      const double want = std::max(0.5 * patch_len, std::max(va, vb) * h_);
-      int level = want > kCellUnit_m ? static_cast<int>(std::ceil(std::log2(want / kCellUnit_m))) : 0;
+      const double want = std::max(0.25 * patch_len, std::max(va, vb) * h_);
+      int level = want > kCellUnit_m ? static_cast<int>(std::floor(std::log2(want / kCellUnit_m))) : 0;
       level = std::clamp(level, 0, 40);
       if (level != level_) level_ = level;
     }
@@ -202,16 +206,7 @@ void RoughContact::generate(float* out, size_t frames) {
     const double h_prev = lp_prev_;
     lp_prev_ = hf;
 
-    const double N = s.normal_force_n;
-    const bool hertz = std::isfinite(desc_.radius_m) && desc_.radius_m > 0.0 && desc_.modulus_pa > 0.0;
-    double delta0;
-    if (hertz) {
-      double a = s.patch_radius_m;
-      if (!(a > 0.0)) a = std::cbrt(3.0 * N * desc_.radius_m / (4.0 * desc_.modulus_pa));
-      delta0 = a * a / desc_.radius_m;
-    } else {
-      delta0 = std::hypot(desc_.a.rms_m, desc_.b.rms_m);
-    }
+    const double delta0 = hertz ? patch * patch / desc_.radius_m : std::hypot(desc_.a.rms_m, desc_.b.rms_m);
     if (!(delta0 > 0.0)) continue;
     const double stiff = (hertz ? 1.5 : 1.0) * N / delta0;
     const double m = desc_.mass_kg;

@@ -65,7 +65,9 @@ void SoundEngine::continuousContact(Voice& v, const EngineContact& c, const std:
     const double poisson = pv ? pv->poisson_ : (p.youngs_pa > 0.0 ? p.poisson : v.poisson_);
     const double k = compliance(v.youngs_pa_, v.poisson_) + compliance(youngs, poisson);
     desc.modulus_pa = k > 0.0 ? 1.0 / k : 0.0;
-    const double curv = curvature(v.contact_radius_m_) + curvature(pv ? pv->contact_radius_m_ : p.radius_m);
+    // A static body is flat here, as in the simulation's Hertz patch (ContactEvent::patch_radius_m).
+    const double curv = curvature(v.is_static_ ? INFINITY : v.contact_radius_m_) +
+                        curvature(pv ? (pv->is_static_ ? INFINITY : pv->contact_radius_m_) : p.radius_m);
     desc.radius_m = curv > 0.0 ? 1.0 / curv : INFINITY;
     const double e_other = pv ? pv->restitution_ : p.restitution;
     desc.damping_ratio = contactDampingRatio(std::sqrt(std::max(0.0, v.restitution_ * e_other)));

@@ -695,6 +695,9 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   report.sustained_contacts = engine_stats.sustained_contacts;
   report.load_changes = engine_stats.load_changes;
   report.load_holds = engine_stats.load_holds;
+  report.continuous_contacts = engine_stats.continuous_contacts;
+  report.continuous_lost_samples = engine_stats.continuous_lost_samples;
+  report.continuous_last_force_s = engine_stats.continuous_last_force_s;
   for (std::string& text : output->warnings()) warn(std::move(text));
   const AudioBuffer& audio = result.audio;
   for (float s : audio.samples) {

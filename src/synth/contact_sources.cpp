@@ -136,6 +136,12 @@ bool SoundEngine::renderContactForces(Voice& v, size_t frames) {
     float* out = v.force_.data() + static_cast<size_t>(ch) * settings_.max_block_frames;
     const uint64_t lost = s.generator.lostSamples();
     s.generator.generate(out, frames);
+    for (size_t n = frames; n-- > 0;)
+      if (out[n] != 0.0f) {
+        stats_.continuous_last_force_s = std::max(stats_.continuous_last_force_s,
+                                                  time() + static_cast<double>(n + 1) / settings_.synth.sample_rate_hz);
+        break;
+      }
     stats_.continuous_lost_samples += s.generator.lostSamples() - lost;
     stats_.continuous_samples += frames;
     v.force_ptrs_[ch] = out;

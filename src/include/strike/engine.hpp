@@ -170,6 +170,9 @@ struct EngineStats {
   uint64_t continuous_dropped = 0;       ///< ...not started: the voice's kForceChannels were in use
   uint64_t continuous_samples = 0;       ///< generator samples computed (cost)
   uint64_t continuous_lost_samples = 0;  ///< samples in which a rough contact lost contact
+  /// Engine time just after the last sample in which any continuous contact's force was not 0, s
+  /// (-1: none yet): where the rolling and sliding sound stops (the modes then ring on freely).
+  double continuous_last_force_s = -1.0;
 };
 
 /// One sounding body. Built off the audio thread (allocates everything it will need).

@@ -122,6 +122,11 @@ struct RenderReport {
   /// Changes of a body's load (a force step each: landing, being pushed, lifted; a steady load is
   /// silent), and steps a sleeping body's load was kept.
   size_t load_changes = 0, load_holds = 0;
+  /// Rolling, sliding and scraping (docs/contact.md): contact generators started, samples in
+  /// which a rough contact lost contact, and the time the last one's force stopped (-1: none).
+  size_t continuous_contacts = 0;
+  uint64_t continuous_lost_samples = 0;
+  double continuous_last_force_s = -1.0;
   /// Scenes that cannot be right, and silent results, in words with numbers (scene_checks.hpp).
   std::vector<std::string> warnings;
   uint64_t modes_total = 0, modes_out_of_band = 0, mode_samples = 0, max_active_modes = 0;

@@ -551,6 +551,7 @@ STRIKE_API strike_status STRIKE_CALL strike_object_add(strike_context ctx, const
     desc.bank = std::shared_ptr<const ModeBank>(data, &data->bank);  // shares the bank's ownership
     desc.weights = c.radiation == STRIKE_RADIATION_PRESSURE ? data->pressure_weights
                                                             : std::vector<double>(data->bank.modeCount(), 1.0);
+    if (c.radiation == STRIKE_RADIATION_PRESSURE) desc.pressure_scale = 1.0 / ctx->config.output_full_scale_pa;
     desc.is_static = c.is_static != 0;
     desc.contact_radius_m = c.contact_radius_m;
     desc.pose = pose;

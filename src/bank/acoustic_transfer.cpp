@@ -55,7 +55,7 @@ void realSphericalHarmonics(uint32_t order, const double direction[3], double* o
   //   Pbar_n^m = a (z Pbar_{n-1}^m - b Pbar_{n-2}^m),  a = sqrt((4n^2-1)/(n^2-m^2)),
   //   b = sqrt(((n-1)^2-m^2)/(4(n-1)^2-1));
   // sin^m(theta) cos(m phi) and sin^m(theta) sin(m phi) are Re and Im of (x + i y)^m.
-  double cos_m = 1.0, sin_m = 0.0;    // Re, Im of (x + i y)^m
+  double cos_m = 1.0, sin_m = 0.0;      // Re, Im of (x + i y)^m
   double p_mm = 0.5 / std::sqrt(M_PI);  // Pbar_m^m / sin^m
   for (int m = 0; m <= L; ++m) {
     if (m > 0) {

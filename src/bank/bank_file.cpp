@@ -732,8 +732,8 @@ Result<BankFile> BankFile::open(const std::string& path) {
     }
     // Only the head of a well-formed format 3 header; everything otherwise.
     uint64_t wanted = bytes->size;
-    if (std::memcmp(header, kMagic, 8) == 0 && version >= 3 && version <= kBankFormatVersionMax && header_size == kHeaderSizeV3 &&
-        head_size <= bytes->size - kHeaderSizeV3)
+    if (std::memcmp(header, kMagic, 8) == 0 && version >= 3 && version <= kBankFormatVersionMax &&
+        header_size == kHeaderSizeV3 && head_size <= bytes->size - kHeaderSizeV3)
       wanted = kHeaderSizeV3 + head_size;
     bytes->buffer.resize(wanted);
     if (bytes->read(0, bytes->buffer.size(), reinterpret_cast<uint8_t*>(bytes->buffer.data()))) {  // from the file

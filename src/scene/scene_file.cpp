@@ -433,8 +433,8 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
           Result<double> coefficient = number(r, where.at("reflection"));
           if (!coefficient) return coefficient.error();
           if (!(*coefficient >= -1.0 && *coefficient <= 1.0))
-            return where.at("reflection").error("a pressure reflection coefficient is between -1 and 1, got " +
-                                                show(r));
+            return where.at("reflection")
+                .error("a pressure reflection coefficient is between -1 and 1, got " + show(r));
           scene.ground_reflection = *coefficient;
         }
       }

@@ -496,8 +496,7 @@ struct OscillatorBank::Impl {
         const Complex pole = m.base_pole - extra_damping;
         const Complex step_amplitude = ramped ? bg / (pole * pole * tau_s * ramp_s) : bg / (pole * tau_s);
         // Audible when the net ringing after the box, |b g (e^{p tau} - 1) / (p tau)|, is.
-        if (edge == 0 && std::abs(bg * (std::exp(pole * tau_s) - 1.0) / (pole * tau_s)) >= threshold)
-          audible = true;
+        if (edge == 0 && std::abs(bg * (std::exp(pole * tau_s) - 1.0) / (pole * tau_s)) >= threshold) audible = true;
         im.hits.push_back({mi, sign * step_amplitude * std::exp(pole * after_s)});
       }
       auto at = std::upper_bound(pending.begin(), pending.end(), im.start_sample,

@@ -83,8 +83,7 @@ bool SoundEngine::radiationToward(Voice& v, const Arrival& a) {
 }
 
 void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
-                                 const std::array<double, 3>& world_point,
-                                 const std::array<double, 3>& impulse_local) {
+                                 const std::array<double, 3>& world_point, const std::array<double, 3>& impulse_local) {
   Arrival paths[2];
   const int count = v.pressure_ ? arrivals(v, world_point, paths) : 1;
   if (!v.pressure_) paths[0].delay_s = delayTo(world_point);

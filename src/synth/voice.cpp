@@ -56,7 +56,8 @@ double surfaceExtent(const ModeBank& bank) {
 }
 
 /// Eigenvalues and unit eigenvectors (rows) of a symmetric 3x3 matrix, by cyclic Jacobi rotations.
-void symmetricEigen3(std::array<double, 9> a, std::array<double, 3>& values, std::array<std::array<double, 3>, 3>& axes) {
+void symmetricEigen3(std::array<double, 9> a, std::array<double, 3>& values,
+                     std::array<std::array<double, 3>, 3>& axes) {
   double v[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   for (int sweep = 0; sweep < 50; ++sweep) {
     const double off = a[1] * a[1] + a[2] * a[2] + a[5] * a[5];
@@ -169,7 +170,8 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
   const size_t paths = settings.ground.enabled ? 2 : 1;
   if (settings.realtime) {
     synth_.reserveImpacts(settings.max_pending_impacts_per_voice * paths, settings.max_contact_duration_s);
-    if (clicks_) click_synth_.reserveImpacts(settings.max_pending_impacts_per_voice * paths, settings.max_contact_duration_s);
+    if (clicks_)
+      click_synth_.reserveImpacts(settings.max_pending_impacts_per_voice * paths, settings.max_contact_duration_s);
   }
 }
 

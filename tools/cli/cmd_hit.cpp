@@ -105,8 +105,7 @@ int runHit(const std::vector<std::string>& raw_args) {
   settings.striker_radius_m = *striker_radius;
   settings.simd = *simd;
   if (args.has("--listener")) {
-    if (args.has("--distance"))
-      return reportError("hit", badInput("give --distance or --listener, not both"));
+    if (args.has("--distance")) return reportError("hit", badInput("give --distance or --listener, not both"));
     Result<std::array<double, 3>> listener = args.vector3("--listener", {});
     if (!listener) return reportError("hit", listener.error());
     settings.listener_m = *listener;

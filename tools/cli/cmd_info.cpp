@@ -110,9 +110,10 @@ void printTable(const std::string& path, const ModeBank& bank) {
   if (has_transfer)
     std::printf("sound     acoustic transfer (%s) in %.2f s\n\n", bank.transfer.method.c_str(), bank.transfer_seconds);
   else
-    std::printf("sound     no acoustic transfer (format %u): heard through the direction average of the older "
-                "model; run `strike modes` again for directivity\n\n",
-                bank.format_version);
+    std::printf(
+        "sound     no acoustic transfer (format %u): heard through the direction average of the older "
+        "model; run `strike modes` again for directivity\n\n",
+        bank.format_version);
   const bool has_error = !bank.frequency_error_estimate.empty();
   const std::vector<double> efficiency = has_transfer ? radiationEfficiency(bank) : std::vector<double>{};
   std::printf("%5s %14s %12s %10s%s%s\n", "mode", "frequency Hz", "decay 1/s", "T60 s", has_error ? "  est. error" : "",

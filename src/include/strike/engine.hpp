@@ -189,28 +189,28 @@ class Voice {
   void setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings);  // sound_paths.cpp's data
   std::shared_ptr<const ModeBank> bank_;
   OscillatorBank synth_;
-  OscillatorBank click_synth_;  ///< acceleration noise: three filters, one per axis (sound_paths.cpp)
+  OscillatorBank click_synth_;     ///< acceleration noise: three filters, one per axis (sound_paths.cpp)
   std::vector<float> click_mono_;  ///< max_block_frames
   ContactProjector projector_;
-  std::vector<double> modal_;         ///< #modes: projection scratch
-  std::vector<double> step_force_;    ///< #modes: this step's sustained modal force (N / sqrt(kg))
-  std::vector<double> held_force_;    ///< #modes: the sustained modal force in force now
-  std::vector<float> mono_;           ///< max_block_frames
-  std::vector<float> levels_;         ///< #modes: budget scratch
+  std::vector<double> modal_;       ///< #modes: projection scratch
+  std::vector<double> step_force_;  ///< #modes: this step's sustained modal force (N / sqrt(kg))
+  std::vector<double> held_force_;  ///< #modes: the sustained modal force in force now
+  std::vector<float> mono_;         ///< max_block_frames
+  std::vector<float> levels_;       ///< #modes: budget scratch
   // Radiation toward the listener (radiation.cpp).
-  bool pressure_ = false;                          ///< output is pressure (VoiceDesc::pressure_scale > 0)
-  std::vector<double> sh_;                         ///< spherical harmonics scratch, (max order + 1)^2
-  std::vector<std::complex<double>> far_field_;    ///< #modes: F_i toward the listener (scratch)
-  std::vector<std::complex<double>> transfer_;     ///< #modes: the factor handed to the oscillators
-  std::vector<double> inv_rms_;                    ///< #modes: 1 / rms_d |F_i| (0 for a silent mode)
-  bool clicks_ = false;                            ///< acceleration noise (a free body with mass)
-  std::array<std::array<double, 3>, 3> click_axis_{};  ///< principal axes of the dipole tensor, mesh frame
-  std::array<double, 3> click_moment_m3_{};        ///< its eigenvalues
-  std::array<std::complex<double>, 3> click_gain_{};  ///< lambda_j / p_j of each click filter
-  std::array<double, 3> click_force_{};            ///< scratch: rigid acceleration impulse per axis
+  bool pressure_ = false;                                 ///< output is pressure (VoiceDesc::pressure_scale > 0)
+  std::vector<double> sh_;                                ///< spherical harmonics scratch, (max order + 1)^2
+  std::vector<std::complex<double>> far_field_;           ///< #modes: F_i toward the listener (scratch)
+  std::vector<std::complex<double>> transfer_;            ///< #modes: the factor handed to the oscillators
+  std::vector<double> inv_rms_;                           ///< #modes: 1 / rms_d |F_i| (0 for a silent mode)
+  bool clicks_ = false;                                   ///< acceleration noise (a free body with mass)
+  std::array<std::array<double, 3>, 3> click_axis_{};     ///< principal axes of the dipole tensor, mesh frame
+  std::array<double, 3> click_moment_m3_{};               ///< its eigenvalues
+  std::array<std::complex<double>, 3> click_gain_{};      ///< lambda_j / p_j of each click filter
+  std::array<double, 3> click_force_{};                   ///< scratch: rigid acceleration impulse per axis
   std::array<std::complex<double>, 3> click_transfer_{};  ///< scratch
-  std::array<double, 3> centre_m_{};  ///< centre of mass, mesh frame
-  double size_m_ = 1.0;               ///< largest extent of its surface (load moments over it)
+  std::array<double, 3> centre_m_{};                      ///< centre of mass, mesh frame
+  double size_m_ = 1.0;                                   ///< largest extent of its surface (load moments over it)
   double youngs_pa_ = 0, poisson_ = 0, mass_kg_ = 0, contact_radius_m_ = 0;
   bool is_static_ = false;
   // Pose and level (engine thread).
@@ -285,9 +285,9 @@ class SoundEngine {
   /// The paths from a voice's source point to the listener: the direct one and, with a ground,
   /// its image (radiation.cpp). Returns how many (1 or 2).
   struct Arrival {
-    double delay_s = 0.0;                  ///< propagation delay
-    double gain = 1.0;                     ///< relative to the voice's distance gain
-    std::array<double, 3> direction{};     ///< toward the (image) listener, mesh frame, unit
+    double delay_s = 0.0;               ///< propagation delay
+    double gain = 1.0;                  ///< relative to the voice's distance gain
+    std::array<double, 3> direction{};  ///< toward the (image) listener, mesh frame, unit
   };
   int arrivals(const Voice& v, const std::array<double, 3>& world_point, Arrival out[2]) const;
   /// The per-mode factor for one arrival into v.transfer_; false when 1 for every mode.

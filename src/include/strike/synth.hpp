@@ -9,9 +9,9 @@
 // under-damped modes), so there is no step-size limit and any damping is stable.
 #pragma once
 
+#include <complex>
 #include <cstddef>
 #include <cstdint>
-#include <complex>
 #include <memory>
 #include <vector>
 

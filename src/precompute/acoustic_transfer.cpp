@@ -21,12 +21,11 @@ using V3 = Eigen::Vector3d;
 constexpr double kFourPi = 4.0 * M_PI;
 
 // Accuracy knobs of the quadrature (checked by the analytic-sphere tests).
-constexpr double kFarRatio = 3.0;        // a cell is "far" from x beyond this many diameters
-constexpr double kCellPhase = 0.6;       // ... and if k times its diameter is at most this
-constexpr double kNearRatio = 2.5;       // a sub-triangle of a near one: this many diameters away
-constexpr double kNearPhase = 1.0;       // ... and k D at most this, for its 3-point rule
-constexpr int kNearMaxDepth = 7;         // subdivision levels at most (4^7 pieces)
-constexpr double kFarFieldPhase = 0.5;   // far-field projection cells: kappa D at most this
+constexpr double kFarRatio = 3.0;       // a cell is "far" from x beyond this many diameters
+constexpr double kCellPhase = 0.6;      // ... and if k times its diameter is at most this
+constexpr double kNearRatio = 2.5;      // a triangle's 3-point rule: this many diameters away
+constexpr int kNearMaxDepth = 7;        // subdivision levels at most (4^7 pieces)
+constexpr double kFarFieldPhase = 0.5;  // far-field projection cells: kappa D at most this
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -50,8 +49,8 @@ struct Triangle {
 struct Node {
   uint32_t begin = 0, end = 0;
   int32_t left = -1, right = -1, parent = -1;
-  V3 centroid = V3::Zero();      // area-weighted
-  V3 vector_area = V3::Zero();   // sum of area * normal
+  V3 centroid = V3::Zero();     // area-weighted
+  V3 vector_area = V3::Zero();  // sum of area * normal
   double area = 0.0;
   double radius = 0.0;  // every point of its triangles lies within this of the centroid
   uint32_t rep = 0;     // triangle whose centroid is nearest the node's: its collocation point
@@ -211,8 +210,10 @@ Result<Surface> makeSurface(const ModeBank& bank) {
     Triangle tri;
     for (int c = 0; c < 3; ++c) {
       const uint32_t v = bank.surface_triangles[3 * t + c];
-      if (v >= vertices) return badInput("surface triangle " + std::to_string(t) + " names vertex " + std::to_string(v));
-      tri.v[c] = V3(bank.surface_positions[3 * v], bank.surface_positions[3 * v + 1], bank.surface_positions[3 * v + 2]);
+      if (v >= vertices)
+        return badInput("surface triangle " + std::to_string(t) + " names vertex " + std::to_string(v));
+      tri.v[c] =
+          V3(bank.surface_positions[3 * v], bank.surface_positions[3 * v + 1], bank.surface_positions[3 * v + 2]);
     }
     const V3 cross = (tri.v[1] - tri.v[0]).cross(tri.v[2] - tri.v[0]);
     tri.area = 0.5 * cross.norm();
@@ -234,8 +235,8 @@ Result<Surface> makeSurface(const ModeBank& bank) {
 // ---- kernels ---------------------------------------------------------------------------------
 
 struct Kernel {
-  cd g;       // G(x, y)
-  cd dg_dr;   // dG/dr divided by r: grad_y G = dg_dr * (y - x)
+  cd g;      // G(x, y)
+  cd dg_dr;  // dG/dr divided by r: grad_y G = dg_dr * (y - x)
 };
 
 inline Kernel kernel(double k, double r) {
@@ -245,39 +246,57 @@ inline Kernel kernel(double k, double r) {
   return {g, g * cd(-inv_r * inv_r, k * inv_r)};  // e^{ikr}(ikr - 1) / (4 pi r^3)
 }
 
-/// int_T G dS and int_T dG/dn_y dS for x away from T (not on it), adaptively subdivided.
-void nearTriangle(const V3& x, const Triangle& t, double k, cd& int_g, cd& int_dg) {
-  struct Piece {
-    V3 a, b, c;
-    int depth;
-  };
-  Piece stack[4 * kNearMaxDepth + 4];
-  int top = 0;
-  stack[top++] = {t.v[0], t.v[1], t.v[2], 0};
-  const double area0 = t.area;
-  while (top > 0) {
-    const Piece p = stack[--top];
-    const V3 m = (p.a + p.b + p.c) / 3.0;
-    const double d = std::max({(p.b - p.a).norm(), (p.c - p.b).norm(), (p.a - p.c).norm()});
-    const double dist = (x - m).norm();
-    if ((dist > kNearRatio * d && k * d <= kNearPhase) || p.depth >= kNearMaxDepth) {
-      const double w = area0 / std::pow(4.0, p.depth) / 3.0;
-      const V3 q[3] = {(4.0 * p.a + p.b + p.c) / 6.0, (p.a + 4.0 * p.b + p.c) / 6.0, (p.a + p.b + 4.0 * p.c) / 6.0};
-      for (const V3& y : q) {
-        const V3 yx = y - x;
-        const double r = yx.norm();
-        if (!(r > 0)) continue;
-        const Kernel kr = kernel(k, r);
-        int_g += w * kr.g;
-        int_dg += w * kr.dg_dr * yx.dot(t.normal);
-      }
-      continue;
-    }
-    const V3 ab = 0.5 * (p.a + p.b), bc = 0.5 * (p.b + p.c), ca = 0.5 * (p.c + p.a);
-    stack[top++] = {p.a, ab, ca, p.depth + 1};
-    stack[top++] = {ab, p.b, bc, p.depth + 1};
-    stack[top++] = {ca, bc, p.c, p.depth + 1};
-    stack[top++] = {ab, bc, ca, p.depth + 1};
+// Symmetric rules on a triangle (barycentric weights, weights summing to 1): 3 points of
+// degree 2 (Strang & Fix) and 7 points of degree 5 (Dunavant 1985).
+constexpr double kRule3[3][4] = {
+    {2.0 / 3, 1.0 / 6, 1.0 / 6, 1.0 / 3}, {1.0 / 6, 2.0 / 3, 1.0 / 6, 1.0 / 3}, {1.0 / 6, 1.0 / 6, 2.0 / 3, 1.0 / 3}};
+constexpr double kA1 = 0.059715871789770, kB1 = 0.470142064105115, kW1 = 0.132394152788506;
+constexpr double kA2 = 0.797426985353087, kB2 = 0.101286507323456, kW2 = 0.125939180544827;
+constexpr double kRule7[7][4] = {{1.0 / 3, 1.0 / 3, 1.0 / 3, 0.225},
+                                 {kA1, kB1, kB1, kW1},
+                                 {kB1, kA1, kB1, kW1},
+                                 {kB1, kB1, kA1, kW1},
+                                 {kA2, kB2, kB2, kW2},
+                                 {kB2, kA2, kB2, kW2},
+                                 {kB2, kB2, kA2, kW2}};
+
+/// int_T G dS and int_T dG/dn_y dS for x not on T: a rule of the degree that T's size in
+/// wavelengths and its distance from x ask for, or four halves when x is too near.
+void integrateTriangle(const V3& x, const V3& a, const V3& b, const V3& c, const V3& normal, double area, double k,
+                       int depth, cd& int_g, cd& int_dg) {
+  const V3 m = (a + b + c) / 3.0;
+  const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  const double dist = (x - m).norm();
+  const double kd = k * d;
+  const double(*rule)[4] = nullptr;
+  int points = 0;
+  if (dist > kFarRatio * d && kd <= kCellPhase) {
+    points = 1;
+  } else if (dist > kNearRatio * d && kd <= 2.0 * kCellPhase) {
+    rule = kRule3;
+    points = 3;
+  } else if ((dist > 2.0 * d && kd <= 2.5) || depth >= kNearMaxDepth) {
+    rule = kRule7;
+    points = 7;
+  }
+  if (points == 0) {
+    const V3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
+    const double quarter = 0.25 * area;
+    integrateTriangle(x, a, ab, ca, normal, quarter, k, depth + 1, int_g, int_dg);
+    integrateTriangle(x, ab, b, bc, normal, quarter, k, depth + 1, int_g, int_dg);
+    integrateTriangle(x, ca, bc, c, normal, quarter, k, depth + 1, int_g, int_dg);
+    integrateTriangle(x, ab, bc, ca, normal, quarter, k, depth + 1, int_g, int_dg);
+    return;
+  }
+  for (int i = 0; i < points; ++i) {
+    const V3 y = rule ? V3(rule[i][0] * a + rule[i][1] * b + rule[i][2] * c) : m;
+    const double w = rule ? rule[i][3] * area : area;
+    const V3 yx = y - x;
+    const double r = yx.norm();
+    if (!(r > 0)) continue;
+    const Kernel kr = kernel(k, r);
+    int_g += w * kr.g;
+    int_dg += w * kr.dg_dr * yx.dot(normal);
   }
 }
 
@@ -303,9 +322,9 @@ cd selfTriangle(const Triangle& t, double k) {
 /// Per-node integrals of the boundary data q = dp/dn (real: the shapes are real): Q = int q dS
 /// and the first moment D = int (y - centroid) q dS.
 struct NodeData {
-  std::vector<double> q;     // per triangle
-  std::vector<double> Q;     // per node
-  std::vector<V3> D;         // per node
+  std::vector<double> q;  // per triangle
+  std::vector<double> Q;  // per node
+  std::vector<V3> D;      // per node
 };
 
 void nodeData(const Surface& s, NodeData& data) {
@@ -425,8 +444,8 @@ Coarse coarsen(const Surface& s, const Cut& cut) {
 
 /// One row of the system at x: M[col] += int_cluster dG/dn_y, and int G q over the surface.
 /// host: the triangle x is the centroid of (-1 for interior points).
-void assembleRow(const Surface& s, const Cut& cut, const NodeData& data, double k, const V3& x, int64_t host,
-                 cd* M, cd& lq, std::vector<int32_t>& stack) {
+void assembleRow(const Surface& s, const Cut& cut, const NodeData& data, double k, const V3& x, int64_t host, cd* M,
+                 cd& lq, std::vector<int32_t>& stack) {
   stack.clear();
   stack.push_back(0);
   while (!stack.empty()) {
@@ -455,7 +474,7 @@ void assembleRow(const Surface& s, const Cut& cut, const NodeData& data, double 
       continue;
     }
     cd int_g = 0.0, int_dg = 0.0;
-    nearTriangle(x, tri, k, int_g, int_dg);
+    integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
     M[col] += int_dg;
     lq += int_g * data.q[t];
   }
@@ -715,26 +734,37 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
       data.q[t] = -rho * s.tris[t].normal.dot(shape / 3.0);
     }
     nodeData(s, data);
-    const size_t elements = elementsFor(s, settings, k);
-    const size_t chief = chiefPointsFor(s, settings, k, elements);
-    const ModeSolve solved = solveSystem(s, data, k, elements, chief);
-
     const double kr = k * s.radius;
     const int n_cap = std::min(120, static_cast<int>(std::ceil(kr + 4.0 * std::cbrt(kr))) + 6);
     const double kappa = std::max(k, (n_cap + 1.0) / s.radius);
-    farFieldPoints(s, solved.cut, data, kappa, points);
-    projectFarField(s, points, k, n_cap, solved.p, solved.p_diff, coef, dcoef);
-
-    // Order: the smallest whose tail holds at most (target / 5)^2 of the energy.
-    std::vector<double> energy(n_cap + 1, 0.0);
+    // Refine while the estimate exceeds the target and the budget allows: the mode's pattern
+    // (not only the wavelength) sets the resolution, and the estimate sees it.
+    size_t elements = elementsFor(s, settings, k);
+    const size_t cap = settings.fixed_elements > 0 ? elements : std::min<size_t>(settings.max_elements, s.tris.size());
+    ModeSolve solved;
+    std::vector<double> energy;
     double total = 0.0, diff = 0.0;
-    for (int n = 0; n <= n_cap; ++n)
-      for (int m = -n; m <= n; ++m) {
-        energy[n] += std::norm(coef[n * n + n + m]);
-        diff += std::norm(dcoef[n * n + n + m]);
-      }
-    for (double e : energy) total += e;
-    const double tail_allowed = std::pow(settings.target_relative_error / 5.0, 2) * total;
+    while (true) {
+      const size_t chief = chiefPointsFor(s, settings, k, elements);
+      solved = solveSystem(s, data, k, elements, chief);
+      farFieldPoints(s, solved.cut, data, kappa, points);
+      projectFarField(s, points, k, n_cap, solved.p, solved.p_diff, coef, dcoef);
+      energy.assign(n_cap + 1, 0.0);
+      total = 0.0;
+      diff = 0.0;
+      for (int n = 0; n <= n_cap; ++n)
+        for (int m = -n; m <= n; ++m) {
+          energy[n] += std::norm(coef[n * n + n + m]);
+          diff += std::norm(dcoef[n * n + n + m]);
+        }
+      for (double e : energy) total += e;
+      if (!(diff > std::pow(settings.target_relative_error, 2) * total) || elements >= cap) break;
+      elements = std::min(cap, elements * 5 / 2);
+    }
+
+    // Order: the smallest whose tail holds at most 1e-8 of the energy (-80 dB), far below the
+    // target, so that the modes of a degenerate pair, truncated apart, still sum basis-free.
+    const double tail_allowed = 1e-8 * total;
     int order = n_cap;
     double tail = 0.0;
     while (order > 0 && tail + energy[order] <= tail_allowed) tail += energy[order--];
@@ -745,7 +775,8 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
 
     out.order.push_back(static_cast<uint32_t>(order));
     for (int i = 0; i < (order + 1) * (order + 1); ++i)
-      out.coefficients.push_back(std::complex<float>(static_cast<float>(coef[i].real()), static_cast<float>(coef[i].imag())));
+      out.coefficients.push_back(
+          std::complex<float>(static_cast<float>(coef[i].real()), static_cast<float>(coef[i].imag())));
     out.offset.push_back(out.coefficients.size());
     out.relative_error.push_back(static_cast<float>(relative));
     if (stats) {
@@ -765,7 +796,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
   // order in k, the volume term by the divergence theorem).
   {
     Eigen::Matrix3d dipole = Eigen::Matrix3d::Identity() * s.volume;
-    const size_t elements = std::min<size_t>(std::max<size_t>(settings.min_elements, 400), s.tris.size());
+    const size_t elements = std::min<size_t>(settings.max_elements, s.tris.size());
     for (int j = 0; j < 3; ++j) {
       data.q.resize(s.tris.size());
       for (size_t t = 0; t < s.tris.size(); ++t) data.q[t] = -s.tris[t].normal[j];

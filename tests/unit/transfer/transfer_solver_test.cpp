@@ -8,6 +8,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <cstdlib>
 #include <vector>
 
 #include "strike/mesh.hpp"
@@ -230,5 +231,30 @@ TEST(TransferSolver, ThinDiscHasTheDiscsAddedMassAndAFiniteFarField) {
   }
 }
 
+}  // namespace
+}  // namespace strike
+
+namespace strike {
+namespace {
+// Development aid, not run by ctest: STRIKE_TRANSFER_BANK=path.modes prints each mode's solve.
+TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
+  const char* path = std::getenv("STRIKE_TRANSFER_BANK");
+  ASSERT_NE(path, nullptr);
+  Result<ModeBank> bank = readBank(path);
+  ASSERT_TRUE(bank) << bank.error().message;
+  TransferSettings settings;
+  if (const char* max = std::getenv("STRIKE_TRANSFER_MAX_ELEMENTS")) settings.max_elements = std::atoi(max);
+  std::vector<TransferModeStats> stats;
+  const auto start = std::chrono::steady_clock::now();
+  Result<AcousticTransfer> t = solveAcousticTransfer(*bank, settings, {}, &stats);
+  ASSERT_TRUE(t) << t.error().message;
+  std::printf("%zu triangles, eigen-solve %.2f s (factorize + Lanczos), transfer %.2f s\n",
+              bank->surface_triangles.size() / 3, bank->factorize_seconds + bank->lanczos_seconds,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  for (size_t i = 0; i < stats.size(); ++i)
+    std::printf("%3zu %8.1f Hz ka %6.2f elements %4u chief %3u order %3u estimate %7.4f %6.3f s\n", i,
+                bank->frequencyHz(i), stats[i].ka, stats[i].elements, stats[i].chief_points, stats[i].order,
+                stats[i].relative_error, stats[i].seconds);
+}
 }  // namespace
 }  // namespace strike

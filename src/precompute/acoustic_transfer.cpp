@@ -22,7 +22,8 @@ constexpr double kFourPi = 4.0 * M_PI;
 
 // Accuracy knobs of the quadrature (checked by the analytic-sphere tests).
 constexpr double kFarRatio = 3.0;       // a cell is "far" from x beyond this many diameters
-constexpr double kCellPhase = 0.6;      // ... and if k times its diameter is at most this
+constexpr double kCellPhase = 0.6;      // a triangle's 1-point rule: k D at most this (3-point: twice)
+constexpr double kPointPhase = 2.0;     // a far piece as one point with its phase spread: k D at most this
 constexpr double kNearRatio = 2.5;      // a triangle's 3-point rule: this many diameters away
 constexpr int kNearMaxDepth = 7;        // subdivision levels at most (4^7 pieces)
 constexpr double kFarFieldPhase = 0.5;  // far-field projection cells: kappa D at most this
@@ -42,7 +43,8 @@ struct Triangle {
   V3 centroid;
   V3 normal;  // unit, outward
   double area = 0.0;
-  double diameter = 0.0;  // longest edge
+  double diameter = 0.0;                          // longest edge
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // covariance of the points of the triangle
 };
 
 // A node of the bounding-volume tree over the triangles: a contiguous range of `order`.
@@ -54,6 +56,7 @@ struct Node {
   double area = 0.0;
   double radius = 0.0;  // every point of its triangles lies within this of the centroid
   uint32_t rep = 0;     // triangle whose centroid is nearest the node's: its collocation point
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // covariance of its points about the centroid
   bool leaf() const { return left < 0; }
 };
 
@@ -127,6 +130,7 @@ void buildTree(Surface& s) {
       n.radius = 0.0;
       for (const V3& v : t.v) n.radius = std::max(n.radius, (v - t.centroid).norm());
       n.rep = s.order[n.begin];
+      n.cov = t.cov;
       continue;
     }
     const Node& a = s.nodes[n.left];
@@ -138,6 +142,10 @@ void buildTree(Surface& s) {
     const double da = (s.tris[a.rep].centroid - n.centroid).squaredNorm();
     const double db = (s.tris[b.rep].centroid - n.centroid).squaredNorm();
     n.rep = da <= db ? a.rep : b.rep;
+    if (n.area > 0) {
+      const V3 oa = a.centroid - n.centroid, ob = b.centroid - n.centroid;
+      n.cov = (a.area * (a.cov + oa * oa.transpose()) + b.area * (b.cov + ob * ob.transpose())) / n.area;
+    }
   }
 }
 
@@ -221,6 +229,7 @@ Result<Surface> makeSurface(const ModeBank& bank) {
     tri.normal = cross.normalized();
     tri.centroid = (tri.v[0] + tri.v[1] + tri.v[2]) / 3.0;
     tri.diameter = std::max({(tri.v[1] - tri.v[0]).norm(), (tri.v[2] - tri.v[1]).norm(), (tri.v[0] - tri.v[2]).norm()});
+    for (const V3& v : tri.v) tri.cov += (v - tri.centroid) * (v - tri.centroid).transpose() / 12.0;
     s.area += tri.area;
     s.volume += tri.centroid.dot(cross) / 6.0;  // divergence theorem: V = 1/3 int y.n dS
     for (const V3& v : tri.v) s.radius = std::max(s.radius, (v - s.centre).norm());
@@ -260,10 +269,33 @@ constexpr double kRule7[7][4] = {{1.0 / 3, 1.0 / 3, 1.0 / 3, 0.225},
                                  {kB2, kA2, kB2, kW2},
                                  {kB2, kB2, kA2, kW2}};
 
+/// The mean of e^{ik(r(y) - r(c))} over a piece with centroid c and covariance C, seen from x at
+/// distance r along rhat: to second order, 1 - k^2 rhat.C.rhat / 2 (the phase's spread across the
+/// piece) + ik (tr C - rhat.C.rhat) / (2r) (the wavefront's curvature). It lets one point stand
+/// for a piece up to k D ~ 2 (the next term, k^4 <(rhat.d)^4> / 24, is ~0.3% there).
+inline cd phaseSpread(double k, const Eigen::Matrix3d& cov, const V3& yx, double r) {
+  const V3 rhat = yx / r;
+  const double along = rhat.dot(cov * rhat);
+  return cd(1.0 - 0.5 * k * k * along, k * (cov.trace() - along) / (2.0 * r));
+}
+
 /// int_T G dS and int_T dG/dn_y dS for x not on T: a rule of the degree that T's size in
 /// wavelengths and its distance from x ask for, or four halves when x is too near.
 void integrateTriangle(const V3& x, const V3& a, const V3& b, const V3& c, const V3& normal, double area, double k,
                        int depth, cd& int_g, cd& int_dg) {
+  if (depth == 0) {  // a far whole triangle: one point with its phase spread
+    const V3 m = (a + b + c) / 3.0, yx = m - x;
+    const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()}), r = yx.norm();
+    if (r > kFarRatio * d && k * d <= kPointPhase) {
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      for (const V3* v : {&a, &b, &c}) cov += (*v - m) * (*v - m).transpose() / 12.0;
+      const Kernel kr = kernel(k, r);
+      const cd spread = phaseSpread(k, cov, yx, r);
+      int_g += area * kr.g * spread;
+      int_dg += area * kr.dg_dr * yx.dot(normal) * spread;
+      return;
+    }
+  }
   const V3 m = (a + b + c) / 3.0;
   const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
   const double dist = (x - m).norm();
@@ -456,10 +488,11 @@ void assembleRow(const Surface& s, const Cut& cut, const NodeData& data, double 
     const V3 yx = n.centroid - x;
     const double dist = yx.norm();
     const double diameter = 2.0 * n.radius;
-    if (col >= 0 && dist > kFarRatio * diameter && k * diameter <= kCellPhase) {
+    if (col >= 0 && dist > kFarRatio * diameter && k * diameter <= kPointPhase) {
       const Kernel kr = kernel(k, dist);
-      M[col] += kr.dg_dr * yx.dot(n.vector_area);
-      lq += kr.g * data.Q[i] + kr.dg_dr * yx.dot(data.D[i]);
+      const cd spread = phaseSpread(k, n.cov, yx, dist);
+      M[col] += kr.dg_dr * yx.dot(n.vector_area) * spread;
+      lq += (kr.g * data.Q[i] + kr.dg_dr * yx.dot(data.D[i])) * spread;
       continue;
     }
     if (!n.leaf()) {

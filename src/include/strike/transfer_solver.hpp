@@ -3,7 +3,7 @@
 // surface acceleration radiates with the body as an acoustic obstacle, as spherical-harmonic
 // coefficients (acoustic_transfer.hpp for the conventions). Target strike_precompute (Eigen).
 //
-// Method (docs/physics.md, "Acoustic transfer"): the exterior Neumann Helmholtz problem
+// Method (docs/acoustic-transfer.md): the exterior Neumann Helmholtz problem
 //   (Delta + k^2) p = 0 outside the body,  dp/dn = -rho_air a_n on its surface,  outgoing,
 // solved by a collocation boundary-element method on the bank's own surface triangles:
 // the conventional boundary integral equation (Kirkup 2007, "The boundary element method in

@@ -10,6 +10,8 @@
 //   reader verifies only the blocks it reads.
 //   format 4: the same with MODQ instead of MODV: a f32 scale per mode after the eigenvalues and
 //   the shapes as i16 (value = q * scale), half the bytes (`strike modes --compact`).
+//   format 5: format 3 or 4 (MODV or MODQ) plus ACTF, the acoustic transfer of every mode
+//   (acoustic_transfer.hpp), and the transfer's seconds at the end of PROV.
 //
 // Unknown chunks are skipped, so a reader of the same major format can read files that carry
 // more. Every read is bounds-checked: a hostile file can make decoding fail, never overrun.
@@ -149,6 +151,44 @@ class ByteReader {
   bool failed_ = false;
 };
 
+/// The shapes chunk a file of `version` may have: MODE (1-2), MODV (3), MODQ (4), either (5).
+bool isShapesTag(uint32_t version, const std::string& tag) {
+  if (version <= 2) return tag == "MODE";
+  if (version == 3) return tag == "MODV";
+  if (version == 4) return tag == "MODQ";
+  return tag == "MODV" || tag == "MODQ";
+}
+
+/// A spherical-harmonic order above this is not a mode's far field (ka = 200 would be a 1 m body
+/// at 11 kHz): refuse it before allocating (201^2 coefficients per mode).
+constexpr uint32_t kMaxTransferOrder = 200;
+
+/// Reads an ACTF chunk (layout in docs/bank-format.md); empty on success, else the problem.
+std::string readTransfer(ByteReader& r, AcousticTransfer& t) {
+  const uint32_t modes = r.get<uint32_t>();
+  r.get<uint32_t>();  // reserved
+  for (double& v : t.centre_m) v = r.get<double>();
+  t.air_density_kg_m3 = r.get<double>();
+  t.speed_of_sound_m_s = r.get<double>();
+  t.solve_seconds = r.get<double>();
+  for (double& v : t.translation_dipole_m3) v = r.get<double>();
+  t.method = r.getString();
+  r.getArray(t.order, modes);
+  r.getArray(t.relative_error, modes);
+  if (r.failed()) return "shorter than its contents";
+  t.offset.assign(1, 0);
+  for (uint32_t n : t.order) {
+    if (n > kMaxTransferOrder) return "order " + std::to_string(n) + " > " + std::to_string(kMaxTransferOrder);
+    t.offset.push_back(t.offset.back() + uint64_t(n + 1) * (n + 1));
+  }
+  const uint64_t count = r.get<uint64_t>();
+  if (count != t.offset.back())
+    return std::to_string(count) + " coefficients, the orders need " + std::to_string(t.offset.back());
+  r.getArray(t.coefficients, count);
+  if (r.failed()) return "shorter than its contents";
+  return t.checkConsistency(modes);
+}
+
 Error corrupt(const std::string& source, const std::string& what) {
   return badInput(source + ": error: not a valid mode bank: " + what);
 }
@@ -183,7 +223,7 @@ std::vector<float> int16ShapeScales(const ModeBank& bank) {
 
 std::vector<uint8_t> encodeBank(const ModeBank& bank, ShapeEncoding encoding) {
   const bool int16 = encoding == ShapeEncoding::Int16;
-  const uint32_t version = int16 ? 4 : 3;
+  const uint32_t version = kBankFormatVersion;  // 5: MODV or MODQ, plus ACTF
   ByteWriter w;
   w.data().insert(w.data().end(), kMagic, kMagic + 8);
   w.put<uint32_t>(version);
@@ -244,6 +284,24 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank, ShapeEncoding encoding) {
     w.endChunk(at);
   }
 
+  if (!bank.transfer.empty()) {
+    const AcousticTransfer& t = bank.transfer;
+    at = w.beginChunk("ACTF");
+    w.put<uint32_t>(static_cast<uint32_t>(t.modeCount()));
+    w.put<uint32_t>(0);  // reserved
+    for (double v : t.centre_m) w.put(v);
+    w.put(t.air_density_kg_m3);
+    w.put(t.speed_of_sound_m_s);
+    w.put(t.solve_seconds);
+    for (double v : t.translation_dipole_m3) w.put(v);
+    w.putString(t.method);
+    w.putArray(t.order);
+    w.putArray(t.relative_error);
+    w.put<uint64_t>(t.coefficients.size());
+    w.putArray(t.coefficients);
+    w.endChunk(at);
+  }
+
   at = w.beginChunk("PROV");
   w.put(bank.meshing_seconds);
   w.put(bank.assembly_seconds);
@@ -253,6 +311,7 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank, ShapeEncoding encoding) {
   w.put<uint32_t>(bank.rigid_modes_dropped);
   w.put<uint32_t>(bank.above_cutoff_dropped);
   w.putString(bank.tool_version);
+  w.put(bank.transfer_seconds);  // format 5
   w.endChunk(at);
 
   // MODV (MODQ in format 4) last: its shapes are the payload's tail, outside the head checksum.
@@ -418,8 +477,8 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
     const uint64_t chunk_offset = static_cast<uint64_t>(payload.here() - payload_start);  // of its contents
     const bool runs_past = !payload.failed() && chunk_size > payload.remaining();
     // Only MODV may run past what is in memory, and only to the end of the file.
-    const std::string shapes_tag = bank.format_version >= 4 ? "MODQ" : "MODV";
-    if (payload.failed() || (runs_past && (tag != shapes_tag || chunk_size != payload_size - chunk_offset)))
+    if (payload.failed() || (runs_past && (!isShapesTag(bank.format_version, tag) || tag == "MODE" ||
+                                           chunk_size != payload_size - chunk_offset)))
       return corrupt(source, "chunk '" + tag + "' runs past the end of the file");
     ByteReader r = payload.take(runs_past ? payload.remaining() : chunk_size);
     if (tag == "MATL") {
@@ -456,8 +515,7 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
     } else if (tag == "MODE" || tag == "MODV" || tag == "MODQ") {
       const bool vertex_major = tag != "MODE";
       const bool int16 = tag == "MODQ";
-      const std::string expected = bank.format_version >= 4 ? "MODQ" : bank.format_version == 3 ? "MODV" : "MODE";
-      if (tag != expected)
+      if (!isShapesTag(bank.format_version, tag))
         return corrupt(source, "a '" + tag + "' chunk in a format " + std::to_string(bank.format_version) + " file");
       if (seen_modes) return corrupt(source, "two '" + tag + "' chunks");
       const uint32_t modes = r.get<uint32_t>();
@@ -479,6 +537,7 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
             return corrupt(source, "a shape scale of 'MODQ' is not finite and >= 0");
       }
       file.int16_shapes_ = int16;
+      bank.shape_encoding = int16 ? ShapeEncoding::Int16 : ShapeEncoding::Float32;
       if (vertex_major) r.getArray(file.block_checksums_, blocks);
       if (r.failed()) return corrupt(source, "chunk '" + tag + "' is shorter than its contents");
       // The shapes are not read here: readAll() or readShapeRows() read them when asked.
@@ -504,6 +563,9 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
     } else if (tag == "RADI") {
       const uint32_t count = r.get<uint32_t>();
       r.getArray(bank.radiation_m2, count);
+    } else if (tag == "ACTF" && bank.format_version >= 5) {
+      const std::string problem = readTransfer(r, bank.transfer);
+      if (!problem.empty()) return corrupt(source, "chunk 'ACTF': " + problem);
     } else if (tag == "PROV") {
       bank.meshing_seconds = r.get<double>();
       bank.assembly_seconds = r.get<double>();
@@ -513,13 +575,15 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
       bank.rigid_modes_dropped = r.get<uint32_t>();
       bank.above_cutoff_dropped = r.get<uint32_t>();
       bank.tool_version = r.getString();
+      if (bank.format_version >= 5) bank.transfer_seconds = r.get<double>();
     }  // else: a chunk from a newer writer of the same version; skipped on purpose.
     if (r.failed()) return corrupt(source, "chunk '" + tag + "' is shorter than its contents");
   }
   if (!seen_modes || !seen_surface)
     return corrupt(source, std::string("missing the ") +
                                (seen_modes                 ? "SURF"
-                                : bank.format_version >= 4 ? "MODQ"
+                                : bank.format_version >= 5 ? "MODV or MODQ"
+                                : bank.format_version == 4 ? "MODQ"
                                 : bank.format_version == 3 ? "MODV"
                                                            : "MODE") +
                                " chunk");
@@ -668,8 +732,8 @@ Result<BankFile> BankFile::open(const std::string& path) {
     }
     // Only the head of a well-formed format 3 header; everything otherwise.
     uint64_t wanted = bytes->size;
-    if (std::memcmp(header, kMagic, 8) == 0 && (version == 3 || version == 4) && header_size == kHeaderSizeV3 &&
-        head_size <= bytes->size - kHeaderSizeV3)
+    if (std::memcmp(header, kMagic, 8) == 0 && version >= 3 && version <= kBankFormatVersionMax &&
+        header_size == kHeaderSizeV3 && head_size <= bytes->size - kHeaderSizeV3)
       wanted = kHeaderSizeV3 + head_size;
     bytes->buffer.resize(wanted);
     if (bytes->read(0, bytes->buffer.size(), reinterpret_cast<uint8_t*>(bytes->buffer.data()))) {  // from the file

@@ -81,6 +81,19 @@ std::string rejectedField(const strike_context_config& c) {
     return say("audibility_threshold = %g (must be finite and >= 0)", c.audibility_threshold);
   if (!(c.reference_distance_m > 0.0) || !std::isfinite(c.reference_distance_m))
     return say("reference_distance_m = %g (must be finite and > 0)", c.reference_distance_m);
+  if (c.ground_reflects != 0 && c.ground_reflects != 1)
+    return say("ground_reflects = %d (must be 0 or 1)", c.ground_reflects);
+  {
+    const double* n = c.ground_normal;
+    const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(length > 1e-9) || !std::isfinite(length)) {
+      std::snprintf(why, sizeof why, "ground_normal = (%g, %g, %g) (must be finite and not zero)", n[0], n[1], n[2]);
+      return std::string(why);
+    }
+  }
+  if (!std::isfinite(c.ground_height_m)) return say("ground_height_m = %g (must be finite)", c.ground_height_m);
+  if (!(c.ground_reflection >= -1.0 && c.ground_reflection <= 1.0))
+    return say("ground_reflection = %g (must be -1 .. 1)", c.ground_reflection);
   if (!(c.min_distance_m > 0.0) || !std::isfinite(c.min_distance_m))
     return say("min_distance_m = %g (must be finite and > 0)", c.min_distance_m);
   if (!(c.output_full_scale_pa > 0.0) || !std::isfinite(c.output_full_scale_pa))
@@ -231,6 +244,10 @@ STRIKE_API strike_context_config STRIKE_CALL strike_context_config_default(void)
   c.min_distance_m = kMinListenerDistance_m;
   c.contact_damping_per_s = 0.0;
   c.contact_queue_capacity = 8192;
+  c.ground_reflects = 0;
+  c.ground_normal[0] = 0.0, c.ground_normal[1] = 0.0, c.ground_normal[2] = 1.0;
+  c.ground_height_m = 0.0;
+  c.ground_reflection = 1.0;
   return c;
 }
 
@@ -298,6 +315,12 @@ STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_
     e.max_contact_duration_s = cfg.max_contact_duration_s;
     e.contact_damping_per_s = cfg.contact_damping_per_s;
     e.realtime = true;
+    e.ground.enabled = cfg.ground_reflects != 0;
+    const double* n = cfg.ground_normal;
+    const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    e.ground.normal = {n[0] / length, n[1] / length, n[2] / length};
+    e.ground.height_m = cfg.ground_height_m;
+    e.ground.reflection = cfg.ground_reflection;
     e.max_pending_impacts_per_voice = cfg.max_pending_impacts_per_object;
     void* engine_mem = ctx->allocArray<SoundEngine>(1);
     try {
@@ -551,6 +574,7 @@ STRIKE_API strike_status STRIKE_CALL strike_object_add(strike_context ctx, const
     desc.bank = std::shared_ptr<const ModeBank>(data, &data->bank);  // shares the bank's ownership
     desc.weights = c.radiation == STRIKE_RADIATION_PRESSURE ? data->pressure_weights
                                                             : std::vector<double>(data->bank.modeCount(), 1.0);
+    if (c.radiation == STRIKE_RADIATION_PRESSURE) desc.pressure_scale = 1.0 / ctx->config.output_full_scale_pa;
     desc.is_static = c.is_static != 0;
     desc.contact_radius_m = c.contact_radius_m;
     desc.pose = pose;

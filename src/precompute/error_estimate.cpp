@@ -380,6 +380,7 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     PrecomputeSettings trial_settings = settings;
     trial_settings.order = 2;
     trial_settings.error_estimate = true;
+    trial_settings.acoustic_transfer = false;  // solved once, on the bank chosen
     LoadedMesh loaded;
     if (step == 0) {
       MeshOptions mesh_options;
@@ -480,6 +481,11 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     }
     edge = finer->target_edge_m;
     next_mesh = std::move(finer->loaded);
+  }
+  if (settings.acoustic_transfer && !out.trials.empty()) {
+    if (Status solved = solveTransferInto(out.chosen.bank, settings.transfer, settings.progress); !solved)
+      return solved.error();
+    out.chosen.bank.total_seconds += out.chosen.bank.transfer_seconds;
   }
   out.total_seconds = secondsSince(start);
   return out;

@@ -65,6 +65,9 @@ NormalizedProblem normalizeProblem(const PrecomputeSettings& actual) {
   // Rigid modes by the solver's own scale (a fraction of its shift), not by 1 Hz, which would
   // mean a different frequency in every normalized problem.
   n.rigid_freq_hz = 0.0;
+  // The acoustic transfer depends on the actual frequencies (ka): similarBank() solves it on the
+  // scaled bank, so the normalized solve (and its cache entry) has none.
+  n.acoustic_transfer = false;
   return problem;
 }
 

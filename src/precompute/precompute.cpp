@@ -104,6 +104,16 @@ void fillProvenance(const LoadedMesh& loaded, const PrecomputeSettings& settings
 
 }  // namespace
 
+Status solveTransferInto(ModeBank& bank, const TransferSettings& settings, const ProgressFn& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  if (progress) progress("transfer", 0.0);
+  Result<AcousticTransfer> transfer = solveAcousticTransfer(bank, settings, progress);
+  if (!transfer) return transfer.error();
+  bank.transfer = std::move(*transfer);
+  bank.transfer_seconds = secondsSince(start);
+  return {};
+}
+
 uint64_t bankCacheKey(uint64_t mesh_hash, const PrecomputeSettings& settings) {
   // Bit-exact inputs: the key changes whenever any input to the precompute changes.
   const Material& m = settings.material;
@@ -179,6 +189,10 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
   bank.above_cutoff_dropped = static_cast<uint32_t>(modes->above_cutoff_dropped);
   result.report.capped_by_max_modes = modes->capped_by_max_modes;
   result.report.operator_applications = modes->operator_applications;
+  if (settings.acoustic_transfer) {
+    // The acoustic transfer: a phase of its own, part of the bank's cost (total_seconds).
+    if (Status solved = solveTransferInto(bank, settings.transfer, settings.progress); !solved) return solved.error();
+  }
   bank.total_seconds = loaded.meshing_seconds + secondsSince(start);
 
   // ---- frequency error estimate (src/precompute/error_estimate.cpp); reported apart from

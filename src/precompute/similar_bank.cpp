@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "strike/precompute.hpp"
 #include "strike/synth.hpp"
 
 namespace strike {
@@ -62,6 +63,33 @@ Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Materia
   for (float& v : out.shapes) v = static_cast<float>(v * shape_factor);
   out.above_cutoff_dropped = 0;
   out.radiation_m2 = radiationStrengths(out);
+
+  // The acoustic transfer. The exterior problem of the scaled body at k' = k sqrt(E'rho/(E rho'))
+  // / s with data scaled by shape_factor has, when ka is unchanged (E/rho unchanged), the
+  // solution p'(s x) = shape_factor s p(x), so F' = shape_factor s^2 F, the dipole tensor M s^3
+  // and the centre s c. Otherwise ka changes and the far field is not similar: solve it again on
+  // the scaled bank (so does a normalized solve, which has none).
+  const double ka_factor = std::sqrt(lambda_factor) * scale;  // omega' / omega times s
+  out.transfer = AcousticTransfer{};
+  if (solved.transfer.modeCount() == solved.modeCount() && std::abs(ka_factor - 1.0) <= 1e-12) {
+    const AcousticTransfer& from = solved.transfer;
+    AcousticTransfer& to = out.transfer;
+    to = from;
+    for (int a = 0; a < 3; ++a) to.centre_m[a] = from.centre_m[a] * scale;
+    to.order.resize(keep);
+    to.offset.resize(keep + 1);
+    to.relative_error.resize(keep);
+    to.coefficients.resize(to.offset[keep]);
+    const float factor = static_cast<float>(shape_factor * scale * scale);
+    for (std::complex<float>& c : to.coefficients) c *= factor;
+    for (double& m : to.translation_dipole_m3) m *= scale * scale * scale;
+    out.transfer_seconds = 0.0;
+  } else {
+    TransferSettings air;
+    if (solved.transfer.air_density_kg_m3 > 0) air.air_density_kg_m3 = solved.transfer.air_density_kg_m3;
+    if (solved.transfer.speed_of_sound_m_s > 0) air.speed_of_sound_m_s = solved.transfer.speed_of_sound_m_s;
+    if (Status transfer = solveTransferInto(out, air); !transfer) return transfer.error();
+  }
   return out;
 }
 

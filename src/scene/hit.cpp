@@ -106,6 +106,7 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
   desc.bank = std::shared_ptr<const ModeBank>(std::shared_ptr<const ModeBank>(), &bank);  // not owned
   desc.weights = radiationWeights(bank, engine_settings.reference_distance_m);
   for (double& w : desc.weights) w *= settings.gain / kFullScalePascal;
+  desc.pressure_scale = settings.gain / kFullScalePascal;
   Voice voice(desc, engine_settings);
   engine.install(0, &voice);
   std::array<double, 3> side = {point[0] - bank.centre_m[0], point[1] - bank.centre_m[1], point[2] - bank.centre_m[2]};
@@ -113,6 +114,7 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
   if (!(side_length > 1e-12)) side = {-normal[0], -normal[1], -normal[2]}, side_length = 1.0;
   Pose listener;
   for (int a = 0; a < 3; ++a) listener.position_m[a] = bank.centre_m[a] + settings.distance_m * side[a] / side_length;
+  if (settings.listener_m) listener.position_m = *settings.listener_m;
   engine.setListener(listener);
   const double contact_time_s = settings.contact_time_s ? *settings.contact_time_s
                                 : speed > 0.0           ? engine.contactDuration(0, striker_sphere, speed)

@@ -418,6 +418,11 @@ EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& se
   engine.max_contact_duration_s = kMaxContactDuration_s;
   engine.contact_damping_per_s = scene.contact_damping_per_s;
   engine.realtime = false;
+  engine.ground.enabled = scene.has_ground && scene.ground_reflects;
+  engine.ground.normal = {0, 0, 1};  // the simulation's ground plane (sim.cpp)
+  engine.ground.height_m = scene.ground_height_m;
+  engine.ground.reflection = std::isnan(scene.ground_reflection) ? groundReflectionCoefficient(scene.ground_material)
+                                                                 : scene.ground_reflection;
   return engine;
 }
 
@@ -636,10 +641,14 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     Body& body = bodies[index];
     if (!body.sounded) continue;
     if (Status audible = hasAudibleMode(body.bank, engine_settings.synth, rate); !audible) {
-      ++report.objects_silent;
-      body.silent = true;
-      warn("objects \"" + body.object->name + "\": " + audible.error().message);
-      continue;
+      if (body.object->is_static || !(body.bank.mass_kg > 0.0)) {
+        ++report.objects_silent;
+        body.silent = true;
+        warn("objects \"" + body.object->name + "\": " + audible.error().message);
+        continue;
+      }
+      // A free body still clicks when struck: its acceleration noise (sound_paths.cpp).
+      ++report.objects_clicks_only;
     }
     ++report.objects_sounded;
     VoiceDesc voice;
@@ -647,6 +656,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     if (body.rows) voice.rows = std::move(*body.rows), voice.use_rows = true;
     voice.weights = radiationWeights(body.bank, engine_settings.reference_distance_m);
     for (double& w : voice.weights) w *= settings.gain / kFullScalePascal;
+    voice.pressure_scale = settings.gain / kFullScalePascal;
     voice.is_static = body.object->is_static;
     voice.contact_radius_m = body.contact_radius_m;
     voice.roughness = surfaceRoughness(*body.object, body.bank.material.name);

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "strike/atomic_file.hpp"
+#include "strike/listener.hpp"
 #include "strike/materials.hpp"
 #include "strike/mesh.hpp"
 #include "strike/scene.hpp"
@@ -331,7 +332,7 @@ const std::vector<SceneKeyTable>& sceneKeyTables() {
         "contact_damping", "contacts"}},
       {"listener", {"position"}},
       {"contacts[]", {"objects", "restitution", "friction", "rolling_resistance"}},
-      {"ground", {"material", "height", "restitution", "friction", "rolling_resistance"}},
+      {"ground", {"material", "height", "restitution", "friction", "rolling_resistance", "reflection"}},
       {"objects[]",
        {"name", "mesh", "units", "bank", "material", "order", "size", "static", "shape", "position", "orientation",
         "velocity", "angular_velocity", "restitution", "friction", "rolling_resistance", "roughness_rms_m",
@@ -435,6 +436,19 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
       Status coefficients = contactCoefficients(ground, where, scene.ground_restitution, scene.ground_friction,
                                                 scene.ground_rolling_resistance);
       if (!coefficients) return coefficients.error();
+      if (ground.contains("reflection")) {
+        const json& r = ground["reflection"];
+        if (r.is_boolean()) {
+          scene.ground_reflects = r.get<bool>();
+        } else {
+          Result<double> coefficient = number(r, where.at("reflection"));
+          if (!coefficient) return coefficient.error();
+          if (!(*coefficient >= -1.0 && *coefficient <= 1.0))
+            return where.at("reflection")
+                .error("a pressure reflection coefficient is between -1 and 1, got " + show(r));
+          scene.ground_reflection = *coefficient;
+        }
+      }
     }
   }
   if (!doc.contains("objects")) return root.at("objects").error("missing: a scene needs a list of objects");
@@ -463,6 +477,15 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
     }
   }
   return scene;
+}
+
+double groundReflectionCoefficient(const Material& m) {
+  const double nu = m.poisson, rho = m.density_kg_m3;
+  const double p_wave_modulus = m.youngs_pa * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  if (!(p_wave_modulus > 0.0) || !(rho > 0.0) || !std::isfinite(p_wave_modulus)) return 1.0;
+  const double z_solid = std::sqrt(p_wave_modulus * rho);  // rho c_p
+  const double z_air = kAirDensity_kg_m3 * kSpeedOfSoundAir_m_s;
+  return (z_solid - z_air) / (z_solid + z_air);
 }
 
 Result<Scene> loadScene(const std::string& path) {

@@ -12,7 +12,8 @@
 //    every body it carried is asleep;
 //  - contact damping (extra modal decay) is on from a body's first sustained contact until
 //    kContactGap_s after its last, and stays on while it sleeps on its support.
-// Every pulse and step is heard propagationDelay_s(distance) after it happens.
+// Every pulse and step is heard propagationDelay_s(distance) after it happens, along each path
+// to the listener, as sound_paths.cpp describes.
 #include <algorithm>
 #include <cmath>
 
@@ -53,36 +54,6 @@ double SoundEngine::hertzDuration(const Voice& v, const ContactPartner& p, doubl
   return std::min(tau, settings_.max_contact_duration_s);
 }
 
-void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
-                                 const std::array<double, 3>& world_point) {
-  ImpactDesc impact;
-  impact.object = 0;
-  impact.time_s = time_s + delayTo(world_point);
-  impact.duration_s = duration_s;
-  impact.shape = shape;
-  impact.modal_impulse = modal;
-  switch (settings_.realtime ? v.synth_.addImpactNoAlloc(impact) : v.synth_.addImpact(impact)) {
-    case ImpactResult::Scheduled: ++stats_.impacts; break;
-    case ImpactResult::Inaudible: ++stats_.impacts_inaudible; break;
-    case ImpactResult::NoCapacity:
-    case ImpactResult::BadObject: ++stats_.impacts_dropped; break;
-  }
-}
-
-void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double time_s, double ramp_s,
-                                    const std::array<double, 3>& world_point) {
-  ForceStepDesc step;
-  step.object = 0;
-  step.time_s = time_s + delayTo(world_point);
-  step.ramp_s = ramp_s;
-  step.modal_force_change = modal_change;
-  const ImpactResult r = settings_.realtime ? v.synth_.addForceStepNoAlloc(step) : v.synth_.addForceStep(step);
-  if (r == ImpactResult::NoCapacity)
-    ++stats_.impacts_dropped;
-  else
-    ++stats_.load_changes;
-}
-
 void SoundEngine::beginStep(double step_end_s, double step_s) {
   if (step_.open) endStep();
   step_.open = true;
@@ -112,7 +83,7 @@ void SoundEngine::contact(const EngineContact& c) {
   if (impact) {
     const double t = c.time_s >= 0.0 ? c.time_s : now;
     scheduleImpact(*v, v->modal_.data(), t, hertzDuration(*v, c.partner, c.normal_speed_m_s), PulseShape::HalfSine,
-                   world);
+                   world, impulse);
   } else {
     // Sustained: a force over the step (its impulse / step length), summed over the step's points.
     ++stats_.sustained_contacts;
@@ -233,13 +204,14 @@ void SoundEngine::impact(const EngineImpact& d) {
   }
   const double duration = d.contact_duration_s < 0.0 ? hertzDuration(*v, d.partner, d.normal_speed_m_s)
                                                      : std::min(d.contact_duration_s, settings_.max_contact_duration_s);
-  scheduleImpact(*v, v->modal_.data(), d.time_s >= 0.0 ? d.time_s : time(), duration, d.shape, world);
+  scheduleImpact(*v, v->modal_.data(), d.time_s >= 0.0 ? d.time_s : time(), duration, d.shape, world, impulse);
 }
 
 void SoundEngine::reset() {
   for (Voice* v : slots_) {
     if (!v) continue;
     v->synth_.reset();
+    v->click_synth_.reset();
     std::fill(v->step_force_.begin(), v->step_force_.end(), 0.0);
     std::fill(v->held_force_.begin(), v->held_force_.end(), 0.0);
     v->step_load_ = {};

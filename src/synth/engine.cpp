@@ -37,7 +37,10 @@ bool SoundEngine::install(uint32_t slot, Voice* voice) {
   voice->fresh_ = true;
   // Its oscillators start on the engine's clock, so a contact's time means the same in every voice.
   const uint64_t at = static_cast<uint64_t>(std::llround(voice->synth_.time() * settings_.synth.sample_rate_hz));
-  if (frames_ > at) voice->synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
+  if (frames_ > at) {
+    voice->synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
+    voice->click_synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
+  }
   return true;
 }
 
@@ -97,12 +100,23 @@ void SoundEngine::render(float* const* out, size_t frames) {
     updateGains(*v);
     if (frames == 0) continue;
     const bool driven = renderContactForces(*v, frames);  // issue 18: continuous contacts' forces
-    if (!driven && v->synth_.idle()) {
+    const bool clicking = !v->click_synth_.idle();
+    if (!driven && v->synth_.idle() && !clicking) {
       v->cur_gain_[0] = v->target_gain_[0], v->cur_gain_[1] = v->target_gain_[1];
       v->synth_.skip(nullptr, frames);  // keeps its clock: its next pulse lands at the right sample
+      v->click_synth_.skip(nullptr, frames);
       continue;
     }
-    v->synth_.render(v->mono_.data(), frames, driven ? v->force_ptrs_.data() : nullptr);
+    if (driven)
+      v->synth_.render(v->mono_.data(), frames, v->force_ptrs_.data());
+    else
+      v->synth_.skip(v->mono_.data(), frames);  // renders, or writes zeros when idle
+    if (clicking) {
+      v->click_synth_.render(v->click_mono_.data(), frames);
+      for (size_t n = 0; n < frames; ++n) v->mono_[n] += v->click_mono_[n];
+    } else {
+      v->click_synth_.skip(nullptr, frames);
+    }
     const float inv = 1.0f / static_cast<float>(frames);
     for (uint32_t c = 0; c < channels; ++c) {
       const float g0 = v->cur_gain_[c], dg = (v->target_gain_[c] - g0) * inv;

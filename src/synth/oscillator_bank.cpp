@@ -276,7 +276,8 @@ struct OscillatorBank::Impl {
         modes.push_back(m);
         continue;
       }
-      double c = rayleighDamping(desc.rayleigh_stiffness, desc.rayleigh_mass, lambda);
+      double c = i < desc.damping_c.size() ? desc.damping_c[i]
+                                           : rayleighDamping(desc.rayleigh_stiffness, desc.rayleigh_mass, lambda);
       if (!(c > 0.0) || !std::isfinite(c)) c = 0.0;  // negative damping (growth) is not physical here
       const double sigma = 0.5 * c, omega0 = std::sqrt(lambda);
       m.omega0 = omega0;
@@ -394,8 +395,9 @@ struct OscillatorBank::Impl {
     // before the impacts it covers), so pulses and the oscillators they feed use the same pole.
     const double extra_damping = extraDampingAt(obj, start_sample);
     for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
+      const Complex factor = desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0);
       const double g = desc.modal_impulse[j];
-      if (g == 0.0 || !std::isfinite(g)) continue;
+      if (g == 0.0 || !std::isfinite(g) || !(std::isfinite(factor.real()) && std::isfinite(factor.imag()))) continue;
       const uint32_t mi = obj.first_mode + j;
       const ModeInfo& m = modes[mi];
       if (m.kind == ModeKind::Ringing) {
@@ -405,7 +407,7 @@ struct OscillatorBank::Impl {
         const Complex y_end = ideal ? Complex(1.0, 0.0)
                               : box ? detail::boxResponse(pole, tau_s, tau_s)
                                     : detail::halfSineResponse(pole, tau_s, tau_s);
-        const Complex bg = g * m.out_weight;
+        const Complex bg = g * m.out_weight * factor;
         const Complex v = bg * std::exp(pole * after_end_s) * y_end;
         if (!(std::abs(v) >= threshold)) continue;
         im.hits.push_back({mi, v});
@@ -419,7 +421,7 @@ struct OscillatorBank::Impl {
           // is added back while it acts: a constant force then gives exactly zero acceleration
           // once its onset has rung out, instead of a DC offset of -g R F. Point samples of the
           // half-open box [t0, t0 + tau) tile exactly when boxes are contiguous.
-          const double feedthrough = g * m.radiation / tau_s;
+          const double feedthrough = g * factor.real() * m.radiation / tau_s;
           for (double& out : im.transient) {
             out += (k * e0).real() + feedthrough;
             e0 = step * e0 + h0;
@@ -453,13 +455,15 @@ struct OscillatorBank::Impl {
         x_end[2] = x_end[3] = 0.0;  // the pulse is over
         const std::array<double, 4> x_inj =
             detail::mul4(detail::expm4(detail::augmentedMatrix(m.omega0, m.damping_c, 0.0), after_end_s), x_end);
-        const Complex v(g * x_inj[0], g * x_inj[1]);
+        // A non-ringing mode has no phase to turn: its factor's real part scales it.
+        const double gr = g * factor.real();
+        const Complex v(gr * x_inj[0], gr * x_inj[1]);
         if (!(dampedAmplitude(m, v.real(), v.imag()) >= threshold)) continue;
         im.hits.push_back({mi, v});
         if (im.transient.empty()) continue;
         const detail::Mat4 step = detail::expm4(a, h);
         std::array<double, 4> x = detail::mul4(detail::expm4(a, first_u_s), x0);
-        const double w = g * m.radiation;
+        const double w = gr * m.radiation;
         for (double& out : im.transient) {
           // The box's feedthrough f = x[2] is part of the output while it acts (see above).
           out += w * (-m.omega0 * x[0] - m.damping_c * x[1] + (box ? x[2] : 0.0));
@@ -525,12 +529,11 @@ struct OscillatorBank::Impl {
         const uint32_t mi = obj.first_mode + j;
         const ModeInfo& m = modes[mi];
         if (m.kind != ModeKind::Ringing) continue;
+        const Complex bg = g * m.out_weight * (desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0));
         const Complex pole = m.base_pole - extra_damping;
-        const Complex step_amplitude =
-            ramped ? g * m.out_weight / (pole * pole * tau_s * ramp_s) : g * m.out_weight / (pole * tau_s);
+        const Complex step_amplitude = ramped ? bg / (pole * pole * tau_s * ramp_s) : bg / (pole * tau_s);
         // Audible when the net ringing after the box, |b g (e^{p tau} - 1) / (p tau)|, is.
-        if (edge == 0 && std::abs(g * m.out_weight * (std::exp(pole * tau_s) - 1.0) / (pole * tau_s)) >= threshold)
-          audible = true;
+        if (edge == 0 && std::abs(bg * (std::exp(pole * tau_s) - 1.0) / (pole * tau_s)) >= threshold) audible = true;
         im.hits.push_back({mi, sign * step_amplitude * std::exp(pole * after_s)});
       }
       auto at = std::upper_bound(pending.begin(), pending.end(), im.start_sample,
@@ -604,8 +607,9 @@ struct OscillatorBank::Impl {
         const uint32_t mi = obj.first_mode + j;
         const ModeInfo& m = modes[mi];
         if (m.kind != ModeKind::Ringing) continue;
+        const Complex bg = g * m.out_weight * (desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0));
         const Complex pole = m.base_pole - extra_damping;
-        const Complex amplitude = ramped ? g * m.out_weight / (pole * pole * ramp_s) : g * m.out_weight / pole;
+        const Complex amplitude = ramped ? bg / (pole * pole * ramp_s) : bg / pole;
         // Audible when the net ringing after the ramp, |b g (e^{p r} - 1) / (p^2 r)|, is.
         const Complex net = ramped ? amplitude * (std::exp(pole * ramp_s) - 1.0) : amplitude;
         if (edge == 0 && std::abs(net) >= threshold) audible = true;
@@ -624,7 +628,8 @@ struct OscillatorBank::Impl {
         const uint32_t mi = obj.first_mode + j;
         const ModeInfo& m = modes[mi];
         if (m.kind != ModeKind::Damped || g == 0.0 || !std::isfinite(g)) continue;
-        const std::array<double, 4> x0{-g / m.omega0, 0.0, 0.0, 0.0};
+        const double gr = g * (desc.modal_transfer ? desc.modal_transfer[j].real() : 1.0);
+        const std::array<double, 4> x0{-gr / m.omega0, 0.0, 0.0, 0.0};
         const std::array<double, 4> x =
             detail::mul4(detail::expm4(detail::augmentedMatrix(m.omega0, m.damping_c, 0.0), after_s), x0);
         if (!(dampedAmplitude(m, x[0], x[1]) >= threshold)) continue;

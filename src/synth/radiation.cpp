@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: MIT
 // Listener model: how loud each mode is at the listener, per unit modal acceleration.
 //
+// Banks of format 5 carry an acoustic transfer (acoustic_transfer.hpp, solved with the body as an
+// obstacle); their weights are its rms over directions, and the engine applies the direction
+// per impact (sound_paths.cpp). What follows is the model of older banks, and of radiation_m2.
+//
 // Model: the surface as free monopoles, heard at the rms over directions.
 // A patch of surface of area A with outward normal n whose wall accelerates at a(t) is a point
 // source of volume acceleration A n.a; in free field its pressure at distance d >> size is
@@ -100,6 +104,13 @@ int64_t cellIndex(double offset_m, double cell_m) {
 std::vector<double> radiationWeights(const ModeBank& bank, double distance_m) {
   const size_t modes = bank.modeCount();
   if (!(distance_m > 0.0) || !std::isfinite(distance_m)) return std::vector<double>(modes, 0.0);
+  if (bank.transfer.modeCount() == modes && modes > 0) {
+    // The acoustic transfer's direction average; the engine turns it toward the listener per
+    // impact (sound_paths.cpp).
+    std::vector<double> weights(modes);
+    for (size_t i = 0; i < modes; ++i) weights[i] = bank.transfer.rmsFarField(i) / distance_m;
+    return weights;
+  }
   std::vector<double> weights = bank.radiation_m2.size() == modes ? bank.radiation_m2 : radiationStrengths(bank);
   const double gain = kAirDensity_kg_m3 / (4.0 * M_PI * distance_m);
   for (double& w : weights) w *= gain;
@@ -201,6 +212,44 @@ std::vector<double> radiationStrengths(const ModeBank& bank) {
     weights[m] = std::sqrt(std::max(r2, 0.0));  // the quadratic form is PSD; clamp rounding
   }
   return weights;
+}
+
+std::vector<double> radiationEfficiency(const ModeBank& bank) {
+  const size_t modes = bank.modeCount();
+  const size_t nv = bank.surfaceVertexCount();
+  std::vector<double> efficiency(modes, 0.0);
+  if (bank.transfer.modeCount() != modes || bank.shapes.size() < modes * nv * 3) return efficiency;
+  const double rho_c = kAirDensity_kg_m3 * kSpeedOfSoundAir_m_s;
+  for (size_t m = 0; m < modes; ++m) {
+    const double omega = std::sqrt(std::max(bank.eigenvalues[m], 0.0));
+    // int |a_n|^2 dS over the surface, a_n the normal component of the shape (triangle midpoint rule
+    // on the vertex average).
+    double surface_a2 = 0.0;
+    for (size_t t = 0; t + 2 < bank.surface_triangles.size(); t += 3) {
+      const uint32_t* tri = &bank.surface_triangles[t];
+      if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) continue;
+      const double* a = &bank.surface_positions[3 * tri[0]];
+      const double* b = &bank.surface_positions[3 * tri[1]];
+      const double* c = &bank.surface_positions[3 * tri[2]];
+      const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      const double an[3] = {0.5 * (e1[1] * e2[2] - e1[2] * e2[1]), 0.5 * (e1[2] * e2[0] - e1[0] * e2[2]),
+                            0.5 * (e1[0] * e2[1] - e1[1] * e2[0])};
+      const double area = std::sqrt(an[0] * an[0] + an[1] * an[1] + an[2] * an[2]);
+      if (!(area > 0.0)) continue;
+      double normal_a = 0.0;
+      for (int v = 0; v < 3; ++v) {
+        const float* phi = bank.shapeAt(m, tri[v]);
+        normal_a += (phi[0] * an[0] + phi[1] * an[1] + phi[2] * an[2]) / (3.0 * area);
+      }
+      surface_a2 += normal_a * normal_a * area;
+    }
+    // Power per unit modal acceleration amplitude, 4 pi rms^2 / (2 rho c), over rho c int |v_n|^2 dS / 2
+    // with v_n = a_n / omega.
+    const double rms = bank.transfer.rmsFarField(m);
+    const double denominator = rho_c * rho_c * surface_a2;
+    if (omega > 0.0 && denominator > 0.0) efficiency[m] = 4.0 * M_PI * rms * rms * omega * omega / denominator;
+  }
+  return efficiency;
 }
 
 }  // namespace strike

@@ -55,10 +55,93 @@ double surfaceExtent(const ModeBank& bank) {
   return std::isfinite(extent) && extent > 0.0 ? extent : 1.0;
 }
 
+/// Eigenvalues and unit eigenvectors (rows) of a symmetric 3x3 matrix, by cyclic Jacobi rotations.
+void symmetricEigen3(std::array<double, 9> a, std::array<double, 3>& values,
+                     std::array<std::array<double, 3>, 3>& axes) {
+  double v[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    const double off = a[1] * a[1] + a[2] * a[2] + a[5] * a[5];
+    if (!(off > 1e-30 * (a[0] * a[0] + a[4] * a[4] + a[8] * a[8]))) break;
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        const double apq = a[3 * p + q];
+        if (apq == 0.0) continue;
+        const double theta = (a[3 * q + q] - a[3 * p + p]) / (2.0 * apq);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
+        const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
+        for (int k = 0; k < 3; ++k) {  // A <- A J (columns p, q)
+          const double akp = a[3 * k + p], akq = a[3 * k + q];
+          a[3 * k + p] = c * akp - s * akq;
+          a[3 * k + q] = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {  // A <- J^T A (rows p, q)
+          const double apk = a[3 * p + k], aqk = a[3 * q + k];
+          a[3 * p + k] = c * apk - s * aqk;
+          a[3 * q + k] = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {  // V <- V J
+          const double vkp = v[3 * k + p], vkq = v[3 * k + q];
+          v[3 * k + p] = c * vkp - s * vkq;
+          v[3 * k + q] = s * vkp + c * vkq;
+        }
+      }
+  }
+  for (int j = 0; j < 3; ++j) {
+    values[j] = a[4 * j];
+    axes[j] = {v[j], v[3 + j], v[6 + j]};  // column j of V
+  }
+}
+
 }  // namespace
 
+void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings) {
+  const ModeBank& bank = *bank_;
+  const size_t modes = bank.modeCount();
+  pressure_ = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
+  if (!pressure_) return;
+  transfer_.assign(modes, std::complex<double>(1.0, 0.0));
+  const AcousticTransfer& t = bank.transfer;
+  if (t.modeCount() == modes && modes > 0) {
+    const size_t order = t.maxOrder();
+    sh_.assign((order + 1) * (order + 1), 0.0);
+    far_field_.assign(modes, 0.0);
+    inv_rms_.assign(modes, 0.0);
+    for (size_t i = 0; i < modes; ++i) {
+      const double rms = t.rmsFarField(i);
+      inv_rms_[i] = rms > 0.0 ? 1.0 / rms : 0.0;
+    }
+  }
+  // Acceleration noise: a free body with a mass and a volume.
+  if (is_static_ || !std::isfinite(mass_kg_) || !(mass_kg_ > 0.0)) return;
+  std::array<double, 9> dipole = t.translation_dipole_m3;
+  const bool solved = !t.empty() && (dipole[0] > 0.0 || dipole[4] > 0.0 || dipole[8] > 0.0);
+  if (!solved) {  // the sphere of the body's volume: M = 2 pi a^3 = 1.5 V
+    if (!(bank.volume_m3 > 0.0) || !std::isfinite(bank.volume_m3)) return;
+    dipole = {1.5 * bank.volume_m3, 0, 0, 0, 1.5 * bank.volume_m3, 0, 0, 0, 1.5 * bank.volume_m3};
+  }
+  symmetricEigen3(dipole, click_moment_m3_, click_axis_);
+  const double rate = settings.synth.sample_rate_hz;
+  // The filter's cut-off stays in the synthesized band (0.98 of its top): a body smaller than
+  // about 4 mm has its click low-passed there instead of at sqrt(2) c / a above the band.
+  const double top_rad_s = 0.98 * 2.0 * M_PI * std::min(settings.synth.max_freq_hz, 0.45 * rate);
+  ModalObjectDesc click;
+  click.radiation_weight.assign(3, desc.pressure_scale / settings.reference_distance_m);
+  for (int j = 0; j < 3; ++j) {
+    const double moment = click_moment_m3_[j];
+    const double radius = moment > 0.0 ? std::cbrt(moment / (2.0 * M_PI)) : 0.0;
+    const double omega0 = radius > 0.0 ? std::min(M_SQRT2 * kSpeedOfSoundAir_m_s / radius, top_rad_s) : 0.0;
+    click.eigenvalues.push_back(omega0 * omega0);
+    click.damping_c.push_back(M_SQRT2 * omega0);  // Butterworth: zeta = 1 / sqrt 2
+    const std::complex<double> pole(-omega0 / M_SQRT2, omega0 / M_SQRT2);
+    click_gain_[j] = omega0 > 0.0 ? omega0 * omega0 / pole : 0.0;
+  }
+  click_synth_.addObject(click);
+  click_mono_.assign(std::max<uint32_t>(settings.max_block_frames, 1), 0.0f);
+  clicks_ = true;
+}
+
 Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
-    : bank_(desc.bank), synth_(settings.synth), projector_(*desc.bank) {
+    : bank_(desc.bank), synth_(settings.synth), click_synth_(settings.synth), projector_(*desc.bank) {
   const ModeBank& bank = *bank_;
   if (desc.use_rows) projector_.useRows(desc.rows);
   ModalObjectDesc modal;
@@ -67,7 +150,6 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
   modal.rayleigh_mass = bank.material.rayleigh_mass;
   modal.radiation_weight = desc.weights;
   synth_.addObject(modal);
-  if (settings.realtime) synth_.reserveImpacts(settings.max_pending_impacts_per_voice, settings.max_contact_duration_s);
   const size_t modes = bank.modeCount();
   modal_.assign(modes, 0.0);
   step_force_.assign(modes, 0.0);
@@ -89,6 +171,14 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
   synth_.reserveForceInput(0);
   for (Source& s : sources_) s.modal.assign(modes, 0.0);
   force_.assign(static_cast<size_t>(kForceChannels) * std::max<uint32_t>(settings.max_block_frames, 1), 0.0f);
+  setUpRadiation(desc, settings);
+  // Each contact may take two paths (the ground's image) and click on each.
+  const size_t paths = settings.ground.enabled ? 2 : 1;
+  if (settings.realtime) {
+    synth_.reserveImpacts(settings.max_pending_impacts_per_voice * paths, settings.max_contact_duration_s);
+    if (clicks_)
+      click_synth_.reserveImpacts(settings.max_pending_impacts_per_voice * paths, settings.max_contact_duration_s);
+  }
 }
 
 Voice::~Voice() = default;

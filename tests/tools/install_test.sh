@@ -24,7 +24,7 @@ if [ "$lv2" = 1 ]; then
   done
 fi
 
-# The tool links libstrike (0.3): it must find the installed copy through its RUNPATH
+# The tool links libstrike (0.4): it must find the installed copy through its RUNPATH
 # ($ORIGIN/../LIBDIR), not the build tree's or one elsewhere on the system.
 uses_own_libstrike() {  # $1: the strike binary, $2: the tree it must load libstrike from
   local resolved
@@ -72,12 +72,12 @@ mkdir -p "$work/consumer"
 cat >"$work/consumer/CMakeLists.txt" <<'CMAKE'
 cmake_minimum_required(VERSION 3.22)
 project(strike_consumer C)
-find_package(strike 0.3 REQUIRED)
+find_package(strike 0.4 REQUIRED)
 add_executable(main ../main.c)
 target_link_libraries(main PRIVATE strike::strike)
 CMAKE
 cmake -S "$work/consumer" -B "$work/consumer/build" -G "$generator" -DCMAKE_C_COMPILER="$cc" \
-      -DCMAKE_PREFIX_PATH="$prefix" >"$work/consumer.log" 2>&1 || { cat "$work/consumer.log"; fail "find_package(strike 0.3)"; }
+      -DCMAKE_PREFIX_PATH="$prefix" >"$work/consumer.log" 2>&1 || { cat "$work/consumer.log"; fail "find_package(strike 0.4)"; }
 cmake --build "$work/consumer/build" >>"$work/consumer.log" 2>&1 || { cat "$work/consumer.log"; fail "building against strike::strike"; }
 env -u LD_LIBRARY_PATH "$work/consumer/build/main" || fail "the find_package build does not run"
 

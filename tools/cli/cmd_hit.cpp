@@ -34,7 +34,12 @@ CommandSpec hitSpec() {
       {"--duration", "S", "length of the output, s; default 2"},
       {"--rate", "HZ", "sample rate; default 48000"},
       {"--format", "pcm16|pcm24|float", "sample encoding; default float for .wav, pcm24 for .flac"},
-      {"--distance", "M", "listener distance from the object, m; default 1 (sets gain and delay)"},
+      {"--distance", "M",
+       "listener distance from the object's centre of mass, on the side struck, m; default 1\n"
+       "(sets level, delay and, with a bank of format 5, the direction heard)"},
+      {"--listener", "X,Y,Z",
+       "the listener at X,Y,Z (metres, mesh frame) instead of --distance: banks of format 5\n"
+       "sound different in every direction (each mode's far field)"},
       {"--gain", "G", "multiply the output (1.0 full scale = 20 Pa); default 1"},
       {"--contact-time", "S", "force pulse duration, s (0 = ideal impulse); default from Hertz theory"},
       {"--striker", "MATERIAL", "striker sphere material for the Hertz contact time; default steel"},
@@ -44,7 +49,8 @@ CommandSpec hitSpec() {
   };
   spec.examples =
       "  strike hit bar.modes -o hit.wav --vertex 12 --impulse 0,0,-0.01 --duration 2\n"
-      "  strike hit bowl.modes -o rim.wav --at 0.1,0,0.05 --impulse 0,0,-0.02 --rate 96000\n";
+      "  strike hit bowl.modes -o rim.wav --at 0.1,0,0.05 --impulse 0,0,-0.02 --rate 96000\n"
+      "  strike hit bar.modes -o end.wav --listener 1,0,0   # heard from the bar's end\n";
   spec.min_positional = 1;
   spec.max_positional = 1;
   return spec;
@@ -98,6 +104,12 @@ int runHit(const std::vector<std::string>& raw_args) {
   settings.striker = args.text("--striker", "steel");
   settings.striker_radius_m = *striker_radius;
   settings.simd = *simd;
+  if (args.has("--listener")) {
+    if (args.has("--distance")) return reportError("hit", badInput("give --distance or --listener, not both"));
+    Result<std::array<double, 3>> listener = args.vector3("--listener", {});
+    if (!listener) return reportError("hit", listener.error());
+    settings.listener_m = *listener;
+  }
   if (args.has("--at")) {
     Result<std::array<double, 3>> at = args.vector3("--at", {});
     if (!at) return reportError("hit", at.error());

@@ -7,6 +7,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "strike/bank.hpp"
+#include "strike/synth.hpp"
 
 namespace strike::cli {
 namespace {
@@ -32,6 +33,7 @@ double t60Seconds(double decay_per_s) { return decay_per_s > 0 ? kLn1000 / decay
 nlohmann::json bankJson(const ModeBank& bank) {
   nlohmann::json j;
   j["format_version"] = bank.format_version;
+  j["shape_encoding"] = bank.shape_encoding == ShapeEncoding::Int16 ? "int16" : "float32";
   std::vector<double> freqs, decays, t60;
   for (size_t i = 0; i < bank.modeCount(); ++i) {
     freqs.push_back(bank.frequencyHz(i));
@@ -75,6 +77,20 @@ nlohmann::json bankJson(const ModeBank& bank) {
                              {"lanczos", bank.lanczos_seconds},
                              {"total", bank.total_seconds}};
   j["tool_version"] = bank.tool_version;
+  if (bank.transfer.modeCount() == bank.modeCount() && bank.modeCount() > 0) {
+    std::vector<uint32_t> orders(bank.transfer.order.begin(), bank.transfer.order.end());
+    std::vector<double> errors(bank.transfer.relative_error.begin(), bank.transfer.relative_error.end());
+    j["transfer"] = {{"method", bank.transfer.method},
+                     {"seconds", bank.transfer_seconds},
+                     {"centre_m", bank.transfer.centre_m},
+                     {"order", orders},
+                     {"relative_error", errors},
+                     {"radiation_efficiency", radiationEfficiency(bank)},
+                     {"translation_dipole_m3", bank.transfer.translation_dipole_m3}};
+    j["precompute_seconds"]["transfer"] = bank.transfer_seconds;
+  } else {
+    j["transfer"] = nullptr;  // format 1-4: direction-averaged radiation only (`strike modes` again to get it)
+  }
   return j;
 }
 
@@ -90,12 +106,25 @@ void printTable(const std::string& path, const ModeBank& bank) {
   std::printf("modes     %zu up to %.0f Hz (max %u); dropped %u rigid, %u above the cut-off; computed in %.2f s\n\n",
               bank.modeCount(), bank.max_freq_hz, bank.max_modes, bank.rigid_modes_dropped, bank.above_cutoff_dropped,
               bank.total_seconds);
+  const bool has_transfer = bank.transfer.modeCount() == bank.modeCount() && bank.modeCount() > 0;
+  if (has_transfer)
+    std::printf("sound     acoustic transfer (%s) in %.2f s\n\n", bank.transfer.method.c_str(), bank.transfer_seconds);
+  else
+    std::printf(
+        "sound     no acoustic transfer (format %u): heard through the direction average of the older "
+        "model; run `strike modes` again for directivity\n\n",
+        bank.format_version);
   const bool has_error = !bank.frequency_error_estimate.empty();
-  std::printf("%5s %14s %12s %10s%s\n", "mode", "frequency Hz", "decay 1/s", "T60 s", has_error ? "  est. error" : "");
+  const std::vector<double> efficiency = has_transfer ? radiationEfficiency(bank) : std::vector<double>{};
+  std::printf("%5s %14s %12s %10s%s%s\n", "mode", "frequency Hz", "decay 1/s", "T60 s", has_error ? "  est. error" : "",
+              has_transfer ? "  order  transfer err  efficiency" : "");
   for (size_t i = 0; i < bank.modeCount(); ++i) {
     const double t60 = t60Seconds(bank.decayPerS(i));
     std::printf("%5zu %14.3f %12.4g %10.4g", i, bank.frequencyHz(i), bank.decayPerS(i), t60);
     if (has_error) std::printf("  %9.3g%%", 100.0 * bank.frequency_error_estimate[i]);
+    if (has_transfer)
+      std::printf("  %5u %12.3g%% %11.3g", bank.transfer.order[i], 100.0 * bank.transfer.relative_error[i],
+                  efficiency[i]);
     std::printf("\n");
   }
 }

@@ -77,6 +77,11 @@ void printSummary(const RenderResult& result, const std::string& output, double 
                "%zu too soft to hear, %zu never struck\n",
                r.objects, r.objects_struck, r.objects_sounded, r.objects_silent, r.objects_inaudible,
                r.objects - r.objects_struck);
+  if (r.objects_clicks_only > 0)
+    std::fprintf(stderr,
+                 "              %zu of those sounded only by acceleration noise (no mode in the audible band: "
+                 "too small or too stiff to ring, but they click)\n",
+                 r.objects_clicks_only);
   std::fprintf(stderr,
                "  banks       %zu given, %zu from the cache, %zu computed, %zu shared between identical objects, "
                "%zu scaled from a solve of the same shape\n",

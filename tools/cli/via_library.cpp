@@ -39,6 +39,10 @@ class LibraryOutput final : public SoundOutput {
     c.min_distance_m = engine.min_distance_m;
     c.contact_damping_per_s = engine.contact_damping_per_s;
     c.max_contact_duration_s = engine.max_contact_duration_s;
+    c.ground_reflects = engine.ground.enabled ? 1 : 0;
+    for (int k = 0; k < 3; ++k) c.ground_normal[k] = engine.ground.normal[k];
+    c.ground_height_m = engine.ground.height_m;
+    c.ground_reflection = engine.ground.reflection;
     // Offline, nothing may be dropped or deferred: no mode budget, every impact of a render call
     // prepared in it, room for every step's records and every pulse in flight.
     c.max_active_modes = 0;

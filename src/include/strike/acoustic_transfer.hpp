@@ -25,9 +25,9 @@
 namespace strike {
 
 struct AcousticTransfer {
-  std::array<double, 3> centre_m{};  ///< expansion centre, mesh frame
-  std::vector<uint32_t> order;       ///< #modes: spherical-harmonic order n_max of each mode
-  std::vector<uint64_t> offset;      ///< #modes + 1: mode i's coefficients are [offset[i], offset[i+1])
+  std::array<double, 3> centre_m{};               ///< expansion centre, mesh frame
+  std::vector<uint32_t> order;                    ///< #modes: spherical-harmonic order n_max of each mode
+  std::vector<uint64_t> offset;                   ///< #modes + 1: mode i's coefficients are [offset[i], offset[i+1])
   std::vector<std::complex<float>> coefficients;  ///< c_{i,n,m}, Pa m per unit modal acceleration
   /// #modes: estimated relative error of F_i over directions (rms of the error / rms of F_i).
   std::vector<float> relative_error;

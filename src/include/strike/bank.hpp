@@ -20,22 +20,23 @@ namespace strike {
 /// The file format version this build writes. Readers accept versions <= this. Version 2 differs
 /// from 1 only in the payload checksum (bankPayloadChecksum); version 3 stores the shapes by
 /// vertex in separately checksummed blocks, so a render reads only the vertices it strikes
-/// (docs/bank-format.md).
-constexpr uint32_t kBankFormatVersion = 3;
-/// The newest version this build reads. Version 4 is version 3 with the shapes stored as 16-bit
-/// integers and a scale per mode (ShapeEncoding::Int16, `strike modes --compact`): half the
-/// shape bytes, each value within 1.54e-5 of its mode's largest surface amplitude
-/// (half a step, 1/65534, plus float rounding).
-constexpr uint32_t kBankFormatVersionMax = 4;
+/// (docs/bank-format.md). Version 4 is version 3 with the shapes stored as 16-bit integers and a
+/// scale per mode (ShapeEncoding::Int16, `strike modes --compact`): half the shape bytes, each
+/// value within 1.54e-5 of its mode's largest surface amplitude (half a step, 1/65534, plus float
+/// rounding). Version 5 adds the acoustic transfer (chunk ACTF) to either encoding.
+constexpr uint32_t kBankFormatVersion = 5;
+/// The newest version this build reads (it reads every older one).
+constexpr uint32_t kBankFormatVersionMax = 5;
 
 /// How a bank file stores its mode shapes.
 enum class ShapeEncoding {
-  Float32,  ///< format 3: IEEE single precision, exact copies of the computed shapes
-  Int16,    ///< format 4: round(value / scale_i), scale_i = (largest |value| of mode i) / 32767
+  Float32,  ///< chunk MODV (formats 3, 5): IEEE single precision, exact copies of the computed shapes
+  Int16,    ///< chunk MODQ (formats 4, 5): round(value / scale_i), scale_i = (largest |value| of mode i) / 32767
 };
 
 struct ModeBank {
   uint32_t format_version = kBankFormatVersion;
+  ShapeEncoding shape_encoding = ShapeEncoding::Float32;  ///< as read (a computed bank: Float32)
 
   Material material;
 

@@ -19,12 +19,23 @@
 // render call, and each contact a delay from its own distance. render() mixes the voices and
 // keeps the number of ringing modes within a budget, quietest first.
 //
+// What each impact sends toward the listener (radiation.cpp, for voices whose output is pressure):
+//  - a bank with an acoustic transfer (format 5): each mode's far field in the listener's
+//    direction in the body frame at the moment of the impact, one complex weight per mode;
+//    older banks: the direction-averaged weight;
+//  - acceleration noise: the body's rigid translation during the Hertz pulse radiates a click
+//    (a dipole with the body's added mass, low-passed as by a sphere of its size) [Chadwick,
+//    Zheng & James 2012];
+//  - a ground reflection: the same from the listener's mirror image in the ground plane, later
+//    and weaker by the path and the reflection coefficient (EngineSettings::ground).
+//
 // Threads: the engine belongs to one thread (the audio thread in libstrike). Voices are built
 // anywhere (makeVoice allocates) and installed by slot; with EngineSettings::realtime nothing
 // after that allocates, locks or throws.
 #pragma once
 
 #include <array>
+#include <complex>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -64,6 +75,16 @@ struct Pose {
   std::array<double, 3> toLocalPoint(const std::array<double, 3>& world) const;
 };
 
+/// A flat ground that reflects sound: the plane normal . x = height_m. An image source of every
+/// sounding body behind it, weighted by `reflection` (pressure reflection coefficient, 1 =
+/// rigid) [Kinsler et al. 2000, sec. 6.3; Allen & Berkley 1979 for image sources].
+struct GroundReflection {
+  bool enabled = false;
+  std::array<double, 3> normal{0, 0, 1};  ///< unit, pointing into the air
+  double height_m = 0.0;
+  double reflection = 1.0;
+};
+
 struct EngineSettings {
   SynthSettings synth;    ///< sample rate, band, audibility threshold, kernel
   uint32_t channels = 1;  ///< 1, or 2 (constant-power pan by the listener's x)
@@ -82,6 +103,7 @@ struct EngineSettings {
   /// reserve are dropped and counted. false (offline renders): the reserve grows.
   bool realtime = true;
   uint32_t max_pending_impacts_per_voice = 32;  ///< realtime reserve of pulses in flight per voice
+  GroundReflection ground;                      ///< off unless enabled
 };
 
 /// What a voice is made of. The bank must outlive the voice (libstrike keeps it in a shared
@@ -95,6 +117,10 @@ struct VoiceDesc {
   /// Per mode: output units per unit modal acceleration at the reference distance (pressure
   /// weights over the output's full scale); empty means 1 (modal acceleration).
   std::vector<double> weights;
+  /// Output units per pascal when `weights` are radiationWeights(bank, reference) times this
+  /// (a render: gain / kFullScalePascal). 0: the output is not pressure (modal acceleration, or
+  /// weights of the caller's own), so no directivity, acceleration noise or ground reflection.
+  double pressure_scale = 0.0;
   bool is_static = false;         ///< immovable (a table): infinite mass for Hertz
   double contact_radius_m = 0.0;  ///< curvature radius at contacts; 0 = flat
   Pose pose;
@@ -187,16 +213,31 @@ class Voice {
 
  private:
   friend class SoundEngine;
+  void setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings);  // sound_paths.cpp's data
   std::shared_ptr<const ModeBank> bank_;
   OscillatorBank synth_;
+  OscillatorBank click_synth_;     ///< acceleration noise: three filters, one per axis (sound_paths.cpp)
+  std::vector<float> click_mono_;  ///< max_block_frames
   ContactProjector projector_;
-  std::vector<double> modal_;         ///< #modes: projection scratch
-  std::vector<double> step_force_;    ///< #modes: this step's sustained modal force (N / sqrt(kg))
-  std::vector<double> held_force_;    ///< #modes: the sustained modal force in force now
-  std::vector<float> mono_;           ///< max_block_frames
-  std::vector<float> levels_;         ///< #modes: budget scratch
-  std::array<double, 3> centre_m_{};  ///< centre of mass, mesh frame
-  double size_m_ = 1.0;               ///< largest extent of its surface (load moments over it)
+  std::vector<double> modal_;       ///< #modes: projection scratch
+  std::vector<double> step_force_;  ///< #modes: this step's sustained modal force (N / sqrt(kg))
+  std::vector<double> held_force_;  ///< #modes: the sustained modal force in force now
+  std::vector<float> mono_;         ///< max_block_frames
+  std::vector<float> levels_;       ///< #modes: budget scratch
+  // Radiation toward the listener (radiation.cpp).
+  bool pressure_ = false;                                 ///< output is pressure (VoiceDesc::pressure_scale > 0)
+  std::vector<double> sh_;                                ///< spherical harmonics scratch, (max order + 1)^2
+  std::vector<std::complex<double>> far_field_;           ///< #modes: F_i toward the listener (scratch)
+  std::vector<std::complex<double>> transfer_;            ///< #modes: the factor handed to the oscillators
+  std::vector<double> inv_rms_;                           ///< #modes: 1 / rms_d |F_i| (0 for a silent mode)
+  bool clicks_ = false;                                   ///< acceleration noise (a free body with mass)
+  std::array<std::array<double, 3>, 3> click_axis_{};     ///< principal axes of the dipole tensor, mesh frame
+  std::array<double, 3> click_moment_m3_{};               ///< its eigenvalues
+  std::array<std::complex<double>, 3> click_gain_{};      ///< lambda_j / p_j of each click filter
+  std::array<double, 3> click_force_{};                   ///< scratch: rigid acceleration impulse per axis
+  std::array<std::complex<double>, 3> click_transfer_{};  ///< scratch
+  std::array<double, 3> centre_m_{};                      ///< centre of mass, mesh frame
+  double size_m_ = 1.0;                                   ///< largest extent of its surface (load moments over it)
   double youngs_pa_ = 0, poisson_ = 0, mass_kg_ = 0, contact_radius_m_ = 0;
   bool is_static_ = false;
   // Pose and level (engine thread).
@@ -282,7 +323,7 @@ class SoundEngine {
   };
   void endStepFor(Voice& v);
   void scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
-                      const std::array<double, 3>& world_point);
+                      const std::array<double, 3>& world_point, const std::array<double, 3>& impulse_local);
   void scheduleForceStep(Voice& v, const double* modal_change, double time_s, double ramp_s,
                          const std::array<double, 3>& world_point);
   double hertzDuration(const Voice& v, const ContactPartner& p, double speed) const;
@@ -292,6 +333,18 @@ class SoundEngine {
   bool renderContactForces(Voice& v, size_t frames);
   void resetContinuous(Voice& v);
   double delayTo(const std::array<double, 3>& world_point) const;
+  /// The paths from a voice's source point to the listener: the direct one and, with a ground,
+  /// its image (radiation.cpp). Returns how many (1 or 2).
+  struct Arrival {
+    double delay_s = 0.0;               ///< propagation delay
+    double gain = 1.0;                  ///< relative to the voice's distance gain
+    std::array<double, 3> direction{};  ///< toward the (image) listener, mesh frame, unit
+  };
+  int arrivals(const Voice& v, const std::array<double, 3>& world_point, Arrival out[2]) const;
+  /// The per-mode factor for one arrival into v.transfer_; false when 1 for every mode.
+  bool radiationToward(Voice& v, const Arrival& a);
+  void scheduleClick(Voice& v, const Arrival& a, double time_s, double duration_s,
+                     const std::array<double, 3>& impulse_local);
   void updateGains(Voice& v);
   void enforceBudget(uint64_t& active);
 

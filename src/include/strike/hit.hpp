@@ -22,10 +22,11 @@ struct HitSettings {
   std::optional<std::array<double, 3>> impulse_n_s;  ///< default 0.01 N s into the surface along its normal
   double duration_s = 2.0;
   double sample_rate_hz = 48000.0;
-  double distance_m = 1.0;               ///< listener distance (gain and delay)
-  double gain = 1.0;                     ///< on top of kFullScalePascal
-  std::optional<double> contact_time_s;  ///< force pulse length; default from Hertz theory
-  std::string striker = "steel";         ///< striker sphere material (Hertz contact time)
+  double distance_m = 1.0;                          ///< listener distance from the centre of mass, on the side struck
+  std::optional<std::array<double, 3>> listener_m;  ///< or the listener here (mesh frame; distance_m unused)
+  double gain = 1.0;                                ///< on top of kFullScalePascal
+  std::optional<double> contact_time_s;             ///< force pulse length; default from Hertz theory
+  std::string striker = "steel";                    ///< striker sphere material (Hertz contact time)
   double striker_radius_m = 0.005;
   SimdLevel simd = SimdLevel::Auto;  ///< the synthesizer's kernel (last bits only)
 };

@@ -10,6 +10,7 @@
 #include "strike/material.hpp"
 #include "strike/mesh.hpp"
 #include "strike/modal.hpp"
+#include "strike/transfer_solver.hpp"
 
 namespace strike {
 
@@ -29,6 +30,11 @@ struct PrecomputeSettings {
   /// Estimate each mode's frequency error (src/precompute/error_estimate.cpp) at extra cost;
   /// does not change the modes, so it is not part of the cache key.
   bool error_estimate = false;
+  /// Solve each mode's acoustic transfer (bank.transfer, its own phase "transfer"; issue 17).
+  /// Off for solves whose frequencies are not the object's (the normalized problem, the
+  /// --tolerance trials, which solve it once on the bank they choose).
+  bool acoustic_transfer = true;
+  TransferSettings transfer;  ///< air and resolution of the transfer solve
 };
 
 struct PrecomputeReport {
@@ -60,6 +66,10 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
 /// A bank with no modes yet: mass properties and surface of the mesh, for the simulator, so a
 /// scene can be simulated before deciding which objects need an eigen-solve.
 ModeBank massAndSurfaceBank(const LoadedMesh& loaded, const PrecomputeSettings& settings);
+
+/// Solves bank.transfer from the bank's modes and surface and sets bank.transfer_seconds (not
+/// total_seconds: callers that time a whole precompute include it there themselves).
+Status solveTransferInto(ModeBank& bank, const TransferSettings& settings, const ProgressFn& progress = {});
 
 /// Cache key of the bank that `settings` would compute from a mesh whose source hashes to
 /// mesh_hash: every input that changes the result goes in.

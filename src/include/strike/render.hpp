@@ -102,9 +102,10 @@ struct RenderSettings {
 
 struct RenderReport {
   size_t objects = 0, objects_struck = 0;
-  size_t objects_sounded = 0;    ///< struck audibly and with at least one mode in the synthesized band
-  size_t objects_silent = 0;     ///< struck audibly, but no mode in the synthesized band (warnings say why)
-  size_t objects_inaudible = 0;  ///< struck, but too softly to hear: no eigen-solve
+  size_t objects_sounded = 0;      ///< struck audibly and with at least one mode in the synthesized band
+  size_t objects_silent = 0;       ///< struck audibly, but no mode in the synthesized band (warnings say why)
+  size_t objects_clicks_only = 0;  ///< sounded, but only by acceleration noise: no mode in the band
+  size_t objects_inaudible = 0;    ///< struck, but too softly to hear: no eigen-solve
   size_t banks_given = 0, banks_cached = 0, banks_computed = 0, banks_shared = 0;
   /// Banks scaled from a solve of the same shape made in this render for an object of another
   /// size or material (every computed bank is a normalized solve, scaled: normalized_problem.hpp).

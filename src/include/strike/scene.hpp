@@ -56,6 +56,11 @@ struct Scene {
   double ground_height_m = 0.0;
   double ground_restitution = NAN, ground_friction = NAN;  ///< NaN: the ground material's
   double ground_rolling_resistance = NAN;                  ///< NaN: the ground material's
+  /// The ground reflects sound (an image source). ground.reflection: false turns it off.
+  bool ground_reflects = true;
+  /// Pressure reflection coefficient; NaN: the ground material's at normal incidence,
+  /// groundReflectionCoefficient().
+  double ground_reflection = NAN;
   std::vector<ContactPairSpec> contact_pairs;
   /// Extra amplitude decay (1/s) of a body's modes while it rests on or slides along something:
   /// the vibration it loses into its support. A phenomenological model (the support's impedance
@@ -73,6 +78,11 @@ struct SceneKeyTable {
   std::vector<const char*> keys;
 };
 const std::vector<SceneKeyTable>& sceneKeyTables();
+
+/// A solid half-space's pressure reflection coefficient at normal incidence,
+/// (Z - rho c) / (Z + rho c) with Z = rho_s c_p its longitudinal impedance and rho c the air's
+/// [Kinsler et al. 2000, sec. 6.2]: 0.9999 for concrete, so solid floors are rigid to air.
+double groundReflectionCoefficient(const Material& material);
 
 /// Parses scene JSON. `path` names the file in messages and anchors relative paths.
 Result<Scene> parseScene(const std::string& json_text, const std::string& path);

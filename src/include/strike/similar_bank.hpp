@@ -6,7 +6,9 @@
 //   lambda' = lambda (E'/E) / ((rho'/rho) s^2)      (frequencies scale as sqrt(E/rho) / L)
 //   phi'    = phi / sqrt((rho'/rho) s^3)            (mass normalization phi^T M phi = 1)
 // Rayleigh damping is the new material's (applied per mode from lambda', as always), and the
-// radiation strengths are recomputed from the scaled surface and shapes.
+// radiation strengths are recomputed from the scaled surface and shapes. The acoustic transfer
+// is scaled exactly when ka is unchanged (E/rho unchanged: F' = F s^2 / sqrt((rho'/rho) s^3)),
+// else solved again on the scaled bank (src/precompute/similar_bank.cpp).
 #pragma once
 
 #include <string>

@@ -27,6 +27,13 @@
  * Status: EXPERIMENTAL (0.x). The ABI may change between minor versions until 1.0; the version
  * check in strike_context_create() refuses a header of another minor version.
  *
+ * Changes in 0.4 (recompile: the soname is now libstrike.so.0.4):
+ *  - What the listener hears (docs/listener.md): objects whose bank has an acoustic transfer
+ *    (bank format 5) sound different in every direction, each impact heard along the direction
+ *    from the object to the listener in the object's frame; free objects click when struck
+ *    (acceleration noise: a 5 mm steel ball with no audible mode is heard); and a ground
+ *    reflection (strike_context_config.ground_*, new, last fields; off by default).
+ *
  * Changes in 0.3 (recompile: the soname is now libstrike.so.0.3; see src/capi/README.md):
  *  - One sound engine with `strike render`: the same contact scheduling, listener model and
  *    voices. strike_step() takes a physics step's body states and contacts (resting ones
@@ -84,7 +91,7 @@ extern "C" {
 /* ---- Version ---------------------------------------------------------------------------- */
 /* Kept equal to project(strike VERSION ...) in CMakeLists.txt (checked at configure time). */
 #define STRIKE_VERSION_MAJOR 0
-#define STRIKE_VERSION_MINOR 3
+#define STRIKE_VERSION_MINOR 4
 #define STRIKE_VERSION_PATCH 0
 /** Packed version of this header: (major << 16) | (minor << 8) | patch. */
 #define STRIKE_VERSION                                                                         \
@@ -203,6 +210,16 @@ typedef struct strike_context_config {
   /** (0.3) Records in flight between strike_step() and the next render: one per body state and
    *  contact, plus two per step, 16 .. 1048576, rounded up to a power of two. Default 8192. */
   uint32_t contact_queue_capacity;
+  /** (0.4) A flat ground that reflects sound: every object is also heard from the listener's
+   *  mirror image in the plane ground_normal . x = ground_height_m, later by the longer path and
+   *  weighted by ground_reflection (the pressure reflection coefficient, -1 .. 1; 1 = rigid, as
+   *  concrete, wood and steel floors are to air). Only when the object and the listener are both
+   *  above it. 0 = no reflection (default); 1 = on. ground_normal is normalized here (default
+   *  0, 0, 1); `strike render` sets it from the scene's ground. */
+  int32_t ground_reflects;
+  double ground_normal[3];
+  double ground_height_m;
+  double ground_reflection;
 } strike_context_config;
 
 /** Defaults (see each field). [any-thread] */

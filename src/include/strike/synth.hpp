@@ -9,6 +9,7 @@
 // under-damped modes), so there is no step-size limit and any damping is stable.
 #pragma once
 
+#include <complex>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -43,6 +44,9 @@ struct ModalObjectDesc {
   std::vector<double> eigenvalues;  ///< lambda_i, rad^2/s^2
   double rayleigh_stiffness = 0.0;  ///< a1, s
   double rayleigh_mass = 0.0;       ///< a2, 1/s
+  /// Optional per-mode damping c_i (1/s) instead of Rayleigh's: the acceleration-noise filters,
+  /// whose damping is not a material's (engine.cpp).
+  std::vector<double> damping_c;
   /// Per mode: output units per unit modal acceleration (m/s^2 * sqrt(kg)). Output sample =
   /// sum_i radiation_weight_i * q_i''(t - delay), where q'' excludes the feedthrough g_i f(t) of
   /// the force pulse itself (see oscillator_bank.cpp). Build it with radiationWeights(). Empty
@@ -74,6 +78,11 @@ struct ImpactDesc {
   /// spans [time_s, time_s + duration_s + ramp_s). 0 = sharp edges. Applied when every mode the
   /// impact touches rings; an object with over-damped modes gets the sharp box.
   double ramp_s = 0.0;
+  /// Optional, one per mode: a complex factor on each mode's output from this impact, in the
+  /// bank's e^{+i omega t} convention: a ringing mode's output Re(yhat) becomes Re(factor yhat),
+  /// its radiation turned in phase and scaled (the acoustic transfer toward the listener, the
+  /// conjugate of acoustic_transfer.hpp's F). Non-ringing modes take its real part. Null: 1.
+  const std::complex<double>* modal_transfer = nullptr;
 };
 
 /// A change of a sustained contact force (a body coming to rest, carrying a load, being pushed),
@@ -86,6 +95,7 @@ struct ForceStepDesc {
   double ramp_s = 0.0;  ///< 0: a sharp step
   /// One per mode of the object: phi_i(p) . dF summed over the contact points, N / sqrt(kg).
   const double* modal_force_change = nullptr;
+  const std::complex<double>* modal_transfer = nullptr;  ///< as ImpactDesc::modal_transfer
 };
 
 /// Continuous force inputs of one object (rolling, sliding, scraping: contact_noise.hpp): each
@@ -293,5 +303,9 @@ std::vector<double> radiationWeights(const ModeBank& bank, double distance_m);
 /// The distance-free part of radiationWeights: R_i per mode (m^2 / sqrt(kg)), computed from the
 /// surface and shapes. radiationWeights uses bank.radiation_m2 instead when the bank has it.
 std::vector<double> radiationStrengths(const ModeBank& bank);
+/// Per mode, the radiation efficiency of its acoustic transfer: radiated power over
+/// rho c <|v_n|^2> S / 2, the power of the same surface velocity as a plane wave [Fahy &
+/// Gardonio, Sound and Structural Vibration, 2007, sec. 3.4]. Zeros for a bank without one.
+std::vector<double> radiationEfficiency(const ModeBank& bank);
 
 }  // namespace strike

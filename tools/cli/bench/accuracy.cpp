@@ -9,6 +9,11 @@
 //  - accuracy-synth.csv: float vs double oscillator state at 16-192 kHz, and culling thresholds at
 //    48 kHz, against a double-precision reference render of the same impact at the same rate:
 //    time-domain error, spectral error (FFT peak frequency and level) and run time;
+//  - accuracy-transfer.csv: the acoustic transfer solver (issue 17) on the analytic sphere: a
+//    sphere R = 5 cm (2420 triangles) whose surface acceleration is Y_nm radiates exactly
+//    A h_n(kr) Y_nm; far-field error (rms over directions, level in dB and phase in degrees of the
+//    Y_nm coefficient) and the solver's own estimate against unknowns and seconds, n = 1 and 3,
+//    ka = 1, 5, 10, 20;
 //  - accuracy-euler.csv: symplectic Euler on the modal ODE at the audio step h = 1/fs against the
 //    exact exponential update, per mode frequency, and the frequency where Euler goes unstable.
 #include <algorithm>
@@ -28,6 +33,7 @@
 #include "strike/constants.hpp"
 #include "strike/precompute.hpp"
 #include "strike/synth.hpp"
+#include "strike/transfer_solver.hpp"
 
 namespace strike::cli {
 namespace {
@@ -75,6 +81,7 @@ Status plateStudy(std::vector<FemRow>& rows) {
     s.max_freq_hz = 1e9;
     s.max_modes = 8;
     s.error_estimate = true;
+    s.acoustic_transfer = false;  // the FEM study times the eigen-solve
     return s;
   };
   std::fprintf(stderr, "strike bench: plate reference, Tet10 size 2.5 mm (~25 s, 1.9 GB)\n");
@@ -118,6 +125,7 @@ Result<std::vector<FemRow>> femStudy(bool plate) {
     s.max_freq_hz = 8000.0;
     s.max_modes = 12;
     s.error_estimate = true;
+    s.acoustic_transfer = false;
     Result<PrecomputeResult> r = computeModeBank(s);
     if (!r) return r.error();
     FemRow row{"bar", order, edge, r->report.dofs, r->bank.total_seconds, r->report.error_estimate_seconds, {}, {}};
@@ -161,6 +169,7 @@ Result<std::vector<FemRow>> femStudy(bool plate) {
       s.max_freq_hz = 1e9;
       s.max_modes = 28;
       s.error_estimate = true;
+      s.acoustic_transfer = false;
       Result<PrecomputeResult> r = computeModeBank(s);
       if (!r) return r.error();
       FemRow row{"sphere", order, edge, r->report.dofs, r->bank.total_seconds, r->report.error_estimate_seconds,
@@ -301,6 +310,78 @@ double exactUpdateError(double f_hz, double c, double rate) {
   return worst / peak;
 }
 
+struct TransferRow {
+  int n;
+  double ka;
+  uint32_t elements, chief;
+  double seconds, relative, level_db, phase_deg, estimate;
+};
+
+/// The analytic sphere of issue 17 at fixed resolutions: surface acceleration Y_nm (radial) on a
+/// sphere of radius a radiates p = A h_n(kr) Y_nm, A = -rho / (k h_n'(ka)) (e^{-i omega t}), so
+/// the far-field coefficient is -rho (-i)^{n+1} / (k^2 h_n'(ka)) and every other one is zero.
+Result<std::vector<TransferRow>> transferStudy() {
+  const double a = 0.05, c_air = kSpeedOfSoundAir_m_s, rho = kAirDensity_kg_m3;
+  Result<SurfaceMesh> mesh = makeSphereSurface(a, a / 10);
+  if (!mesh) return mesh.error();
+  ModeBank sphere;
+  for (Eigen::Index v = 0; v < mesh->V.rows(); ++v)
+    for (int c = 0; c < 3; ++c) sphere.surface_positions.push_back(mesh->V(v, c));
+  sphere.surface_normals.assign(sphere.surface_positions.size(), 0.0f);
+  for (Eigen::Index f = 0; f < mesh->F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) sphere.surface_triangles.push_back(static_cast<uint32_t>(mesh->F(f, c)));
+  std::vector<TransferRow> rows;
+  for (int n : {1, 3})
+    for (double ka : {1.0, 5.0, 10.0, 20.0}) {
+      const int m = n == 1 ? 0 : 2;
+      const double k = ka / a;
+      ModeBank bank = sphere;
+      bank.eigenvalues = {k * k * c_air * c_air};
+      std::vector<double> Y((n + 1) * (n + 1));
+      for (size_t v = 0; v < bank.surfaceVertexCount(); ++v) {
+        const double* p = &bank.surface_positions[3 * v];
+        realSphericalHarmonics(static_cast<uint32_t>(n), p, Y.data());
+        const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+        for (int c = 0; c < 3; ++c) bank.shapes.push_back(static_cast<float>(Y[n * n + n + m] * p[c] / r));
+      }
+      using cd = std::complex<double>;
+      auto h = [&](int order) { return cd(std::sph_bessel(order, ka), std::sph_neumann(order, ka)); };
+      const cd exact = -rho * std::pow(cd(0, -1), n + 1) / (k * k * (h(n - 1) - (n + 1.0) / ka * h(n)));
+      for (uint32_t elements : {100u, 200u, 400u, 700u, 1000u}) {
+        TransferSettings settings;
+        settings.fixed_elements = elements;
+        settings.max_elements = elements;
+        std::vector<TransferModeStats> stats;
+        Result<AcousticTransfer> t = solveAcousticTransfer(bank, settings, {}, &stats);
+        if (!t) return t.error();
+        double wrong = 0;
+        cd got = 0;
+        for (uint64_t j = 0; j < t->offset[1]; ++j) {
+          const cd c(t->coefficients[j].real(), t->coefficients[j].imag());
+          const bool main = j == static_cast<uint64_t>(n * n + n + m);
+          if (main) got = c;
+          wrong += std::norm(main ? c - exact : c);
+        }
+        TransferRow row{n,
+                        ka,
+                        stats[0].elements,
+                        stats[0].chief_points,
+                        stats[0].seconds,
+                        std::sqrt(wrong) / std::abs(exact),
+                        20 * std::log10(std::abs(got) / std::abs(exact)),
+                        std::arg(got / exact) * 180 / kPi,
+                        stats[0].relative_error};
+        std::fprintf(stderr,
+                     "strike bench: transfer sphere n %d ka %4.1f: %4u elements, %2u CHIEF, %.3f s, error %.2f%% "
+                     "(%+.2f dB, %+.2f deg), estimate %.2f%%\n",
+                     n, ka, row.elements, row.chief, row.seconds, 100 * row.relative, row.level_db, row.phase_deg,
+                     100 * row.estimate);
+        rows.push_back(row);
+      }
+    }
+  return rows;
+}
+
 }  // namespace
 /// `strike bench accuracy`: writes the study's files to DIR (which exists) and returns the exit
 /// code (bench_studies.hpp).
@@ -390,6 +471,18 @@ int benchAccuracy(const std::string& dir, bool plate) {
   euler << "# symplectic Euler unstable above " << lo << " Hz at " << rate << " Hz (fs/pi = " << rate / kPi
         << "); the exact update is stable at every frequency\n";
   euler.close();
+  // The acoustic transfer on the analytic sphere.
+  Result<std::vector<TransferRow>> transfer = transferStudy();
+  if (!transfer) return reportError("bench", transfer.error());
+  std::ofstream transfer_csv;
+  if (Status ok = open("accuracy-transfer.csv", transfer_csv); !ok) return reportError("bench", ok.error());
+  transfer_csv << "object,n,ka,elements,chief_points,solve_s,rel_error,level_error_db,phase_error_deg,"
+                  "estimated_rel_error\n";
+  for (const TransferRow& r : *transfer)
+    transfer_csv << "sphere," << r.n << "," << r.ka << "," << r.elements << "," << r.chief << "," << r.seconds << ","
+                 << r.relative << "," << r.level_db << "," << r.phase_deg << "," << r.estimate << "\n";
+  transfer_csv.close();
+  std::fprintf(stderr, "strike bench: wrote %s/accuracy-transfer.csv\n", dir.c_str());
   std::fprintf(stderr,
                "strike bench: wrote %s/accuracy-{fem.csv,fem.svg,synth.csv,euler.csv}; Euler unstable above %.0f Hz\n",
                dir.c_str(), lo);

@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: MIT
+// The acoustic transfer solver (issue 17): for every mode of a bank, the far field that its
+// surface acceleration radiates with the body as an acoustic obstacle, as spherical-harmonic
+// coefficients (acoustic_transfer.hpp for the conventions). Target strike_precompute (Eigen).
+//
+// Method (docs/acoustic-transfer.md): the exterior Neumann Helmholtz problem
+//   (Delta + k^2) p = 0 outside the body,  dp/dn = -rho_air a_n on its surface,  outgoing,
+// solved by a collocation boundary-element method on the bank's own surface triangles:
+// the conventional boundary integral equation (Kirkup 2007, "The boundary element method in
+// acoustics", ch. 3)
+//   1/2 p(x) - int_S p dG/dn_y dS = - int_S G dp/dn dS,   G = e^{ikr} / (4 pi r),
+// with the pressure piecewise constant on CLUSTERS of triangles (a bounding-volume tree cut at
+// the size the wavelength asks for: elements per wavelength from the target error, within an
+// element budget) and the integrals over the exact triangles (far cells by their moments, near
+// ones subdivided adaptively, the singular one by a Duffy transform), so a coarse solve keeps
+// the geometry and the fine boundary data. Fictitious interior resonances (Schenck 1968, CHIEF)
+// are suppressed by interior points in least squares once k reaches the body's interior
+// resonance range. The far field is projected onto spherical harmonics from the surface
+// integral with the plane wave's expansion; the order is cut where the tail's energy is small.
+// Error estimate per mode: the far field of the same system with clusters merged pairwise
+// (about half the unknowns), against the full one, plus the truncated tail.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "strike/acoustic_transfer.hpp"
+#include "strike/bank.hpp"
+#include "strike/listener.hpp"
+#include "strike/progress.hpp"
+#include "strike/result.hpp"
+
+namespace strike {
+
+struct TransferSettings {
+  double air_density_kg_m3 = kAirDensity_kg_m3;
+  double speed_of_sound_m_s = kSpeedOfSoundAir_m_s;
+  /// Target relative error of each mode's far field (rms over directions); picks the resolution
+  /// (elements per wavelength ~ 1/sqrt(target)). 0.05 is -26 dB.
+  double target_relative_error = 0.05;
+  /// Element budget: at most this many unknowns per mode's solve (dense complex LU / QR,
+  /// cost ~ N^3). Above it the solve is coarser than the target asks and says so in its error.
+  uint32_t max_elements = 700;
+  /// At least this many unknowns (or every triangle of a smaller surface): the mode's pattern
+  /// needs them even where the wavelength does not.
+  uint32_t min_elements = 160;
+  /// Force this many unknowns for every mode (0: automatic). For studies of error against cost.
+  uint32_t fixed_elements = 0;
+  /// Interior (CHIEF) points once k reaches the interior resonances (false: never; a study).
+  bool chief = true;
+};
+
+/// What one mode's solve cost and found (for studies and reports).
+struct TransferModeStats {
+  double ka = 0.0;              ///< k times the surface's radius about the centre
+  uint32_t elements = 0;        ///< unknowns of the solve
+  uint32_t chief_points = 0;    ///< interior points used (0: square system)
+  uint32_t order = 0;           ///< spherical-harmonic order kept
+  double relative_error = 0.0;  ///< the estimate stored in the transfer
+  double seconds = 0.0;
+};
+
+/// Solves the transfer of every mode of `bank` (its eigenvalues, shapes on surface vertices,
+/// surface triangles CCW from outside) and the rigid translation's dipole tensor. `progress`
+/// (optional) is called with phase "transfer" and the fraction of modes done. `stats`
+/// (optional) receives one entry per mode.
+Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const TransferSettings& settings = {},
+                                               const ProgressFn& progress = {},
+                                               std::vector<TransferModeStats>* stats = nullptr);
+
+}  // namespace strike

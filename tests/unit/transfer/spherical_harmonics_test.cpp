@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: MIT
+// The evaluation side of the acoustic transfer (src/bank/acoustic_transfer.cpp): real spherical
+// harmonics against their closed forms and their orthonormality by quadrature over the sphere,
+// and the far-field sum.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <vector>
+
+#include "strike/acoustic_transfer.hpp"
+
+namespace strike {
+namespace {
+
+// Gauss-Legendre nodes and weights on [-1, 1] (Newton on P_n), for the quadrature over the sphere.
+void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
+  x.resize(n);
+  w.resize(n);
+  for (int i = 0; i < n; ++i) {
+    double z = std::cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 0.0;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1.0, p1 = z;
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      dp = n * (z * p1 - p0) / (z * z - 1.0);
+      const double step = p1 / dp;
+      z -= step;
+      if (std::abs(step) < 1e-16) break;
+    }
+    x[i] = z;
+    w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+  }
+}
+
+TEST(SphericalHarmonics, LowOrdersMatchTheirClosedForms) {
+  const double d[3] = {0.3, -0.5, 0.812403840463596};  // unit
+  const double x = d[0], y = d[1], z = d[2];
+  double Y[25];
+  realSphericalHarmonics(4, d, Y);
+  const double pi = M_PI;
+  EXPECT_NEAR(Y[0], 1.0 / std::sqrt(4 * pi), 1e-15);
+  EXPECT_NEAR(Y[1], std::sqrt(3 / (4 * pi)) * y, 1e-15);  // n 1, m -1
+  EXPECT_NEAR(Y[2], std::sqrt(3 / (4 * pi)) * z, 1e-15);
+  EXPECT_NEAR(Y[3], std::sqrt(3 / (4 * pi)) * x, 1e-15);
+  // n = 2 (Wikipedia "Table of spherical harmonics", real forms, no Condon-Shortley phase).
+  EXPECT_NEAR(Y[4], 0.5 * std::sqrt(15 / pi) * x * y, 1e-14);
+  EXPECT_NEAR(Y[5], 0.5 * std::sqrt(15 / pi) * y * z, 1e-14);
+  EXPECT_NEAR(Y[6], 0.25 * std::sqrt(5 / pi) * (3 * z * z - 1), 1e-14);
+  EXPECT_NEAR(Y[7], 0.5 * std::sqrt(15 / pi) * x * z, 1e-14);
+  EXPECT_NEAR(Y[8], 0.25 * std::sqrt(15 / pi) * (x * x - y * y), 1e-14);
+  // n = 3, m = 0 and m = 3.
+  EXPECT_NEAR(Y[12], 0.25 * std::sqrt(7 / pi) * z * (5 * z * z - 3), 1e-14);
+  EXPECT_NEAR(Y[15], 0.25 * std::sqrt(35 / (2 * pi)) * x * (x * x - 3 * y * y), 1e-14);
+  // Not normalized on input; a zero vector means +z.
+  const double longer[3] = {3 * x, 3 * y, 3 * z}, zero[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+  double Y2[25], Y3[25];
+  realSphericalHarmonics(4, longer, Y2);
+  for (int i = 0; i < 25; ++i) EXPECT_NEAR(Y2[i], Y[i], 1e-14);
+  realSphericalHarmonics(4, zero, Y2);
+  realSphericalHarmonics(4, up, Y3);
+  for (int i = 0; i < 25; ++i) EXPECT_EQ(Y2[i], Y3[i]);
+}
+
+TEST(SphericalHarmonics, AreOrthonormalOverTheSphereUpToHighOrder) {
+  // Gauss-Legendre in cos(theta) x uniform phi integrates products of degree <= 2 N exactly.
+  const int order = 40, count = (order + 1) * (order + 1);
+  std::vector<double> gx, gw;
+  gaussLegendre(order + 2, gx, gw);
+  const int nphi = 2 * order + 4;
+  std::vector<double> gram(static_cast<size_t>(count) * count, 0.0), Y(count);
+  for (size_t i = 0; i < gx.size(); ++i)
+    for (int j = 0; j < nphi; ++j) {
+      const double phi = 2 * M_PI * j / nphi, s = std::sqrt(1 - gx[i] * gx[i]);
+      const double d[3] = {s * std::cos(phi), s * std::sin(phi), gx[i]};
+      realSphericalHarmonics(order, d, Y.data());
+      const double w = gw[i] * 2 * M_PI / nphi;
+      for (int a = 0; a < count; ++a)
+        for (int b = a; b < count; ++b) gram[static_cast<size_t>(a) * count + b] += w * Y[a] * Y[b];
+    }
+  double worst = 0.0;
+  for (int a = 0; a < count; ++a)
+    for (int b = a; b < count; ++b)
+      worst = std::max(worst, std::abs(gram[static_cast<size_t>(a) * count + b] - (a == b ? 1.0 : 0.0)));
+  EXPECT_LT(worst, 1e-12);
+}
+
+TEST(AcousticTransfer, EvaluatesTheSumAndItsRmsAndChecksItsShape) {
+  AcousticTransfer t;
+  t.order = {0, 1};
+  t.offset = {0, 1, 5};
+  t.coefficients = {{2.0f, 0.0f}, {0.0f, 0.0f}, {0.0f, 0.0f}, {1.0f, -1.0f}, {0.5f, 0.0f}};
+  t.relative_error = {0.01f, 0.02f};
+  EXPECT_EQ(t.checkConsistency(2), "");
+  EXPECT_NE(t.checkConsistency(3), "");
+  EXPECT_EQ(t.maxOrder(), 1u);
+  const double d[3] = {0.6, 0.0, 0.8};
+  double Y[4];
+  realSphericalHarmonics(1, d, Y);
+  std::complex<double> F[2];
+  evaluateFarField(t, Y, F);
+  const double c1 = std::sqrt(3 / (4 * M_PI));
+  EXPECT_NEAR(F[0].real(), 2.0 / std::sqrt(4 * M_PI), 1e-7);
+  EXPECT_NEAR(F[1].real(), c1 * 0.8 + 0.5 * c1 * 0.6, 1e-7);
+  EXPECT_NEAR(F[1].imag(), -c1 * 0.8, 1e-7);
+  EXPECT_NEAR(t.rmsFarField(1), std::sqrt((2.0 + 0.25) / (4 * M_PI)), 1e-7);
+  t.offset[2] = 4;
+  EXPECT_NE(t.checkConsistency(2), "");
+}
+
+}  // namespace
+}  // namespace strike

@@ -73,7 +73,11 @@ void SoundEngine::continuousContact(Voice& v, const EngineContact& c, const std:
     desc.damping_ratio = contactDampingRatio(std::sqrt(std::max(0.0, v.restitution_ * e_other)));
     desc.sample_rate_hz = settings_.synth.sample_rate_hz;
     source->generator.start(desc, frames_);
-    source->delay_s = delayTo(world);
+    // The delay from where the pair started stays the source's for its life: a sliding body's
+    // path length changes by metres per second only, and moving the delay would need resampling.
+    Arrival paths[2];
+    if (v.pressure_) arrivals(v, world, paths);
+    source->delay_s = v.pressure_ ? paths[0].delay_s : delayTo(world);
     source->stepped = false;
     ++stats_.continuous_contacts;
   }
@@ -123,6 +127,18 @@ void SoundEngine::continuousEndStep(Voice& v) {
     w.channel = ch;
     w.time_s = t;  // with the generator's state: both carry the source's delay
     w.modal_weight = s.modal.data();
+    // Directivity, evaluated at each physics step (not once when the source starts): a rolling
+    // body turns a full revolution every 2 pi r of travel, so the direction toward the listener
+    // in its frame changes within a roll; the weights already change per step, and one
+    // evaluation per step and source costs nothing next to the audio-rate work. The direct path
+    // only: the ground's image would need the force signal again behind its longer path (a delay
+    // line per source), which continuous contact leaves out (docs/listener.md).
+    if (v.pressure_) {
+      Arrival paths[2];
+      const std::array<double, 3> world = {s.world_n[0] / n, s.world_n[1] / n, s.world_n[2] / n};
+      arrivals(v, world, paths);
+      if (radiationToward(v, paths[0])) w.modal_transfer = v.transfer_.data();
+    }
     (void)v.synth_.setForceWeights(w);  // a full queue keeps the weights in force
   }
 }

@@ -218,7 +218,7 @@ struct OscillatorBank::Impl {
     std::vector<uint32_t> local;   // object-local index per entry
     AlignedBuffer<float> y_re, y_im, z_re, z_im;
     AlignedBuffer<float> w_re, w_im;  // kForceChannels x padded: b g (e^{ph} - 1) / p
-    std::vector<double> g;            // kForceChannels x mode_count: the weights in force
+    std::vector<Complex> g;           // kForceChannels x mode_count: the weights in force, x transfer
     double feed[kForceChannels] = {};
     bool on[kForceChannels] = {};
     struct Pending {
@@ -226,8 +226,8 @@ struct OscillatorBank::Impl {
       uint32_t channel, slot;
       bool on;
     };
-    std::vector<Pending> pending;   // sorted by sample; capacity kForcedPending
-    std::vector<double> pending_g;  // kForcedPending x mode_count
+    std::vector<Pending> pending;    // sorted by sample; capacity kForcedPending
+    std::vector<Complex> pending_g;  // kForcedPending x mode_count
     uint32_t free_slots = (1u << kForcedPending) - 1;
     bool has_state = false;
     bool reserved() const { return !mode.empty() || padded > 0; }
@@ -993,9 +993,9 @@ struct OscillatorBank::Impl {
     for (auto* b : {&f.y_re, &f.y_im, &f.z_re, &f.z_im}) b->grow(f.padded);
     f.w_re.grow(kForceChannels * f.padded);
     f.w_im.grow(kForceChannels * f.padded);
-    f.g.assign(kForceChannels * obj.mode_count, 0.0);
+    f.g.assign(kForceChannels * obj.mode_count, Complex(0.0, 0.0));
     f.pending.reserve(kForcedPending);
-    f.pending_g.assign(kForcedPending * obj.mode_count, 0.0);
+    f.pending_g.assign(kForcedPending * obj.mode_count, Complex(0.0, 0.0));
     forced_acc.grow(kBlock * kForcedLanes);
   }
 
@@ -1011,10 +1011,10 @@ struct OscillatorBank::Impl {
     uint32_t slot = 0;
     while (!(f.free_slots & (1u << slot))) ++slot;
     f.free_slots &= ~(1u << slot);
-    double* g = f.pending_g.data() + static_cast<size_t>(slot) * obj.mode_count;
+    Complex* g = f.pending_g.data() + static_cast<size_t>(slot) * obj.mode_count;
     for (uint32_t j = 0; j < obj.mode_count; ++j) {
-      const double v = d.modal_weight ? d.modal_weight[j] : 0.0;
-      g[j] = std::isfinite(v) ? v : 0.0;
+      const Complex v = (d.modal_weight ? d.modal_weight[j] : 0.0) * (d.modal_transfer ? d.modal_transfer[j] : 1.0);
+      g[j] = std::isfinite(v.real()) && std::isfinite(v.imag()) ? v : Complex(0.0, 0.0);
     }
     const ForcedObject::Pending p{sample, d.channel, slot, d.modal_weight != nullptr};
     auto at = std::upper_bound(f.pending.begin(), f.pending.end(), sample,
@@ -1052,10 +1052,15 @@ struct OscillatorBank::Impl {
       // Sample-held force F over [n, n + 1): y(n + 1) = e^{ph} y(n) + F (e^{ph} - 1) / p.
       const Complex d = m.out_weight * (m.step - 1.0) / m.pole;
       for (uint32_t c = 0; c < kForceChannels; ++c) {
-        const double g = f.on[c] ? f.g[static_cast<size_t>(c) * obj.mode_count + f.local[e]] : 0.0;
-        f.w_re[c * f.padded + e] = static_cast<float>(d.real() * g);
-        f.w_im[c * f.padded + e] = static_cast<float>(d.imag() * g);
-        f.feed[c] += m.radiation * g;
+        const Complex g = f.on[c] ? f.g[static_cast<size_t>(c) * obj.mode_count + f.local[e]] : 0.0;
+        const Complex w = d * g;
+        f.w_re[c * f.padded + e] = static_cast<float>(w.real());
+        f.w_im[c * f.padded + e] = static_cast<float>(w.imag());
+        // Feedthrough R g F, so that a steady force is silent: the sample-held state settles at
+        // y = -F / p, whose output Re(b g y) it cancels. With a complex g (directivity) that is
+        // Re(b g / p) = R Re(g (1 + i sigma / omega_d)) at the mode's own pole.
+        const Complex settle(1.0, -m.base_pole.real() / m.base_pole.imag());
+        f.feed[c] += m.radiation * (g * settle).real();
       }
     }
   }

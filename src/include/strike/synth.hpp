@@ -112,6 +112,9 @@ struct ForceWeightsDesc {
   /// signal (d: the direction of the force on the body, its normal plus its friction share),
   /// 1/sqrt(kg). Copied. Null: the channel stops (its modes ring on freely).
   const double* modal_weight = nullptr;
+  /// As ImpactDesc::modal_transfer (the direction toward the listener), multiplied into each
+  /// weight (the feedthrough follows, so a steady force stays silent). Copied. Null: 1.
+  const std::complex<double>* modal_transfer = nullptr;
 };
 
 /// What addImpactNoAlloc() did with an impact.

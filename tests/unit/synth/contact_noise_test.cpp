@@ -62,6 +62,49 @@ TEST(ForceInput, ConstantForceMatchesTheSharpForceStep) {
   EXPECT_EQ(a[255], 0.0f);        // nothing before the block the weights start at
 }
 
+TEST(ForceInput, DirectivityActsAsOnAForceStepAndASteadyForceStaysSilent) {
+  // A per-mode complex factor (the direction toward the listener, sound_paths.cpp) on the force
+  // input gives what the force step with the same factor gives, and once the onset has rung out a
+  // steady force is silent (the feedthrough follows the factor).
+  const ModalObjectDesc object = test::makeObject({440.0, 1870.0, 5230.0}, 1e-6, 40.0, {1.0, 0.7, 0.3});
+  SynthSettings settings;
+  settings.sample_rate_hz = kFs;
+  OscillatorBank driven(settings), stepped(settings);
+  driven.addObject(object);
+  stepped.addObject(object);
+  driven.reserveForceInput(0);
+  const std::vector<double> g = {0.8, -0.5, 0.25};
+  const std::vector<std::complex<double>> transfer = {{0.5, 0.8}, {-1.2, 0.3}, {0.0, -0.7}};
+  const double t0 = 256.0 / kFs, force_n = 0.6;
+  ForceWeightsDesc w;
+  w.time_s = t0;
+  w.modal_weight = g.data();
+  w.modal_transfer = transfer.data();
+  ASSERT_TRUE(driven.setForceWeights(w));
+  std::vector<double> dg(g.size());
+  for (size_t i = 0; i < g.size(); ++i) dg[i] = g[i] * force_n;
+  ForceStepDesc step;
+  step.time_s = t0;
+  step.modal_force_change = dg.data();
+  step.modal_transfer = transfer.data();
+  ASSERT_EQ(stepped.addForceStep(step), ImpactResult::Scheduled);
+  const size_t frames = kFs / 2;
+  std::vector<float> force(frames, static_cast<float>(force_n));
+  std::vector<float> a(frames), b(frames);
+  const float* at[kForceChannels] = {force.data(), nullptr, nullptr, nullptr};
+  driven.render(a.data(), frames, at);
+  stepped.render(b.data(), frames);
+  const double peak = test::peakAbs(b);
+  ASSERT_GT(peak, 0.1);
+  double worst = 0.0, tail = 0.0;
+  for (size_t n = 0; n < frames; ++n) worst = std::max(worst, std::fabs(double(a[n]) - double(b[n])));
+  for (size_t n = frames - 480; n < frames; ++n) tail = std::max(tail, std::fabs(double(a[n])));
+  std::printf("directional force vs force step: peak %.4g, largest difference %.3g, last 10 ms %.3g\n", peak, worst,
+              tail);
+  EXPECT_LT(worst, 1e-4 * peak);
+  EXPECT_LT(tail, 1e-4 * peak);  // rung out (decay 20 per s over 0.5 s): no offset left
+}
+
 TEST(ForceInput, StoppedChannelRingsOnFreely) {
   // Driven for 0.1 s, then the channel stops: the modes ring on exactly as a free mode (the state
   // is merged into the free oscillators), decaying at the material's rate.

@@ -245,6 +245,18 @@ TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
   ASSERT_TRUE(bank) << bank.error().message;
   TransferSettings settings;
   if (const char* max = std::getenv("STRIKE_TRANSFER_MAX_ELEMENTS")) settings.max_elements = std::atoi(max);
+  if (const char* every = std::getenv("STRIKE_TRANSFER_EVERY")) {  // every N-th mode only (N-1, 2N-1, ...)
+    const size_t n = std::max(1, std::atoi(every)), vertices = bank->surfaceVertexCount();
+    ModeBank kept = *bank;
+    kept.eigenvalues.clear();
+    kept.shapes.clear();
+    for (size_t i = n - 1; i < bank->modeCount(); i += n) {
+      kept.eigenvalues.push_back(bank->eigenvalues[i]);
+      kept.shapes.insert(kept.shapes.end(), bank->shapes.begin() + i * vertices * 3,
+                         bank->shapes.begin() + (i + 1) * vertices * 3);
+    }
+    *bank = std::move(kept);
+  }
   std::vector<TransferModeStats> stats;
   const auto start = std::chrono::steady_clock::now();
   Result<AcousticTransfer> t = solveAcousticTransfer(*bank, settings, {}, &stats);

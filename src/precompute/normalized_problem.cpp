@@ -79,8 +79,8 @@ uint64_t normalizedBankCacheKey(uint64_t mesh_hash, const NormalizedProblem& pro
 
 Result<ModeBank> scaleNormalizedBank(const ModeBank& normalized, const NormalizedProblem& problem,
                                      const PrecomputeSettings& actual, uint64_t mesh_hash) {
-  Result<ModeBank> scaled =
-      similarBank(normalized, problem.scale, actual.material, actual.max_freq_hz, actual.mesh_spec);
+  Result<ModeBank> scaled = similarBank(normalized, problem.scale, actual.material, actual.max_freq_hz,
+                                        actual.mesh_spec, actual.acoustic_transfer ? &actual.transfer : nullptr);
   if (!scaled) return scaled.error();
   // The provenance of the object asked for, as a direct solve would record it.
   scaled->mesh_hash = mesh_hash;

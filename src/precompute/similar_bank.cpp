@@ -11,7 +11,7 @@
 namespace strike {
 
 Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Material& material, double max_freq_hz,
-                             const std::string& mesh_spec) {
+                             const std::string& mesh_spec, const TransferSettings* transfer_settings) {
   auto text = [](double v) {  // shortest round-trip form: 0.1, not 0.10000000000000001
     char buffer[32];
     const std::to_chars_result end = std::to_chars(buffer, buffer + sizeof buffer, v);
@@ -84,11 +84,8 @@ Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Materia
     for (std::complex<float>& c : to.coefficients) c *= factor;
     for (double& m : to.translation_dipole_m3) m *= scale * scale * scale;
     out.transfer_seconds = 0.0;
-  } else {
-    TransferSettings air;
-    if (solved.transfer.air_density_kg_m3 > 0) air.air_density_kg_m3 = solved.transfer.air_density_kg_m3;
-    if (solved.transfer.speed_of_sound_m_s > 0) air.speed_of_sound_m_s = solved.transfer.speed_of_sound_m_s;
-    if (Status transfer = solveTransferInto(out, air); !transfer) return transfer.error();
+  } else if (transfer_settings) {
+    if (Status transfer = solveTransferInto(out, *transfer_settings); !transfer) return transfer.error();
   }
   return out;
 }

@@ -16,6 +16,7 @@
 #include "strike/bank.hpp"
 #include "strike/material.hpp"
 #include "strike/result.hpp"
+#include "strike/transfer_solver.hpp"
 
 namespace strike {
 
@@ -24,7 +25,9 @@ namespace strike {
 /// the new object in the bank's provenance (its hash becomes mesh_hash). Fails, naming the value,
 /// when the Poisson ratio differs, the scale is not positive, or the new object needs modes above
 /// the highest one solved (its cut-off would fall above the solved band).
+/// `transfer`: how to solve the acoustic transfer when it cannot be scaled (null: leave it empty
+/// then).
 Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Material& material, double max_freq_hz,
-                             const std::string& mesh_spec);
+                             const std::string& mesh_spec, const TransferSettings* transfer = nullptr);
 
 }  // namespace strike

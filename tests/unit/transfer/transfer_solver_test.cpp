@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "strike/mesh.hpp"
+#include "strike/similar_bank.hpp"
 #include "strike/transfer_solver.hpp"
 
 namespace strike {
@@ -244,6 +245,18 @@ TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
   ASSERT_TRUE(bank) << bank.error().message;
   TransferSettings settings;
   if (const char* max = std::getenv("STRIKE_TRANSFER_MAX_ELEMENTS")) settings.max_elements = std::atoi(max);
+  if (const char* every = std::getenv("STRIKE_TRANSFER_EVERY")) {  // every N-th mode only (N-1, 2N-1, ...)
+    const size_t n = std::max(1, std::atoi(every)), vertices = bank->surfaceVertexCount();
+    ModeBank kept = *bank;
+    kept.eigenvalues.clear();
+    kept.shapes.clear();
+    for (size_t i = n - 1; i < bank->modeCount(); i += n) {
+      kept.eigenvalues.push_back(bank->eigenvalues[i]);
+      kept.shapes.insert(kept.shapes.end(), bank->shapes.begin() + i * vertices * 3,
+                         bank->shapes.begin() + (i + 1) * vertices * 3);
+    }
+    *bank = std::move(kept);
+  }
   std::vector<TransferModeStats> stats;
   const auto start = std::chrono::steady_clock::now();
   Result<AcousticTransfer> t = solveAcousticTransfer(*bank, settings, {}, &stats);
@@ -255,6 +268,51 @@ TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
     std::printf("%3zu %8.1f Hz ka %6.2f elements %4u chief %3u order %3u estimate %7.4f %6.3f s\n", i,
                 bank->frequencyHz(i), stats[i].ka, stats[i].elements, stats[i].chief_points, stats[i].order,
                 stats[i].relative_error, stats[i].seconds);
+}
+}  // namespace
+}  // namespace strike
+
+namespace strike {
+namespace {
+// similarBank() scales the transfer when ka is unchanged (E/rho unchanged): F' = F s^2 / sqrt((rho'/rho)
+// s^3). Checked against a direct solve of the scaled bank.
+TEST(TransferSolver, ASimilarBankScalesItsTransferAsADirectSolveFindsIt) {
+  const double a = 0.05, k = 2.0 / a;
+  ModeBank bank = sphereBank(a, 0.01);
+  bank.material = {"m", 1e10, 0.3, 1000.0, 0, 0};
+  bank.max_freq_hz = 1e9;
+  bank.max_modes = 1;  // capped: every mode up to the cut-off is there
+  addYnmMode(bank, 1, 1, k, kSpeedOfSoundAir_m_s);
+  Result<AcousticTransfer> t = solveAcousticTransfer(bank);
+  ASSERT_TRUE(t) << t.error().message;
+  bank.transfer = *t;
+  const double s = 2.0;
+  const Material heavier{"m2", 3e10, 0.3, 3000.0, 0, 0};  // E/rho unchanged: ka unchanged
+  Result<ModeBank> scaled = similarBank(bank, s, heavier, 1e9, "scaled");
+  ASSERT_TRUE(scaled) << scaled.error().message;
+  ModeBank direct_bank = *scaled;
+  direct_bank.transfer = {};
+  Result<AcousticTransfer> direct = solveAcousticTransfer(direct_bank);
+  ASSERT_TRUE(direct) << direct.error().message;
+  const AcousticTransfer& by_scaling = scaled->transfer;
+  ASSERT_EQ(by_scaling.modeCount(), 1u);
+  double diff = 0, norm = 0;
+  for (uint64_t j = 0; j < std::min(by_scaling.offset[1], direct->offset[1]); ++j) {
+    diff += std::norm(std::complex<double>(by_scaling.coefficients[j]) - std::complex<double>(direct->coefficients[j]));
+    norm += std::norm(std::complex<double>(direct->coefficients[j]));
+  }
+  EXPECT_LT(std::sqrt(diff / norm), 1e-5);
+  EXPECT_NEAR(by_scaling.translation_dipole_m3[0], direct->translation_dipole_m3[0],
+              1e-6 * direct->translation_dipole_m3[0]);
+  // Another E/rho changes ka: solved again when asked, left empty when not.
+  const Material stiffer{"m3", 4e10, 0.3, 1000.0, 0, 0};
+  TransferSettings settings;
+  Result<ModeBank> solved = similarBank(bank, s, stiffer, 1e9, "stiffer", &settings);
+  ASSERT_TRUE(solved) << solved.error().message;
+  EXPECT_EQ(solved->transfer.checkConsistency(1), "");
+  Result<ModeBank> without = similarBank(bank, s, stiffer, 1e9, "stiffer");
+  ASSERT_TRUE(without);
+  EXPECT_TRUE(without->transfer.empty());
 }
 }  // namespace
 }  // namespace strike

@@ -50,6 +50,13 @@ struct StepRecord {
   double time_s;            ///< Begin: end of the step; Contact: time
   double value;             ///< Begin: step length; Contact: normal speed
   double partner_props[4];  ///< Contact: youngs, poisson, radius, mass
+  // Contact, continuous (0.4; all 0 from a 0.3 element): normal force, track speed over the
+  // object and over the partner, patch radius; the point on the partner; the partner's surface
+  // (rms, correlation length, restitution) and its seed.
+  double continuous[4];
+  double partner_point[3];
+  double partner_surface[3];
+  uint64_t partner_seed;
 };
 
 struct AudioSlot {

@@ -532,6 +532,7 @@ STRIKE_API strike_object_config STRIKE_CALL strike_object_config_default(void) {
   c.gain = 1.0f;
   c.radiation = STRIKE_RADIATION_PRESSURE;
   c.internal_cookie = kObjectCookie;
+  c.restitution = 0.5;
   return c;
 }
 
@@ -560,6 +561,15 @@ STRIKE_API strike_status STRIKE_CALL strike_object_add(strike_context ctx, const
     if (!(c.contact_radius_m >= 0.0) || !std::isfinite(c.contact_radius_m))
       return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: contact_radius_m = %g (must be >= 0)",
                   c.contact_radius_m);
+    if (!(c.roughness_rms_m >= 0.0) || !std::isfinite(c.roughness_rms_m) || !(c.roughness_correlation_m >= 0.0) ||
+        !std::isfinite(c.roughness_correlation_m) || (c.roughness_rms_m > 0.0 && !(c.roughness_correlation_m > 0.0)))
+      return fail(ctx, STRIKE_ERR_INVALID_ARG,
+                  "strike_object_add: roughness_rms_m = %g, roughness_correlation_m = %g (must be >= 0, and the "
+                  "correlation length > 0 when the rms is)",
+                  c.roughness_rms_m, c.roughness_correlation_m);
+    if (!(c.restitution >= 0.0 && c.restitution <= 1.0))
+      return fail(ctx, STRIKE_ERR_INVALID_ARG, "strike_object_add: restitution = %g (must be in [0, 1])",
+                  c.restitution);
     uint32_t index = ctx->max_objects;
     for (uint32_t i = 0; i < ctx->max_objects; ++i)
       if (!ctx->main_slots[i].used) {
@@ -577,6 +587,10 @@ STRIKE_API strike_status STRIKE_CALL strike_object_add(strike_context ctx, const
     if (c.radiation == STRIKE_RADIATION_PRESSURE) desc.pressure_scale = 1.0 / ctx->config.output_full_scale_pa;
     desc.is_static = c.is_static != 0;
     desc.contact_radius_m = c.contact_radius_m;
+    desc.roughness.rms_m = c.roughness_rms_m;
+    desc.roughness.correlation_m = c.roughness_correlation_m;
+    desc.roughness.seed = c.roughness_seed;
+    desc.restitution = c.restitution;
     desc.pose = pose;
     desc.gain = c.gain;
     void* mem = ctx->allocArray<Voice>(1);

@@ -5,6 +5,7 @@
 // Nothing here allocates, locks or throws once the context exists.
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 
 #include "capi_internal.hpp"
@@ -14,6 +15,12 @@ namespace strike::detail {
 namespace {
 
 bool finite3(const double* v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
+
+double length3(const double* v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+// strike_contact's layouts: 0.3's ends before the continuous-contact fields; 0.4's after them.
+constexpr size_t kContactSize03 = offsetof(strike_contact, normal_force_n);
+constexpr size_t kContactSize04 = offsetof(strike_contact, partner_restitution) + sizeof(double);
 
 /// The engine slot of a live object on the audio thread, or kNoVoice.
 uint32_t audioSlot(strike_context ctx, strike_object_id id) {
@@ -107,6 +114,15 @@ void applyStepRecord(strike_context ctx, const StepRecord& r) {
       c.partner.radius_m = r.partner_props[2];
       c.partner.mass_kg = r.partner_props[3];
       c.partner.voice = audioSlot(ctx, r.partner);
+      c.normal_force_n = r.continuous[0];
+      c.track_speed_m_s = r.continuous[1];
+      c.partner_track_speed_m_s = r.continuous[2];
+      c.patch_radius_m = r.continuous[3];
+      std::copy(r.partner_point, r.partner_point + 3, c.partner_point.begin());
+      c.partner.roughness.rms_m = r.partner_surface[0];
+      c.partner.roughness.correlation_m = r.partner_surface[1];
+      c.partner.roughness.seed = r.partner_seed;
+      c.partner.restitution = r.partner_surface[2];
       engine.contact(c);
       break;
     }
@@ -180,6 +196,7 @@ STRIKE_API strike_contact STRIKE_CALL strike_contact_default(void) {
   c.frame = STRIKE_FRAME_OBJECT;
   c.time_s = -1.0;
   c.partner_poisson = 0.3;
+  c.partner_restitution = 0.5;
   return c;
 }
 
@@ -197,9 +214,11 @@ STRIKE_API strike_status STRIKE_CALL strike_step(strike_context ctx, const strik
   // No allocation and nothing that throws: no guard needed, and none wanted on this path.
   if (!ctx || !step) return STRIKE_ERR_INVALID_ARG;
   const strike_step_desc& d = *step;
-  // 0.3 is the first layout: a newer caller's larger elements are read by their stride.
+  // 0.3 is the first layout: a newer caller's larger elements are read by their stride. A
+  // contact is 0.3's (without the continuous-contact fields) or 0.4's or larger.
+  const bool continuous = d.contact_size >= kContactSize04;
   if (d.struct_size < sizeof(strike_step_desc) || d.state_size < sizeof(strike_body_state) ||
-      d.contact_size < sizeof(strike_contact) || (d.state_count > 0 && !d.states) ||
+      (d.contact_size != kContactSize03 && !continuous) || (d.state_count > 0 && !d.states) ||
       (d.contact_count > 0 && !d.contacts) || !std::isfinite(d.end_time_s) || !(d.duration_s > 0.0) ||
       !std::isfinite(d.duration_s))
     return STRIKE_ERR_INVALID_ARG;
@@ -221,6 +240,13 @@ STRIKE_API strike_status STRIKE_CALL strike_step(strike_context ctx, const strik
     if (!finite3(c.point) || !finite3(c.impulse) || !std::isfinite(c.normal_speed_m_s) || !std::isfinite(c.time_s) ||
         (c.frame != STRIKE_FRAME_OBJECT && c.frame != STRIKE_FRAME_WORLD) || !std::isfinite(c.partner_youngs_pa) ||
         !std::isfinite(c.partner_poisson) || !std::isfinite(c.partner_radius_m) || !std::isfinite(c.partner_mass_kg))
+      return STRIKE_ERR_INVALID_ARG;
+    if (continuous &&
+        (!(c.normal_force_n >= 0.0) || !std::isfinite(c.normal_force_n) || !finite3(c.slip_velocity_m_s) ||
+         !finite3(c.rolling_velocity_m_s) || !finite3(c.partner_point) || !(c.patch_radius_m >= 0.0) ||
+         !std::isfinite(c.patch_radius_m) || !(c.partner_roughness_rms_m >= 0.0) ||
+         !std::isfinite(c.partner_roughness_rms_m) || !(c.partner_roughness_correlation_m >= 0.0) ||
+         !std::isfinite(c.partner_roughness_correlation_m) || !std::isfinite(c.partner_restitution)))
       return STRIKE_ERR_INVALID_ARG;
   }
   StepRecord r;
@@ -258,6 +284,27 @@ STRIKE_API strike_status STRIKE_CALL strike_step(strike_context ctx, const strik
     r.partner_props[1] = c.partner_poisson;
     r.partner_props[2] = c.partner_radius_m;
     r.partner_props[3] = c.partner_mass_kg;
+    if (continuous) {
+      // The point travels |rolling| over the object and |rolling + slip| over the partner.
+      const double over_partner[3] = {c.rolling_velocity_m_s[0] + c.slip_velocity_m_s[0],
+                                      c.rolling_velocity_m_s[1] + c.slip_velocity_m_s[1],
+                                      c.rolling_velocity_m_s[2] + c.slip_velocity_m_s[2]};
+      r.continuous[0] = c.normal_force_n;
+      r.continuous[1] = length3(c.rolling_velocity_m_s);
+      r.continuous[2] = length3(over_partner);
+      r.continuous[3] = c.patch_radius_m;
+      std::copy(c.partner_point, c.partner_point + 3, r.partner_point);
+      r.partner_surface[0] = c.partner_roughness_rms_m;
+      r.partner_surface[1] = c.partner_roughness_correlation_m;
+      r.partner_surface[2] = c.partner_restitution;
+      r.partner_seed = c.partner_roughness_seed;
+    } else {
+      std::fill(r.continuous, r.continuous + 4, 0.0);
+      std::fill(r.partner_point, r.partner_point + 3, 0.0);
+      r.partner_surface[0] = r.partner_surface[1] = 0.0;
+      r.partner_surface[2] = 0.5;
+      r.partner_seed = 0;
+    }
     full = !ctx->steps.push(r);
     if (!full) ctx->counters.contacts_queued.fetch_add(1, std::memory_order_relaxed);
   }

@@ -520,6 +520,12 @@ TEST(CApiStep, InvalidStepsAreRefusedAndNothingIsQueued) {
   refused("struct_size 0", [](strike_step_desc& s) { s.struct_size = 0; });
   refused("state_size too small", [](strike_step_desc& s) { s.state_size = sizeof(strike_body_state) - 8; });
   refused("contact_size too small", [](strike_step_desc& s) { s.contact_size = sizeof(strike_contact) - 8; });
+  refused("contact_size below 0.3's",
+          [](strike_step_desc& s) { s.contact_size = offsetof(strike_contact, normal_force_n) - 8; });
+  refused("normal force < 0", [&](strike_step_desc&) { c.normal_force_n = -1.0; });
+  refused("slip NaN", [&](strike_step_desc&) { c.slip_velocity_m_s[1] = NAN; });
+  refused("rolling inf", [&](strike_step_desc&) { c.rolling_velocity_m_s[0] = INFINITY; });
+  refused("partner roughness < 0", [&](strike_step_desc&) { c.partner_roughness_rms_m = -1e-6; });
   refused("contacts NULL", [](strike_step_desc& s) { s.contacts = nullptr; });
   refused("states NULL", [](strike_step_desc& s) { s.states = nullptr; });
   refused("end_time_s NaN", [](strike_step_desc& s) { s.end_time_s = NAN; });
@@ -552,6 +558,81 @@ TEST(CApiStep, InvalidStepsAreRefusedAndNothingIsQueued) {
   s = statsOf(game.ctx);
   EXPECT_EQ(s.steps, 2u);
   EXPECT_EQ(s.contacts_queued, 1u);
+}
+
+// A 1 kg steel box sliding at 0.3 m/s on a steel floor for 2 s, reported every 1/60 s with a
+// steady load on its four corners: rough surfaces sound the whole time it slides when the 0.4
+// continuous-contact fields are given; a 0.3-sized element (read without them) and a normal
+// force of 0 give the steady load's silence, byte for byte the same.
+std::vector<float> slidingBox(size_t contact_size, double normal_force_scale) {
+  Game game(boxBank());
+  strike_object_config oc = strike_object_config_default();
+  oc.bank = game.bank;
+  oc.roughness_rms_m = 4e-7;  // ground steel (assets/materials.json)
+  oc.roughness_correlation_m = 1e-5;
+  oc.roughness_seed = 7;
+  oc.restitution = 0.6;
+  strike_object_id box{0, 0};
+  EXPECT_EQ(strike_object_add(game.ctx, &oc, &box), STRIKE_OK) << strike_context_last_error(game.ctx);
+  const double listener[3] = {0.0, -1.0, 0.3}, identity[4] = {1, 0, 0, 0};
+  EXPECT_EQ(strike_listener_set_pose(game.ctx, listener, identity), STRIKE_OK);
+  const double frame_s = 1.0 / 60.0, speed = 0.3, m = 1.0, g = 9.81, duration = 2.0;
+  const std::array<std::array<double, 3>, 4> corners = {
+      {{-0.05, -0.05, 0}, {0.05, -0.05, 0}, {-0.05, 0.05, 0}, {0.05, 0.05, 0}}};
+  std::vector<unsigned char> bytes(4 * contact_size);
+  for (double t = frame_s; t <= duration + 1e-9; t += frame_s) {
+    strike_body_state state{};
+    state.object = box;
+    state.position[0] = speed * t;
+    state.orientation[0] = 1.0;
+    for (size_t k = 0; k < 4; ++k) {
+      strike_contact c = strike_contact_default();
+      c.object = box;
+      for (int i = 0; i < 3; ++i) c.point[i] = corners[k][i];
+      c.impulse[0] = -0.4 * m * g * 0.25 * frame_s;  // kinetic friction against the motion
+      c.impulse[2] = m * g * 0.25 * frame_s;
+      c.normal_force_n = normal_force_scale * m * g * 0.25;
+      c.slip_velocity_m_s[0] = speed;  // the box's surface over the floor; the point moves with the box
+      for (int i = 0; i < 3; ++i) c.partner_point[i] = corners[k][i] + state.position[i];
+      c.partner_roughness_rms_m = 4e-7;
+      c.partner_roughness_correlation_m = 1e-5;
+      c.partner_roughness_seed = 11;
+      c.partner_restitution = 0.6;
+      std::memcpy(bytes.data() + k * contact_size, &c, contact_size);
+    }
+    strike_step_desc step = strike_step_desc_default();
+    step.end_time_s = t;
+    step.duration_s = frame_s;
+    step.states = &state;
+    step.state_count = 1;
+    step.contacts = reinterpret_cast<const strike_contact*>(bytes.data());
+    step.contact_count = 4;
+    step.contact_size = static_cast<uint32_t>(contact_size);
+    EXPECT_EQ(strike_step(game.ctx, &step), STRIKE_OK);
+    game.renderTo(static_cast<size_t>(std::floor((t - frame_s) * kRate)));
+  }
+  game.renderAll(static_cast<size_t>(duration * kRate));
+  return game.out;
+}
+
+TEST(CApiStep, ABoxSlidingOnARoughFloorIsHeardOnlyWithTheContinuousContactFields) {
+  const size_t size03 = offsetof(strike_contact, normal_force_n);
+  const std::vector<float> sliding = slidingBox(sizeof(strike_contact), 1.0);
+  const std::vector<float> old_layout = slidingBox(size03, 1.0);
+  const std::vector<float> no_force = slidingBox(sizeof(strike_contact), 0.0);
+  auto rms = [](const std::vector<float>& x, double a, double b) {
+    double sum = 0.0;
+    const size_t n0 = static_cast<size_t>(a * kRate), n1 = static_cast<size_t>(b * kRate);
+    for (size_t n = n0; n < n1; ++n) sum += double(x[n]) * x[n];
+    return std::sqrt(sum / double(n1 - n0));
+  };
+  const double heard = rms(sliding, 0.5, 1.9), silent = rms(no_force, 0.5, 1.9);
+  // Output 1.0 = 20 Pa = 120 dB SPL.
+  std::printf("sliding box: %.1f dB SPL with the 0.4 fields, %.1f dB SPL without\n",
+              120 + 20 * std::log10(std::max(heard, 1e-30)), 120 + 20 * std::log10(std::max(silent, 1e-30)));
+  EXPECT_GT(heard, 1e-5);             // above 20 dB SPL
+  EXPECT_GT(heard, 1000.0 * silent);  // 60 dB over the steady load's silence
+  EXPECT_EQ(old_layout, no_force);    // a 0.3 element is read without the new fields
 }
 
 TEST(CApiStep, ContactsOnStaleObjectsAreCountedWhenRendered) {

@@ -70,6 +70,10 @@ class LibraryOutput final : public SoundOutput {
     config.gain = gain_;
     config.contact_radius_m = voice.contact_radius_m;
     config.is_static = voice.is_static ? 1 : 0;
+    config.roughness_rms_m = voice.roughness.rms_m;
+    config.roughness_correlation_m = voice.roughness.correlation_m;
+    config.roughness_seed = voice.roughness.seed;
+    config.restitution = voice.restitution;
     strike_object_id id{};
     if (strike_object_add(ctx_, &config, &id) != STRIKE_OK)
       return badInput("objects \"" + name + "\": --via-library: " + strike_context_last_error(ctx_));
@@ -113,6 +117,17 @@ class LibraryOutput final : public SoundOutput {
     c.partner_poisson = from.partner.poisson;
     c.partner_radius_m = from.partner.radius_m;
     c.partner_mass_kg = from.partner.mass_kg;
+    // Rolling, sliding and scraping. A physics engine gives velocities; the render has the speeds
+    // at which the point travels over each surface, which are these vectors' lengths.
+    c.normal_force_n = from.normal_force_n;
+    c.rolling_velocity_m_s[0] = from.track_speed_m_s;
+    c.slip_velocity_m_s[0] = from.partner_track_speed_m_s - from.track_speed_m_s;
+    for (int k = 0; k < 3; ++k) c.partner_point[k] = from.partner_point[k];
+    c.patch_radius_m = from.patch_radius_m;
+    c.partner_roughness_rms_m = from.partner.roughness.rms_m;
+    c.partner_roughness_correlation_m = from.partner.roughness.correlation_m;
+    c.partner_roughness_seed = from.partner.roughness.seed;
+    c.partner_restitution = from.partner.restitution;
     contacts_.push_back(c);
   }
 

@@ -33,6 +33,12 @@
  *    from the object to the listener in the object's frame; free objects click when struck
  *    (acceleration noise: a 5 mm steel ball with no audible mode is heard); and a ground
  *    reflection (strike_context_config.ground_*, new, last fields; off by default).
+ *  - Rolling, sliding and scraping (docs/contact.md): strike_contact gains, at its end,
+ *    normal_force_n, slip_velocity_m_s, rolling_velocity_m_s, partner_point, patch_radius_m and
+ *    the partner's roughness and restitution (read only when strike_step_desc.contact_size
+ *    covers them); strike_object_config gains roughness_rms_m, roughness_correlation_m,
+ *    roughness_seed and restitution (last fields). A contact with a normal force whose surfaces
+ *    move over each other sounds while it moves; without them, contacts sound as in 0.3.
  *
  * Changes in 0.3 (recompile: the soname is now libstrike.so.0.3; see src/capi/README.md):
  *  - One sound engine with `strike render`: the same contact scheduling, listener model and
@@ -378,6 +384,15 @@ typedef struct strike_object_config {
    *  and it keeps carrying the load of objects that fall asleep on it. Default 0. */
   int32_t is_static;
   int32_t internal_cookie; /**< set by strike_object_config_default(); do not touch */
+  /** (0.4) Its surface's roughness for rolling, sliding and scraping (strike_contact's
+   *  normal_force_n): rms height R_q and correlation length of the profile, m; the materials'
+   *  values are in assets/materials.json (`strike modes --list-materials`). rms 0 (default):
+   *  smooth. The seed names the surface: the same seed, the same profile (default 0; give each
+   *  object its own). */
+  double roughness_rms_m;
+  double roughness_correlation_m;
+  uint64_t roughness_seed;
+  double restitution; /**< of its material on itself: damps the contact's resonance; default 0.5 */
 } strike_object_config;
 
 /** Defaults (see each field). [any-thread] */
@@ -495,6 +510,30 @@ typedef struct strike_contact {
   double partner_poisson;
   double partner_radius_m;
   double partner_mass_kg;
+  /* (0.4) Continuous contact: rolling, sliding, scraping (docs/contact.md). Read only when the
+   * step's contact_size covers them (a smaller, older element is read without them). A point
+   * with normal_force_n > 0 whose surfaces move over each other drives the object's modes with
+   * the force of their roughness (both objects need a roughness, or the partner's fields). */
+  /** Mean normal force on this point over the step, N (>= 0). 0 (default): no continuous sound. */
+  double normal_force_n;
+  /** Velocity of the object's surface relative to the partner's at the point, in the tangent
+   *  plane, m/s (0 while they stick: resting, rolling without slip). Same frame as point. */
+  double slip_velocity_m_s[3];
+  /** Velocity at which the contact point travels over the object's own surface, in the tangent
+   *  plane, m/s: a ball rolling at v, v; a block sliding, 0. Only the lengths are used: the
+   *  point travels |rolling| over the object and |rolling + slip| over the partner. */
+  double rolling_velocity_m_s[3];
+  /** The point in the partner's mesh frame (in the world for a partner {0, 0}), m: where the
+   *  partner's roughness is read, so the same spot sounds the same. */
+  double partner_point[3];
+  /** Hertz contact radius, m; 0 (default): from the normal force. */
+  double patch_radius_m;
+  /** The partner's surface when it is not an object (partner {0, 0}); an object's come from its
+   *  strike_object_config. rms 0 (default): smooth. The seed names the surface (0 default). */
+  double partner_roughness_rms_m;
+  double partner_roughness_correlation_m;
+  uint64_t partner_roughness_seed;
+  double partner_restitution; /**< damps the contact's resonance; default 0.5 */
 } strike_contact;
 
 /** Defaults (see each field). [any-thread] */

@@ -177,6 +177,7 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
                bank.meshing_seconds, bank.assembly_seconds, bank.factorize_seconds, bank.lanczos_seconds,
                bank.total_seconds);
   if (!bank.transfer.empty()) {
+    const double target = settings.transfer.target_relative_error;
     float worst = 0.0f;
     size_t worst_mode = 0;
     for (size_t i = 0; i < bank.transfer.relative_error.size(); ++i)
@@ -186,6 +187,13 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
                  "%s\n",
                  bank.transfer_seconds, bank.transfer.maxOrder(), 100.0 * worst, worst_mode,
                  bank.modeCount() > worst_mode ? bank.frequencyHz(worst_mode) : 0.0, bank.transfer.method.c_str());
+    size_t over = 0;
+    for (float e : bank.transfer.relative_error) over += e > target ? 1 : 0;
+    if (over > 0)
+      std::fprintf(stderr,
+                   "  note        the transfer of %zu of %zu modes is estimated worse than its target %.3g%%: the "
+                   "element budget (%u) stops it short (docs/acoustic-transfer.md)\n",
+                   over, bank.modeCount(), 100.0 * target, settings.transfer.max_elements);
   }
   const std::vector<double>& error = bank.frequency_error_estimate;
   if (!error.empty()) {
@@ -252,6 +260,9 @@ Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSe
     return badInput("--tolerance needs the error estimate; drop --no-error-estimate");
   ToleranceOptions options;
   options.tolerance = *tolerance;
+  // The transfer, when asked for, aims at the same relative error (its far field's, rms over
+  // directions); its element budget may stop it short, and the summary says where.
+  settings.transfer.target_relative_error = *tolerance;
   if (args.has("--max-memory")) {
     // The same sizes as `strike cache` and `render --cache-max-size` (K, M, G, T: powers of 1024).
     Result<uint64_t> bytes = parseByteSize(args.text("--max-memory"), "--max-memory");

@@ -263,6 +263,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   body.precompute.max_modes = scene.max_modes;
   body.precompute.max_tets = settings.max_tets;
   body.precompute.progress = settings.progress;
+  body.precompute.acoustic_transfer = settings.acoustic_transfer;
   Result<uint64_t> hash = meshHash(object.mesh);
   if (!hash) return hash.error();
   if (settings.similar_reuse) return prepareSimilarBody(settings, *hash, body, loaded_by_key, report);

@@ -36,10 +36,10 @@ CommandSpec hitSpec() {
       {"--format", "pcm16|pcm24|float", "sample encoding; default float for .wav, pcm24 for .flac"},
       {"--distance", "M",
        "listener distance from the object's centre of mass, on the side struck, m; default 1\n"
-       "(sets level, delay and, with a bank of format 5, the direction heard)"},
+       "(sets level, delay and, with a bank that has an acoustic transfer, the direction heard)"},
       {"--listener", "X,Y,Z",
-       "the listener at X,Y,Z (metres, mesh frame) instead of --distance: banks of format 5\n"
-       "sound different in every direction (each mode's far field)"},
+       "the listener at X,Y,Z (metres, mesh frame) instead of --distance: a bank with an acoustic\n"
+       "transfer (strike modes --transfer) sounds different in every direction"},
       {"--gain", "G", "multiply the output (1.0 full scale = 20 Pa); default 1"},
       {"--contact-time", "S", "force pulse duration, s (0 = ideal impulse); default from Hertz theory"},
       {"--striker", "MATERIAL", "striker sphere material for the Hertz contact time; default steel"},

@@ -66,6 +66,11 @@ CommandSpec modesSpec() {
       {"--compact", "",
        "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
        "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
+      {"--transfer", "",
+       "also solve each mode's acoustic transfer (its far field in every direction, with the body\n"
+       "as an obstacle: boundary elements; docs/listener.md): renders then hear each impact in the\n"
+       "listener's direction, and the same object solved twice sounds the same. Costs 1x to 16x\n"
+       "the eigen-solve (docs/acoustic-transfer.md)"},
       {"--similar", "",
        "solve the shape at unit size with a reference material and scale the bank to the object,\n"
        "as `strike render --similar` does: the bank that render uses (frequencies equal to a\n"
@@ -171,6 +176,25 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
   std::fprintf(stderr, "  time        mesh %.2f s, assemble %.2f s, factorize %.2f s, Lanczos %.2f s, total %.2f s\n",
                bank.meshing_seconds, bank.assembly_seconds, bank.factorize_seconds, bank.lanczos_seconds,
                bank.total_seconds);
+  if (!bank.transfer.empty()) {
+    const double target = settings.transfer.target_relative_error;
+    float worst = 0.0f;
+    size_t worst_mode = 0;
+    for (size_t i = 0; i < bank.transfer.relative_error.size(); ++i)
+      if (bank.transfer.relative_error[i] > worst) worst = bank.transfer.relative_error[i], worst_mode = i;
+    std::fprintf(stderr,
+                 "  transfer    %.2f s (of the total), order up to %u, est. error max %.3g%% (mode %zu, %.2f Hz); "
+                 "%s\n",
+                 bank.transfer_seconds, bank.transfer.maxOrder(), 100.0 * worst, worst_mode,
+                 bank.modeCount() > worst_mode ? bank.frequencyHz(worst_mode) : 0.0, bank.transfer.method.c_str());
+    size_t over = 0;
+    for (float e : bank.transfer.relative_error) over += e > target ? 1 : 0;
+    if (over > 0)
+      std::fprintf(stderr,
+                   "  note        the transfer of %zu of %zu modes is estimated worse than its target %.3g%%: the "
+                   "element budget (%u) stops it short (docs/acoustic-transfer.md)\n",
+                   over, bank.modeCount(), 100.0 * target, settings.transfer.max_elements);
+  }
   const std::vector<double>& error = bank.frequency_error_estimate;
   if (!error.empty()) {
     size_t worst = 0;
@@ -236,6 +260,9 @@ Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSe
     return badInput("--tolerance needs the error estimate; drop --no-error-estimate");
   ToleranceOptions options;
   options.tolerance = *tolerance;
+  // The transfer, when asked for, aims at the same relative error (its far field's, rms over
+  // directions); its element budget may stop it short, and the summary says where.
+  settings.transfer.target_relative_error = *tolerance;
   if (args.has("--max-memory")) {
     // The same sizes as `strike cache` and `render --cache-max-size` (K, M, G, T: powers of 1024).
     Result<uint64_t> bytes = parseByteSize(args.text("--max-memory"), "--max-memory");
@@ -309,6 +336,7 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (*order != 1 && *order != 2)
     return reportError("modes", badInput("--order = " + args.text("--order") + " (must be 1 or 2)"));
   settings.order = static_cast<int>(*order);
+  settings.acoustic_transfer = args.has("--transfer");
   Result<double> size = args.number("--size", 0.0);
   if (!size) return reportError("modes", size.error());
   if (args.has("--size") && !(*size > 0))

@@ -41,6 +41,10 @@ CommandSpec renderSpec() {
        "after the render, remove the least recently used banks until the cache fits\n"
        "in SIZE (e.g. 500M, 2G; 0 = no cap); default 2G. See `strike cache`"},
       {"--max-tets", "N", "refuse object meshes with more tets than this (memory cap); default 2000000"},
+      {"--transfer", "",
+       "solve the acoustic transfer of every bank computed (as `strike modes --transfer`): each\n"
+       "impact is heard in the listener's direction, and the sound no longer depends on the\n"
+       "eigen-solver's choice of signs; costs 1x to 16x the eigen-solve per bank (cached)"},
       {"--similar", "",
        "exact similarity reuse: solve each shape once at unit size and scale it to every size and\n"
        "material (same Poisson ratio) of the scene and the cache (docs/datasets.md); changes the\n"
@@ -187,6 +191,7 @@ int runRender(const std::vector<std::string>& raw_args) {
   settings.simd = *simd;
   if (args.has("--via-library")) settings.output = libraryOutput(settings.gain);
   settings.similar_reuse = args.has("--similar");
+  settings.acoustic_transfer = args.has("--transfer");
   settings.cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
   if (args.has("--cache-max-size")) {
     Result<uint64_t> cap = parseByteSize(args.text("--cache-max-size"), "--cache-max-size");

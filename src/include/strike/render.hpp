@@ -85,6 +85,8 @@ struct RenderSettings {
   /// leave_nothing_out), so its renders differ from those without it in the polarity of some modes
   /// (the same modes, frequencies equal to 2e-12) and the committed golden renders would not match.
   bool similar_reuse = false;
+  /// Banks computed by this render get an acoustic transfer (PrecomputeSettings::acoustic_transfer).
+  bool acoustic_transfer = false;
   /// Physics step, s (at most 1 ms, what the issue allows). Contact times fall on this grid, so an
   /// impact is placed within one step (48 samples at 48 kHz); 1 ms halves the simulation cost of
   /// the 0.5 ms step used before (`strike bench render` measures both).

@@ -68,7 +68,7 @@ def test_render_equals_the_cli_byte_for_byte(repo, cli, cache_dir, tmp_path):
     header = csv.read_text().splitlines()[0].split(",")
     assert header.index("step_time_s") == 19 and header[20:] == [
         "normal_force_n", "slip_x_m_s", "slip_y_m_s", "slip_z_m_s", "rolling_speed_m_s",
-        "track_speed_a_m_s", "track_speed_b_m_s", "patch_radius_m"]
+        "track_speed_a_m_s", "track_speed_b_m_s", "patch_radius_m", "motion"]
     np.testing.assert_allclose(result.events["normal_force_n"], [float(row[20]) for row in rows], rtol=1e-8)
     np.testing.assert_allclose(result.events["slip_velocity_m_s"][:, 0], [float(row[21]) for row in rows], rtol=1e-8, atol=1e-12)
     np.testing.assert_allclose(result.events["patch_radius_m"], [float(row[27]) for row in rows], rtol=1e-8)

@@ -22,6 +22,7 @@
 #include "strike/atomic_file.hpp"
 #include "strike/bank.hpp"
 #include "strike/bank_cache.hpp"
+#include "strike/contact_noise.hpp"
 #include "strike/materials.hpp"
 #include "strike/normalized_problem.hpp"
 #include "strike/precompute.hpp"
@@ -726,25 +727,39 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   return result;
 }
 
+// The events CSV's marker of continuous contact (docs/cli.md): whether the surfaces roll and/or
+// slide over each other, by the speed below which a rough contact is still
+// (RoughContact::kStillSpeed_m_s); "rest" otherwise, impacts included.
+namespace {
+const char* motionOf(const ContactEvent& e) {
+  const double still = RoughContact::kStillSpeed_m_s;
+  const double slip =
+      std::sqrt(e.slip_velocity_m_s[0] * e.slip_velocity_m_s[0] + e.slip_velocity_m_s[1] * e.slip_velocity_m_s[1] +
+                e.slip_velocity_m_s[2] * e.slip_velocity_m_s[2]);
+  const bool rolling = e.rolling_speed_m_s >= still, sliding = slip >= still;
+  return rolling && sliding ? "rolling+sliding" : rolling ? "rolling" : sliding ? "sliding" : "rest";
+}
+}  // namespace
+
 Status writeEventsCsv(const std::string& path, const RenderResult& result) {
   std::string csv =
       "time_s,body_a,body_b,new_contact,normal_speed_m_s,normal_impulse_n_s,friction_impulse_n_s,"
       "point_x_m,point_y_m,point_z_m,normal_x,normal_y,normal_z,"
       "point_a_mesh_x,point_a_mesh_y,point_a_mesh_z,point_b_mesh_x,point_b_mesh_y,point_b_mesh_z,step_time_s,"
       "normal_force_n,slip_x_m_s,slip_y_m_s,slip_z_m_s,rolling_speed_m_s,track_speed_a_m_s,track_speed_b_m_s,"
-      "patch_radius_m\n";
+      "patch_radius_m,motion\n";
   auto name = [&](uint32_t index) { return index == kGroundBody ? std::string("ground") : result.body_names[index]; };
   char line[1024];
   for (const ContactEvent& e : result.events) {
     std::snprintf(line, sizeof line,
                   ",%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g"
-                  ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n",
+                  ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%s\n",
                   e.new_contact ? 1 : 0, e.normal_speed_m_s, e.normal_impulse_n_s, e.friction_impulse_n_s,
                   e.point_world[0], e.point_world[1], e.point_world[2], e.normal_world[0], e.normal_world[1],
                   e.normal_world[2], e.point_a_mesh[0], e.point_a_mesh[1], e.point_a_mesh[2], e.point_b_mesh[0],
                   e.point_b_mesh[1], e.point_b_mesh[2], e.step_time_s, e.normal_force_n, e.slip_velocity_m_s[0],
                   e.slip_velocity_m_s[1], e.slip_velocity_m_s[2], e.rolling_speed_m_s, e.track_speed_a_m_s,
-                  e.track_speed_b_m_s, e.patch_radius_m);
+                  e.track_speed_b_m_s, e.patch_radius_m, motionOf(e));
     char time[64];
     std::snprintf(time, sizeof time, "%.9g,", e.time_s);
     csv += time + name(e.body_a) + "," + name(e.body_b) + line;

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -389,6 +390,24 @@ TEST_F(BarDrop, EventLogHasTheFirstImpactAtFreeFallTime) {
   const double t = std::stod(first.substr(0, first.find(',')));
   EXPECT_NEAR(t, std::sqrt(2 * 0.139 / 9.81), 0.01);
   EXPECT_NE(first.find(",bar,ground,"), std::string::npos) << first;
+}
+
+// The last column marks rolling and sliding contacts (docs/cli.md): a word per row, by the
+// same 1 mm/s the rough contacts use; the bar settling on the ground slides somewhere.
+TEST_F(BarDrop, EventLogMarksRollingAndSlidingContacts) {
+  std::ifstream in(events_);
+  std::string header, row;
+  std::getline(in, header);
+  ASSERT_GE(header.size(), 22u);
+  EXPECT_EQ(header.substr(header.size() - 22), ",patch_radius_m,motion") << header;
+  std::map<std::string, int> count;
+  while (std::getline(in, row)) ++count[row.substr(row.rfind(',') + 1)];
+  for (const auto& [word, n] : count) {
+    std::printf("  motion %s: %d events\n", word.c_str(), n);
+    EXPECT_TRUE(word == "rest" || word == "rolling" || word == "sliding" || word == "rolling+sliding") << word;
+  }
+  EXPECT_GT(count["sliding"] + count["rolling+sliding"], 0);
+  EXPECT_GT(count["rest"], 0);
 }
 
 // The bar of bar-drop.json dropped flat from rest, its underside at h: it meets the ground at

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -50,7 +51,9 @@ std::vector<EventRow> readEvents(const std::string& path) {
     row.time_s = std::stod(field);
     std::getline(fields, row.body_a, ',');
     std::getline(fields, row.body_b, ',');
-    while (std::getline(fields, field, ',')) row.fields.push_back(std::stod(field));
+    // The numeric columns; the last, motion, is a word (rest, rolling, sliding, rolling+sliding).
+    while (std::getline(fields, field, ','))
+      if (!field.empty() && !std::isalpha(static_cast<unsigned char>(field[0]))) row.fields.push_back(std::stod(field));
     rows.push_back(row);
   }
   return rows;

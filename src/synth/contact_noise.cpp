@@ -39,7 +39,8 @@ uint64_t mix64(uint64_t z) {  // splitmix64 finalizer
 // Zero mean, unit variance (uniform on +-sqrt 3): the profile's spectrum needs only the first two
 // moments, and the sum over many cells is Gaussian.
 double cellNoise(uint64_t seed, int level, const int64_t cell[3]) {
-  uint64_t k = mix64(seed ^ static_cast<uint64_t>(static_cast<int64_t>(level) * 0x632be59bd9b4e019ll));
+  // Unsigned: the product wraps by definition (signed overflow is undefined; UBSan found it).
+  uint64_t k = mix64(seed ^ (static_cast<uint64_t>(static_cast<int64_t>(level)) * 0x632be59bd9b4e019ull));
   k = mix64(k ^ static_cast<uint64_t>(cell[0]));
   k = mix64(k ^ static_cast<uint64_t>(cell[1]));
   k = mix64(k ^ static_cast<uint64_t>(cell[2]));
@@ -138,7 +139,11 @@ void RoughContact::advanceTrack(Track& t, const SurfaceRoughness& r, const std::
                                 double cell_m, int level) {
   if (!(r.rms_m > 0.0)) return;
   int64_t cell[3];
-  for (int k = 0; k < 3; ++k) cell[k] = static_cast<int64_t>(std::floor(spot[k] / cell_m));
+  for (int k = 0; k < 3; ++k) {
+    // Clamped before the conversion: an absurd position (hostile input) must not overflow it.
+    const double index = std::floor(spot[k] / cell_m);
+    cell[k] = index > -4e18 && index < 4e18 ? static_cast<int64_t>(index) : 0;  // NaN -> 0
+  }
   if (!t.placed || t.cell_m != cell_m) {
     t.placed = true;
     t.cell_m = cell_m;

@@ -76,8 +76,8 @@ void SoundEngine::continuousContact(Voice& v, const EngineContact& c, const std:
     // The delay from where the pair started stays the source's for its life: a sliding body's
     // path length changes by metres per second only, and moving the delay would need resampling.
     Arrival paths[2];
-    if (v.pressure_) arrivals(v, world, paths);
-    source->delay_s = v.pressure_ ? paths[0].delay_s : delayTo(world);
+    arrivals(v, world, paths);
+    source->delay_s = paths[0].delay_s;
     source->stepped = false;
     ++stats_.continuous_contacts;
   }

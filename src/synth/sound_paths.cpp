@@ -50,7 +50,7 @@ int SoundEngine::arrivals(const Voice& v, const std::array<double, 3>& world_poi
   out[0].gain = 1.0;
   out[0].direction = direction(listener);
   const GroundReflection& g = settings_.ground;
-  if (!g.enabled) return 1;
+  if (!g.enabled || !v.pressure_) return 1;  // a voice whose output is not pressure has no image
   const std::array<double, 3>& n = g.normal;
   const double listener_height = n[0] * listener[0] + n[1] * listener[1] + n[2] * listener[2] - g.height_m;
   const double body_height =
@@ -85,8 +85,7 @@ bool SoundEngine::radiationToward(Voice& v, const Arrival& a) {
 void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
                                  const std::array<double, 3>& world_point, const std::array<double, 3>& impulse_local) {
   Arrival paths[2];
-  const int count = v.pressure_ ? arrivals(v, world_point, paths) : 1;
-  if (!v.pressure_) paths[0].delay_s = delayTo(world_point);
+  const int count = arrivals(v, world_point, paths);
   for (int k = 0; k < count; ++k) {
     ImpactDesc impact;
     impact.object = 0;
@@ -111,8 +110,7 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
 void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double time_s, double ramp_s,
                                     const std::array<double, 3>& world_point) {
   Arrival paths[2];
-  const int count = v.pressure_ ? arrivals(v, world_point, paths) : 1;
-  if (!v.pressure_) paths[0].delay_s = delayTo(world_point);
+  const int count = arrivals(v, world_point, paths);
   for (int k = 0; k < count; ++k) {
     ForceStepDesc step;
     step.object = 0;

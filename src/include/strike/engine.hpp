@@ -334,7 +334,8 @@ class SoundEngine {
   void resetContinuous(Voice& v);
   double delayTo(const std::array<double, 3>& world_point) const;
   /// The paths from a voice's source point to the listener: the direct one and, with a ground,
-  /// its image (radiation.cpp). Returns how many (1 or 2).
+  /// its image (sound_paths.cpp; only for a voice whose output is pressure). Returns how many (1
+  /// or 2).
   struct Arrival {
     double delay_s = 0.0;               ///< propagation delay
     double gain = 1.0;                  ///< relative to the voice's distance gain

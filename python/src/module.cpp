@@ -219,6 +219,11 @@ py::object eventsArray(const RenderResult& r) {
   scalar("track_speed_a_m_s", [](const ContactEvent& e) { return e.track_speed_a_m_s; });
   scalar("track_speed_b_m_s", [](const ContactEvent& e) { return e.track_speed_b_m_s; });
   scalar("patch_radius_m", [](const ContactEvent& e) { return e.patch_radius_m; });
+  // The CSV's motion word ("rest", "rolling", "sliding", "rolling+sliding") as a short string.
+  py::list motion;
+  for (const ContactEvent& e : events) motion.append(contactMotion(e));
+  fields.append(py::make_tuple("motion", "U15"));
+  columns["motion"] = motion;
   py::object array = np.attr("zeros")(n, np.attr("dtype")(fields));
   for (auto item : columns) array[item.first] = item.second;
   return array;

@@ -194,7 +194,8 @@ class RenderResult:
     audio: numpy float32, shape (frames,) for mono (1.0 = 20 Pa at the listener times gain).
     rate: sample rate, Hz.
     events: numpy structured array, one row per contact (the columns of ``--events``; body
-        indices into ``metadata["bodies"]``, -1 for the ground).
+        indices into ``metadata["bodies"]``, -1 for the ground; vectors as (n, 3) fields, e.g.
+        ``slip_velocity_m_s``; ``motion`` is "rest", "rolling", "sliding" or "rolling+sliding").
     metadata: dict: the scene, version, bodies, counts (banks cached/computed, events, modes),
         peak level and timings in seconds.
     """

@@ -72,6 +72,7 @@ def test_render_equals_the_cli_byte_for_byte(repo, cli, cache_dir, tmp_path):
     np.testing.assert_allclose(result.events["normal_force_n"], [float(row[20]) for row in rows], rtol=1e-8)
     np.testing.assert_allclose(result.events["slip_velocity_m_s"][:, 0], [float(row[21]) for row in rows], rtol=1e-8, atol=1e-12)
     np.testing.assert_allclose(result.events["patch_radius_m"], [float(row[27]) for row in rows], rtol=1e-8)
+    assert list(result.events["motion"]) == [row[28] for row in rows]
     # 1 ms steps: the normal force is the normal impulse over the step.
     np.testing.assert_allclose(result.events["normal_force_n"], result.events["normal_impulse_n_s"] / 1e-3, rtol=1e-12)
 

@@ -730,8 +730,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
 // The events CSV's marker of continuous contact (docs/cli.md): whether the surfaces roll and/or
 // slide over each other, by the speed below which a rough contact is still
 // (RoughContact::kStillSpeed_m_s); "rest" otherwise, impacts included.
-namespace {
-const char* motionOf(const ContactEvent& e) {
+const char* contactMotion(const ContactEvent& e) {
   const double still = RoughContact::kStillSpeed_m_s;
   const double slip =
       std::sqrt(e.slip_velocity_m_s[0] * e.slip_velocity_m_s[0] + e.slip_velocity_m_s[1] * e.slip_velocity_m_s[1] +
@@ -739,7 +738,6 @@ const char* motionOf(const ContactEvent& e) {
   const bool rolling = e.rolling_speed_m_s >= still, sliding = slip >= still;
   return rolling && sliding ? "rolling+sliding" : rolling ? "rolling" : sliding ? "sliding" : "rest";
 }
-}  // namespace
 
 Status writeEventsCsv(const std::string& path, const RenderResult& result) {
   std::string csv =
@@ -759,7 +757,7 @@ Status writeEventsCsv(const std::string& path, const RenderResult& result) {
                   e.normal_world[2], e.point_a_mesh[0], e.point_a_mesh[1], e.point_a_mesh[2], e.point_b_mesh[0],
                   e.point_b_mesh[1], e.point_b_mesh[2], e.step_time_s, e.normal_force_n, e.slip_velocity_m_s[0],
                   e.slip_velocity_m_s[1], e.slip_velocity_m_s[2], e.rolling_speed_m_s, e.track_speed_a_m_s,
-                  e.track_speed_b_m_s, e.patch_radius_m, motionOf(e));
+                  e.track_speed_b_m_s, e.patch_radius_m, contactMotion(e));
     char time[64];
     std::snprintf(time, sizeof time, "%.9g,", e.time_s);
     csv += time + name(e.body_a) + "," + name(e.body_b) + line;

@@ -168,6 +168,10 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
 EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& settings, double rate_hz,
                                     double max_freq_hz);
 
+/// How the surfaces move at a contact: "rolling", "sliding", "rolling+sliding", or "rest" (impacts
+/// included) when both speeds are below a rough contact's still speed (the events CSV's last column).
+const char* contactMotion(const ContactEvent& event);
+
 /// One row per contact event: time, bodies, points, impulses, speeds (see the header row).
 Status writeEventsCsv(const std::string& path, const RenderResult& result);
 

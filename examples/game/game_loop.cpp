@@ -3,11 +3,16 @@
 // contacts to libstrike through the C API only (strike.h), and an audio callback pulls blocks.
 //
 // Usage: strike_game BANK.modes OUT.wav [SECONDS]
-// Four plates of the bank's object are dropped onto a ground plane and onto each other. After
+// Four plates of the bank's object are dropped onto a ground plane and onto each other, and a
+// steel ball rolls across a fifth plate lying on the ground (rolling sound). After
 // every physics substep the game reports the step through strike_step(): every body's pose and
 // sleep state, and every contact point of Bullet's manifolds, resting ones included (both bodies'
 // sides, world-frame point, normal + friction impulse, approach speed from the bodies' relative
 // velocity). libstrike's contact scheduler decides what is an impact, a steady load or a change.
+// Each point also carries what rolling and sliding need (docs/contact.md): its normal force, the
+// slip and rolling velocities, and where it is on the partner's surface; the objects carry their
+// surface roughness. The ball is not an object (a 2.4 cm steel ball rings far above hearing):
+// the plate's contact with it names it by its material, radius, mass and roughness.
 //
 // Threads: here everything runs on one thread so the WAV is deterministic. In a game,
 // strike_step() is called from the physics thread (it is [any-thread] and lock-free) and
@@ -58,6 +63,16 @@ struct Body {
   std::unique_ptr<btRigidBody> body;
   strike_object_id sound{0, 0};
 };
+
+// Bullet user indices of the bodies that are not objects (objects: their index in `bodies`).
+constexpr int kGround = -1, kBall = -2;
+
+// Surfaces, from assets/materials.json: R_q and correlation length of the roughness, m.
+constexpr double kSteelRoughness_m = 4e-7, kSteelCorrelation_m = 1e-5, kSteelRestitution = 0.6;
+constexpr double kConcreteRoughness_m = 3e-5, kConcreteCorrelation_m = 3e-4, kConcreteRestitution = 0.4;
+constexpr double kBallRadius_m = 0.012, kSteelDensity_kg_m3 = 7850.0;
+
+btVector3 tangential(const btVector3& v, const btVector3& normal) { return v - normal * normal.dot(v); }
 
 void poseOf(const btRigidBody& b, double pos[3], double quat[4]) {
   const btTransform& t = b.getWorldTransform();
@@ -114,7 +129,9 @@ int main(int argc, char** argv) {
   ground.setRestitution(0.3);
   world.addRigidBody(&ground);
 
-  std::vector<Body> bodies(4);
+  // Plates 0-3 fall; plate 4 lies on the ground for the ball to roll across.
+  std::vector<Body> bodies(5);
+  const size_t kRollPlate = 4;
   for (size_t k = 0; k < bodies.size(); ++k) {
     Body& b = bodies[k];
     const double mass = info.mass_kg > 0 ? info.mass_kg : 1.0;
@@ -125,6 +142,7 @@ int main(int argc, char** argv) {
     start.setIdentity();
     start.setOrigin(btVector3(0.15 * static_cast<double>(k) - 0.2, 0.05 * static_cast<double>(k), 0.3 + 0.25 * k));
     start.setRotation(btQuaternion(btVector3(1, 0.3 * k, 0).normalized(), 0.2 + 0.3 * k));
+    if (k == kRollPlate) start = btTransform(btQuaternion::getIdentity(), btVector3(0.9, 0.0, half[2]));
     b.motion = std::make_unique<btDefaultMotionState>(start);
     b.body = std::make_unique<btRigidBody>(
         btRigidBody::btRigidBodyConstructionInfo(mass, b.motion.get(), b.shape.get(), inertia));
@@ -135,11 +153,32 @@ int main(int argc, char** argv) {
     strike_object_config oc = strike_object_config_default();
     oc.bank = bank;
     poseOf(*b.body, oc.position, oc.orientation);
+    oc.roughness_rms_m = kSteelRoughness_m;  // the test bank is a steel plate
+    oc.roughness_correlation_m = kSteelCorrelation_m;
+    oc.roughness_seed = 100 + k;  // each plate its own surface
+    oc.restitution = kSteelRestitution;
     if (strike_object_add(ctx, &oc, &b.sound) != STRIKE_OK) {
       std::fprintf(stderr, "%s\n", strike_context_last_error(ctx));
       return 2;
     }
   }
+
+  // The ball starts on plate 4's near edge, rolling without slip at 0.25 m/s along +x (spin
+  // v / r about +y), so it crosses the 0.2 m plate in ~0.7 s and rolls off onto the ground.
+  const double ball_mass_kg = kSteelDensity_kg_m3 * 4.0 / 3.0 * M_PI * std::pow(kBallRadius_m, 3);
+  const double ball_speed_m_s = 0.25;
+  btSphereShape ball_shape(kBallRadius_m);
+  btVector3 ball_inertia;
+  ball_shape.calculateLocalInertia(ball_mass_kg, ball_inertia);
+  btDefaultMotionState ball_motion(
+      btTransform(btQuaternion::getIdentity(), btVector3(0.82, 0.0, 2.0 * half[2] + kBallRadius_m)));
+  btRigidBody ball(btRigidBody::btRigidBodyConstructionInfo(ball_mass_kg, &ball_motion, &ball_shape, ball_inertia));
+  ball.setRestitution(kSteelRestitution);
+  ball.setUserIndex(kBall);
+  ball.setLinearVelocity(btVector3(ball_speed_m_s, 0, 0));
+  ball.setAngularVelocity(btVector3(0, ball_speed_m_s / kBallRadius_m, 0));
+  world.addRigidBody(&ball);
+  ground.setUserIndex(kGround);
 
   // --- the loop -----------------------------------------------------------------------------
   std::vector<float> wav;
@@ -160,6 +199,10 @@ int main(int argc, char** argv) {
       // and every contact point Bullet solved, resting ones included. libstrike's contact
       // scheduler decides what is an impact, a steady load (silent) or a change of load.
       contacts.clear();
+      // The velocity of a body's material at a world point (0 for the ground).
+      auto materialVelocity = [](const btRigidBody* body, const btVector3& p) {
+        return body->getVelocityInLocalPoint(p - body->getCenterOfMassPosition());
+      };
       for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
         btPersistentManifold* pm = dispatcher.getManifoldByIndexInternal(m);
         const auto* a = static_cast<const btRigidBody*>(pm->getBody0());
@@ -180,7 +223,7 @@ int main(int argc, char** argv) {
           for (int side = 0; side < 2; ++side) {
             const btRigidBody* body = sides[side];
             const btRigidBody* other = sides[1 - side];
-            if (body->getUserIndex() < 0) continue;  // the ground is not heard
+            if (body->getUserIndex() < 0) continue;  // the ground and the ball are not heard
             strike_contact k = strike_contact_default();
             k.object = bodies[static_cast<size_t>(body->getUserIndex())].sound;
             if (other->getUserIndex() >= 0) k.partner = bodies[static_cast<size_t>(other->getUserIndex())].sound;
@@ -188,7 +231,33 @@ int main(int argc, char** argv) {
             const btVector3 on_body = side == 0 ? j : -j;
             for (int i = 0; i < 3; ++i) k.point[i] = points[side][i], k.impulse[i] = on_body[i];
             k.normal_speed_m_s = approach > 0.0 ? approach : 0.0;
-            k.partner_radius_m = other->getUserIndex() < 0 ? 0.0 : 0.002;  // the ground is flat; corners sharp
+            k.partner_radius_m = other->getUserIndex() == kGround ? 0.0 : 0.002;  // the ground is flat; corners sharp
+            // Continuous contact. The slip: this body's surface relative to the partner's. The
+            // contact point rides under the ball's centre when one side is the ball, so it travels
+            // over this body's surface at (centre - material); between plates it stays with this
+            // plate's material (they slide, nothing rolls).
+            const btVector3& normal = cp.m_normalWorldOnB;
+            const btVector3 here = materialVelocity(body, points[side]);
+            const btVector3 there = materialVelocity(other, points[side]);
+            const btVector3 slip = tangential(here - there, normal);
+            const btVector3 rolling =
+                other->getUserIndex() == kBall ? tangential(other->getLinearVelocity() - here, normal) : btVector3(0, 0, 0);
+            k.normal_force_n = cp.getAppliedImpulse() / dt;
+            for (int i = 0; i < 3; ++i) k.slip_velocity_m_s[i] = slip[i], k.rolling_velocity_m_s[i] = rolling[i];
+            // Where the point is on the partner's surface, in a frame fixed to that surface, so
+            // the same spot always has the same roughness (for an object: its mesh frame).
+            const btVector3 on_partner = other->getWorldTransform().invXform(points[side]);
+            for (int i = 0; i < 3; ++i) k.partner_point[i] = on_partner[i];
+            if (other->getUserIndex() == kBall) {
+              k.partner_youngs_pa = 2.0e11, k.partner_poisson = 0.29;
+              k.partner_radius_m = kBallRadius_m, k.partner_mass_kg = ball_mass_kg;
+              k.partner_roughness_rms_m = kSteelRoughness_m, k.partner_roughness_correlation_m = kSteelCorrelation_m;
+              k.partner_roughness_seed = 1, k.partner_restitution = kSteelRestitution;
+            } else if (other->getUserIndex() == kGround) {
+              k.partner_youngs_pa = 3.0e10, k.partner_poisson = 0.2;
+              k.partner_roughness_rms_m = kConcreteRoughness_m, k.partner_roughness_correlation_m = kConcreteCorrelation_m;
+              k.partner_roughness_seed = 2, k.partner_restitution = kConcreteRestitution;
+            }
             contacts.push_back(k);
           }
         }
@@ -250,14 +319,20 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(stats.load_holds), static_cast<double>(peak),
       static_cast<double>(peak) * cfg.output_full_scale_pa, gain, clipped,
       20.0 * std::log10(std::max(static_cast<double>(tail), 1e-30) / std::max(static_cast<double>(peak), 1e-30)));
+  std::printf("rolling and sliding: %llu contact sources started, %llu dropped\n",
+              static_cast<unsigned long long>(stats.continuous_contacts),
+              static_cast<unsigned long long>(stats.continuous_dropped));
+  world.removeRigidBody(&ball);
   for (Body& b : bodies) world.removeRigidBody(b.body.get());
   world.removeRigidBody(&ground);
   strike_bank_destroy(bank);
   strike_context_destroy(ctx);
   // What the test checks: every step and contact arrived (none dropped), the drops struck,
-  // the resting plates were reported as sustained contact, and there was sound.
+  // the resting plates were reported as sustained contact, the ball's rolling drove a plate,
+  // and there was sound.
   const bool ok = stats.steps == reported_steps && stats.contacts_queued == reported_contacts &&
                   stats.contacts_dropped_queue_full == 0 && stats.contacts_dropped_stale == 0 &&
-                  stats.impacts_scheduled > 0 && stats.sustained_contacts > 0 && peak > 0.0f && reported_states > 0;
+                  stats.impacts_scheduled > 0 && stats.sustained_contacts > 0 && stats.continuous_contacts > 0 &&
+                  peak > 0.0f && reported_states > 0;
   return ok ? 0 : 3;
 }

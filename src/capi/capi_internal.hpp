@@ -78,7 +78,7 @@ struct Retired {
 struct Counters {
   std::atomic<uint64_t> queued{0}, dropped_full{0}, stale{0}, capacity{0}, scheduled{0}, inaudible{0}, culled{0},
       frames{0}, steps{0}, contacts_queued{0}, contacts_dropped_full{0}, contacts_stale{0}, sustained{0},
-      load_changes{0}, load_holds{0}, clock_frames{0};
+      load_changes{0}, load_holds{0}, clock_frames{0}, continuous{0}, continuous_dropped{0};
   std::atomic<uint32_t> active_modes{0}, objects{0};
 };
 

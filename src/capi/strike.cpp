@@ -402,6 +402,8 @@ STRIKE_API strike_status STRIKE_CALL strike_context_get_stats(strike_context ctx
   s.load_changes = get(k.load_changes);
   s.load_holds = get(k.load_holds);
   s.clock_frames = get(k.clock_frames);
+  s.continuous_contacts = get(k.continuous);
+  s.continuous_dropped = get(k.continuous_dropped);
   std::memcpy(out, &s, s.struct_size);  // never past the caller's struct
   return STRIKE_OK;
 }

@@ -144,6 +144,8 @@ void publishStats(strike_context ctx) {
   k.sustained.store(s.sustained_contacts, std::memory_order_relaxed);
   k.load_changes.store(s.load_changes, std::memory_order_relaxed);
   k.load_holds.store(s.load_holds, std::memory_order_relaxed);
+  k.continuous.store(s.continuous_contacts, std::memory_order_relaxed);
+  k.continuous_dropped.store(s.continuous_dropped, std::memory_order_relaxed);
   k.active_modes.store(static_cast<uint32_t>(std::min<uint64_t>(s.active_modes, UINT32_MAX)),
                        std::memory_order_relaxed);
   k.clock_frames.store(static_cast<uint64_t>(std::llround(ctx->engine->time() * ctx->config.sample_rate_hz)),

@@ -564,7 +564,7 @@ TEST(CApiStep, InvalidStepsAreRefusedAndNothingIsQueued) {
 // steady load on its four corners: rough surfaces sound the whole time it slides when the 0.4
 // continuous-contact fields are given; a 0.3-sized element (read without them) and a normal
 // force of 0 give the steady load's silence, byte for byte the same.
-std::vector<float> slidingBox(size_t contact_size, double normal_force_scale) {
+std::vector<float> slidingBox(size_t contact_size, double normal_force_scale, strike_stats* stats = nullptr) {
   Game game(boxBank());
   strike_object_config oc = strike_object_config_default();
   oc.bank = game.bank;
@@ -612,13 +612,15 @@ std::vector<float> slidingBox(size_t contact_size, double normal_force_scale) {
     game.renderTo(static_cast<size_t>(std::floor((t - frame_s) * kRate)));
   }
   game.renderAll(static_cast<size_t>(duration * kRate));
+  if (stats) *stats = statsOf(game.ctx);
   return game.out;
 }
 
 TEST(CApiStep, ABoxSlidingOnARoughFloorIsHeardOnlyWithTheContinuousContactFields) {
   const size_t size03 = offsetof(strike_contact, normal_force_n);
-  const std::vector<float> sliding = slidingBox(sizeof(strike_contact), 1.0);
-  const std::vector<float> old_layout = slidingBox(size03, 1.0);
+  strike_stats with_fields{}, without_fields{};
+  const std::vector<float> sliding = slidingBox(sizeof(strike_contact), 1.0, &with_fields);
+  const std::vector<float> old_layout = slidingBox(size03, 1.0, &without_fields);
   const std::vector<float> no_force = slidingBox(sizeof(strike_contact), 0.0);
   auto rms = [](const std::vector<float>& x, double a, double b) {
     double sum = 0.0;
@@ -633,6 +635,10 @@ TEST(CApiStep, ABoxSlidingOnARoughFloorIsHeardOnlyWithTheContinuousContactFields
   EXPECT_GT(heard, 1e-5);             // above 20 dB SPL
   EXPECT_GT(heard, 1000.0 * silent);  // 60 dB over the steady load's silence
   EXPECT_EQ(old_layout, no_force);    // a 0.3 element is read without the new fields
+  // The four corners slide over one partner surface (the floor's seed): one contact source.
+  EXPECT_EQ(with_fields.continuous_contacts, 1u);
+  EXPECT_EQ(with_fields.continuous_dropped, 0u);
+  EXPECT_EQ(without_fields.continuous_contacts, 0u);
 }
 
 TEST(CApiStep, ContactsOnStaleObjectsAreCountedWhenRendered) {
@@ -686,7 +692,8 @@ TEST(CApiStep, StatsWriteExactlyStructSizeBytes) {
   // An older (smaller) layout: the 0.2 fields only, ending at `objects`; and a few odd sizes.
   for (size_t size : {offsetof(strike_stats, steps), offsetof(strike_stats, objects) + sizeof(uint32_t),
                       offsetof(strike_stats, impacts_queued), offsetof(strike_stats, impacts_dropped_queue_full) + 3,
-                      offsetof(strike_stats, clock_frames), sizeof(strike_stats)}) {
+                      offsetof(strike_stats, clock_frames), offsetof(strike_stats, continuous_contacts),
+                      sizeof(strike_stats)}) {
     Guarded<strike_stats> g;
     g.setSize(static_cast<uint32_t>(size));
     ASSERT_EQ(strike_context_get_stats(game.ctx, g.get()), STRIKE_OK) << size;

@@ -39,6 +39,7 @@
  *    covers them); strike_object_config gains roughness_rms_m, roughness_correlation_m,
  *    roughness_seed and restitution (last fields). A contact with a normal force whose surfaces
  *    move over each other sounds while it moves; without them, contacts sound as in 0.3.
+ *    strike_stats gains continuous_contacts and continuous_dropped (last fields).
  *
  * Changes in 0.3 (recompile: the soname is now libstrike.so.0.3; see src/capi/README.md):
  *  - One sound engine with `strike render`: the same contact scheduling, listener model and
@@ -283,6 +284,9 @@ typedef struct strike_stats {
   uint64_t load_changes;                /**< changes of an object's load (force steps scheduled) */
   uint64_t load_holds;                  /**< steps a sleeping object's load was kept */
   uint64_t clock_frames;                /**< frames since creation or the last strike_context_reset() */
+  /* 0.4 */
+  uint64_t continuous_contacts; /**< rolling/sliding contacts whose roughness began to drive an object */
+  uint64_t continuous_dropped;  /**< ...that could not: all of the object's contact sources were busy */
 } strike_stats;
 
 /** Copies the counters. [any-thread]

@@ -63,22 +63,29 @@ double distanceSquaredToTriangle(const Vec& p, const Vec& a, const Vec& b, const
   return dist2({a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w});
 }
 
-/// A body's surface in world coordinates and its bounding box.
+/// A body's surface in world coordinates, its bounding box, and its box in its own mesh frame.
 struct WorldSurface {
   std::vector<double> positions;
   std::vector<double> probes;  ///< the vertices and the triangles' centroids: where overlap is tested
   Vec low{}, high{};
+  Vec local_low{}, local_high{};  ///< the mesh-frame box: tight for a tilted plank, unlike the world one
+  std::array<double, 4> orientation_wxyz{1, 0, 0, 0};
+  Vec position{};
 };
 
 WorldSurface toWorld(const SimBodyDesc& body) {
   WorldSurface w;
   const double inf = std::numeric_limits<double>::infinity();
-  w.low = {inf, inf, inf};
-  w.high = {-inf, -inf, -inf};
+  w.low = w.local_low = {inf, inf, inf};
+  w.high = w.local_high = {-inf, -inf, -inf};
+  w.orientation_wxyz = body.orientation_wxyz;
+  w.position = body.position_m;
   for (size_t v = 0; v + 2 < body.surface_positions.size(); v += 3) {
     const Vec local{body.surface_positions[v], body.surface_positions[v + 1], body.surface_positions[v + 2]};
     const Vec r = rotate(body.orientation_wxyz, local);
     for (int a = 0; a < 3; ++a) {
+      w.local_low[a] = std::min(w.local_low[a], local[a]);
+      w.local_high[a] = std::max(w.local_high[a], local[a]);
       const double x = r[a] + body.position_m[a];
       w.positions.push_back(x);
       w.low[a] = std::min(w.low[a], x);
@@ -104,10 +111,15 @@ std::string format(const char* fmt, double a = 0, double b = 0, double c = 0, do
 
 /// Deepest penetration of `a`'s probe points (those inside b's box) into b's closed surface.
 double deepestVertexInside(const WorldSurface& a, const WorldSurface& b, const SimBodyDesc& b_desc, size_t max_tested) {
+  // The candidates: probes inside b's box in b's own frame. A tilted plank's world box holds
+  // every block resting on it, and each probe tested costs a pass over b's triangles.
+  const std::array<double, 4> inverse{b.orientation_wxyz[0], -b.orientation_wxyz[1], -b.orientation_wxyz[2],
+                                      -b.orientation_wxyz[3]};
   std::vector<size_t> candidates;
   for (size_t v = 0; v + 2 < a.probes.size(); v += 3) {
+    const Vec local = rotate(inverse, sub({a.probes[v], a.probes[v + 1], a.probes[v + 2]}, b.position));
     bool in_box = true;
-    for (int k = 0; k < 3; ++k) in_box = in_box && a.probes[v + k] >= b.low[k] && a.probes[v + k] <= b.high[k];
+    for (int k = 0; k < 3; ++k) in_box = in_box && local[k] >= b.local_low[k] && local[k] <= b.local_high[k];
     if (in_box) candidates.push_back(v);
   }
   // Each probe costs a pass over b's triangles: keep a pair under ~2e7 triangle visits (~0.3 s).

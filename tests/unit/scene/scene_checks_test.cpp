@@ -61,6 +61,37 @@ TEST(SceneChecks, TouchingIsNotOverlapping) {
   EXPECT_TRUE(checkStartingPlacement(sceneOf(bodies), bodies).empty());
 }
 
+TEST(SceneChecks, ARotatedBoxIsTestedInItsOwnFrame) {
+  // a, turned 45 degrees about z, reaches x = 0.05 sqrt 2 = 70.7 mm: its corners there are 20.7 mm
+  // inside b (b's face at x = 50 mm; b is twice a's size, so no other face is nearer). Then a cube resting on a's tilted face (30 degrees about y, 0.5 mm
+  // above it) is inside a's world box but not in a: nothing to say.
+  const double c45 = std::cos(M_PI / 8), s45 = std::sin(M_PI / 8);
+  SimBodyDesc a = box("a", 0.1, {0, 0, 0.5});
+  a.orientation_wxyz = {c45, 0, 0, s45};
+  const std::vector<SimBodyDesc> overlapping = {a, box("b", 0.2, {0.15, 0.0, 0.5})};
+  const std::vector<std::string> w = checkStartingPlacement(sceneOf(overlapping), overlapping);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("start inside each other (a surface point 20.7 mm deep)"), std::string::npos) << w[0];
+  // A 0.4 x 0.1 x 0.02 m plank tilted 30 degrees about y, and a 2 cm cube 0.15 m along it (its
+  // world box holds the cube): resting 0.5 mm above its face, nothing to say; sunk 5 mm into it,
+  // the cube's lower points are found in the plank's own frame.
+  const double t = M_PI / 6;
+  SimBodyDesc plank = box("plank", 0.1, {0, 0, 0.5}), cube = box("cube", 0.02, {0, 0, 0});
+  for (size_t v = 0; v < plank.surface_positions.size(); v += 3)
+    plank.surface_positions[v] *= 4.0, plank.surface_positions[v + 2] *= 0.2;
+  plank.orientation_wxyz = cube.orientation_wxyz = {std::cos(t / 2), 0, std::sin(t / 2), 0};
+  auto place = [&](double above_face_m) {  // along (cos t, 0, -sin t), off the face along (sin t, 0, cos t)
+    const double along = 0.15, off = 0.01 + 0.01 + above_face_m;
+    cube.position_m = {along * std::cos(t) + off * std::sin(t), 0.0, 0.5 - along * std::sin(t) + off * std::cos(t)};
+    const std::vector<SimBodyDesc> bodies = {plank, cube};
+    return checkStartingPlacement(sceneOf(bodies), bodies);
+  };
+  EXPECT_TRUE(place(0.0005).empty());
+  const std::vector<std::string> sunk = place(-0.005);
+  ASSERT_EQ(sunk.size(), 1u);
+  EXPECT_NE(sunk[0].find("(a surface point 5 mm deep)"), std::string::npos) << sunk[0];
+}
+
 TEST(SceneChecks, AMeshInMillimetresIsImplausiblyLargeAndHeavy) {
   // An 80 mm cube read as 80 m: 512,000 m^3 of porcelain.
   const std::vector<SimBodyDesc> bodies = {box("mug", 80.0, {0, 0, 40.0}, 2400.0 * 512000.0)};

@@ -30,6 +30,9 @@ double curvature(double radius_m) { return radius_m > 0.0 && std::isfinite(radiu
 
 void SoundEngine::continuousContact(Voice& v, const EngineContact& c, const std::array<double, 3>& world) {
   if (!(c.normal_force_n > 0.0) || !std::isfinite(c.normal_force_n)) return;
+  // A body with no mode in the band (a marble, a small block) would drive nothing: its rolling is
+  // heard through its partner's modes, whose own source reads this body's roughness.
+  if (!v.rings_) return;
   const ContactPartner& p = c.partner;
   const Voice* pv = p.voice != kNoVoice ? voice(p.voice) : nullptr;
   const SurfaceRoughness& partner_roughness = pv ? pv->roughness_ : p.roughness;

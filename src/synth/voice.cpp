@@ -150,6 +150,8 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
   modal.rayleigh_mass = bank.material.rayleigh_mass;
   modal.radiation_weight = desc.weights;
   synth_.addObject(modal);
+  const SynthStats bands = synth_.stats();
+  rings_ = bands.modes_total > bands.modes_out_of_band;
   const size_t modes = bank.modeCount();
   modal_.assign(modes, 0.0);
   step_force_.assign(modes, 0.0);

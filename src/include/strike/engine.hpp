@@ -217,6 +217,7 @@ class Voice {
   std::shared_ptr<const ModeBank> bank_;
   OscillatorBank synth_;
   OscillatorBank click_synth_;     ///< acceleration noise: three filters, one per axis (sound_paths.cpp)
+  bool rings_ = false;             ///< has a mode in the synthesized band
   std::vector<float> click_mono_;  ///< max_block_frames
   ContactProjector projector_;
   std::vector<double> modal_;       ///< #modes: projection scratch

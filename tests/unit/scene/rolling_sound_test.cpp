@@ -126,6 +126,27 @@ TEST(RollingSound, BlockBelowTheFrictionAngleIsSilentAboveItSlidesAudibly) {
   // Above: it slides, and the slide is heard (>= 30 dB above 0 dB SPL).
   EXPECT_GE(above.report.continuous_contacts, 1u);
   EXPECT_GT(20 * std::log10(rms(above.audio.samples, 0.2, 0.5, rate) / 1e-6), 30.0);
+  // Energy, over 0.05-0.6 s (after its first settling, before it leaves the plank's end): radiated
+  // over a sphere of the listener's distance, 4 pi d^2 int p^2 dt / (rho c), below what friction
+  // dissipates, sum of |friction impulse| |slip speed| over the steps' contact points.
+  const double t0 = 0.05, t1 = 0.6;
+  double dissipated = 0.0;
+  for (const ContactEvent& e : above.events) {
+    if (e.step_time_s <= t0 || e.step_time_s > t1) continue;
+    const double slip = std::sqrt(e.slip_velocity_m_s[0] * e.slip_velocity_m_s[0] +
+                                  e.slip_velocity_m_s[1] * e.slip_velocity_m_s[1] +
+                                  e.slip_velocity_m_s[2] * e.slip_velocity_m_s[2]);
+    dissipated += e.friction_impulse_n_s * slip;
+  }
+  const double d = std::sqrt(0.6 * 0.6 + 0.1 * 0.1), rho_c = 1.2 * 343.0;
+  double p2 = 0.0;
+  for (size_t n = static_cast<size_t>(t0 * rate); n < static_cast<size_t>(t1 * rate); ++n)
+    p2 += std::pow(double(above.audio.samples[n]) * 20.0, 2) / rate;
+  const double radiated = 4 * M_PI * d * d * p2 / rho_c;
+  std::printf("sliding: radiated %.3g J of %.3g J dissipated by friction: ratio %.3g\n", radiated, dissipated,
+              radiated / dissipated);
+  EXPECT_GT(dissipated, 0.0);
+  EXPECT_LT(radiated / dissipated, 1.0);
 }
 
 // examples/scenes/marbles-in-bowl.json: four glass marbles launched around the wall of a ceramic

@@ -305,10 +305,15 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
     }
     if (!settings_.allow_sleep) state->rigid->setActivationState(DISABLE_DEACTIVATION);
     if (!desc.path.empty()) {
-      // The hand sets its velocities every substep (drive()): it must never sleep, and the
-      // gyroscopic term would turn it off its path within a substep (the hand supplies that torque).
+      // The hand sets its velocities every substep (drive()): it must never sleep. It holds the
+      // orientation, so nothing turns the body but the hand: no inverse inertia for the solver.
+      // (Correcting between substeps instead is an explicit controller against a rigid contact:
+      // a spoon touching down with its tip away from its centre of mass rocked up to m/s.) The
+      // gyroscopic term goes with it.
       state->driven = true;
       state->rigid->setActivationState(DISABLE_DEACTIVATION);
+      state->rigid->setInvInertiaDiagLocal(btVector3(0, 0, 0));
+      state->rigid->updateInertiaTensor();
       state->rigid->setFlags(state->rigid->getFlags() & ~BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY);
     }
   }

@@ -6,7 +6,8 @@
 // whatever the solver's 1000 iterations add up to), and a kinematic body is not collided with
 // static bodies at all. So a driven body is a dynamic body of its own mass whose velocities are
 // set at the start of every substep: the hand, stiff in everything but pressing down, and its
-// weight rests on what it meets.
+// weight rests on what it meets. Its orientation is the hand's alone: the solver sees no inverse
+// inertia (buildBody), so a contact away from its centre of mass cannot turn it.
 #include <algorithm>
 #include <cmath>
 

@@ -56,7 +56,8 @@ struct SimBodyDesc {
   /// where its path is then: exactly in free air, and against friction too (a lag is made up in the
   /// next substep). Upward (against gravity) the hand only holds it: where its path goes into
   /// something it rests on that under its own weight, above its path, and it is lifted again when
-  /// its path rises above it. Never asleep. See docs/scene-format.md.
+  /// its path rises above it. Nothing but the hand turns it (no inverse inertia in the solver).
+  /// Never asleep. See docs/scene-format.md.
   std::vector<PathKey> path;
 };
 

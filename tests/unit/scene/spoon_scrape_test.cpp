@@ -83,13 +83,15 @@ TEST(SpoonScrapesPlate, SoundsWhileItSlidesAtTheKeyedSpeedAndStopsWithIt) {
   const std::vector<Span> path = spans(scene->objects[1].path);
   // The scrape: the spans that move the spoon at its height on the plate, up to where it stops.
   std::vector<Span> scrape;
-  double stop_s = 0.0;
+  double stop_s = 0.0, lift_s = 0.0;
   for (const Span& s : path) {
     if (stop_s == 0.0 && s.level && s.speed_m_s > 0.0) scrape.push_back(s);
     if (stop_s == 0.0 && !scrape.empty() && s.speed_m_s == 0.0) stop_s = s.t0_s;
+    if (stop_s > 0.0 && lift_s == 0.0 && !s.level) lift_s = s.t0_s;
   }
   ASSERT_EQ(scrape.size(), 3u);
   ASSERT_GT(stop_s, 0.0);
+  ASSERT_GT(lift_s, stop_s);
   const RenderResult rough = render(*scene);
   Scene smooth_scene = *scene;
   for (SceneObject& o : smooth_scene.objects) o.roughness_rms_m = 0.0;
@@ -134,6 +136,14 @@ TEST(SpoonScrapesPlate, SoundsWhileItSlidesAtTheKeyedSpeedAndStopsWithIt) {
   std::printf("after the stop: level %.1f dB below the last 50 ms of the scrape, largest rise %.2f dB per 10 ms\n",
               drop_db, worst_rise_db);
   EXPECT_LT(worst_rise_db, 1.0);
+
+  // Lifted off: its last contact with the plate within 50 ms of the lift's start (the path rises
+  // at 0.2 m/s from 0.5 mm inside the plate: 2.5 ms), and nothing heard from the spoon after.
+  double last_contact_s = 0.0;
+  for (const ContactEvent& e : rough.events) last_contact_s = std::max(last_contact_s, e.step_time_s);
+  std::printf("lift at %.3f s, last contact %.3f s\n", lift_s, last_contact_s);
+  EXPECT_GT(last_contact_s, lift_s - 0.001);
+  EXPECT_LT(last_contact_s, lift_s + 0.05);
 
   // The events CSV: the spoon's contacts while it moves are "sliding", at the keyed speed.
   const std::vector<std::vector<std::string>> csv = eventsCsv(rough);

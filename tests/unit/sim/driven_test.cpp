@@ -144,6 +144,54 @@ TEST(DrivenBody, RestsItsWeightWherePathGoesInAndSlidesAtTheKeyedSpeed) {
   EXPECT_LT(distance(run->final_position_m[1], block.path.back().position_m), 1e-12);
 }
 
+// The same block scraped over a 2 kg plate that lies free on the ground: the plate moves a
+// little too, yet the contact travels with the tool (two moving bodies would otherwise share it),
+// and the plate's ground contact carries the block's weight besides its own.
+TEST(DrivenBody, ItsContactTravelsWithItOverAPlateLyingFree) {
+  SimBodyDesc plate = makeBox("plate", {0.3, 0.2, 0.01}, 2.0);
+  plate.position_m = {0, 0, 0.005};
+  plate.friction = 0.6;
+  SimBodyDesc block = makeBox("block", {0.04, 0.02, 0.01}, 0.1);
+  block.friction = 0.4;
+  const double z_in = 0.01 + 0.005 - 0.0005;
+  block.path = {{0.0, {-0.05, 0, z_in}, {1, 0, 0, 0}},
+                {0.1, {-0.05, 0, z_in}, {1, 0, 0, 0}},
+                {0.6, {0.05, 0, z_in}, {1, 0, 0, 0}}};
+  SimSettings settings;
+  settings.duration_s = 0.6;
+  settings.gravity_m_s2 = {0, 0, -kG};
+  settings.ground_friction = 0.6;
+  Result<SimResult> run = simulate({plate, block}, settings);
+  ASSERT_TRUE(run) << run.error().message;
+  std::map<double, double> tool_n, ground_n;
+  double track_block = 0.0, track_plate_lo = 1e9, slip_lo = 1e9, slip_hi = 0.0;
+  for (const ContactEvent& e : run->events) {
+    if (e.step_time_s < 0.15 || e.step_time_s > 0.55) continue;
+    if (e.body_b == kGroundBody) {
+      ground_n[e.step_time_s] += e.normal_force_n;
+      continue;
+    }
+    tool_n[e.step_time_s] += e.normal_force_n;
+    track_block = std::max(track_block, e.track_speed_b_m_s);
+    track_plate_lo = std::min(track_plate_lo, e.track_speed_a_m_s);
+    const double slip = std::sqrt(dot(e.slip_velocity_m_s, e.slip_velocity_m_s));
+    slip_lo = std::min(slip_lo, slip), slip_hi = std::max(slip_hi, slip);
+  }
+  double tool = 0.0, ground = 0.0;
+  for (const auto& [t, n] : tool_n) tool += n / double(tool_n.size());
+  for (const auto& [t, n] : ground_n) ground += n / double(ground_n.size());
+  std::printf("on the plate %.4f N, plate on the ground %.4f N (weights %.4f and %.4f N); track over the block "
+              "%.2g m/s, over the plate from %.4f m/s; slip %.4f to %.4f m/s\n",
+              tool, ground, 0.1 * kG, 2.1 * kG, track_block, track_plate_lo, slip_lo, slip_hi);
+  ASSERT_GT(tool_n.size(), 390u);
+  EXPECT_NEAR(tool, 0.1 * kG, 0.01 * 0.1 * kG);
+  EXPECT_NEAR(ground, 2.1 * kG, 0.01 * 2.1 * kG);
+  EXPECT_LT(track_block, 1e-3);
+  EXPECT_GT(track_plate_lo, 0.2 * 0.98);
+  EXPECT_GT(slip_lo, 0.2 * 0.98);
+  EXPECT_LT(slip_hi, 0.2 * 1.02);
+}
+
 TEST(DrivenBody, BadPathsAreRefusedNamingTheKey) {
   SimBodyDesc block = makeBox("block", {0.04, 0.02, 0.01}, 0.1);
   SimSettings settings;

@@ -343,6 +343,12 @@ SimBodyDesc simBody(const Body& body) {
   desc.inertia_kg_m2 = body.bank.inertia_kg_m2;
   desc.position_m = object.position_m;
   desc.orientation_wxyz = object.orientation_wxyz;
+  desc.path = object.path;
+  if (!object.path.empty()) {  // a driven body starts on its path (for the checks and the voice)
+    const PathPose start = pathPose(object.path, 0.0);
+    desc.position_m = start.position_m;
+    desc.orientation_wxyz = start.orientation_wxyz;
+  }
   desc.velocity_m_s = object.velocity_m_s;
   desc.angular_velocity_rad_s = object.angular_velocity_rad_s;
   const ContactProperties contact = table.contactProperties(body.bank.material.name);
@@ -663,8 +669,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     voice.contact_radius_m = body.contact_radius_m;
     voice.roughness = surfaceRoughness(*body.object, body.bank.material.name);
     voice.restitution = bodyRestitution(*body.object, body.bank.material.name);
-    if (Status added = output->addVoice(static_cast<uint32_t>(index), voice, body.object->position_m,
-                                        body.object->orientation_wxyz, body.object->name);
+    if (Status added = output->addVoice(static_cast<uint32_t>(index), voice, sim_bodies[index].position_m,
+                                        sim_bodies[index].orientation_wxyz, body.object->name);
         !added)
       return added.error();
     has_voice[index] = true;

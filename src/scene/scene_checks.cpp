@@ -223,6 +223,11 @@ std::string neverStruckWarning(const Scene& scene, const SimBodyDesc& body, doub
   std::string text = "objects \"" + body.name + "\": never struck (it starts at " +
                      format("(%.4g, %.4g, %.4g) m", body.position_m[0], body.position_m[1], body.position_m[2]);
   const double g = -scene.gravity_m_s2[2];
+  if (!body.path.empty()) {  // a driven body goes where its path takes it, not where it falls
+    const PathKey& last = body.path.back();
+    return text + format("; its path ends at (%.4g, %.4g, %.4g) m at %.4g s without touching anything)",
+                         last.position_m[0], last.position_m[1], last.position_m[2], last.t_s);
+  }
   if (scene.has_ground && !w.positions.empty()) {
     const double height = w.low[2] - scene.ground_height_m;
     text += format(", its lowest point %.4g m above the ground", height);

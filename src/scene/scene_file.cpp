@@ -113,6 +113,19 @@ Result<std::array<double, N>> vector(const json& value, const Where& where) {
   return out;
 }
 
+/// [w, x, y, z] within 0.001 of unit length, normalized.
+Result<std::array<double, 4>> unitQuaternion(const json& value, const Where& where) {
+  Result<std::array<double, 4>> q = vector<4>(value, where);
+  if (!q) return q.error();
+  const double norm = std::sqrt((*q)[0] * (*q)[0] + (*q)[1] * (*q)[1] + (*q)[2] * (*q)[2] + (*q)[3] * (*q)[3]);
+  if (std::fabs(norm - 1.0) > 1e-3)
+    return where.error("expected a unit quaternion [w, x, y, z], got " + show(value) + " (norm " +
+                       std::to_string(norm) + ")");
+  std::array<double, 4> unit{};
+  for (int i = 0; i < 4; ++i) unit[i] = (*q)[i] / norm;
+  return unit;
+}
+
 Result<std::string> text(const json& value, const Where& where) {
   if (!value.is_string()) return where.error("expected a string, got " + show(value));
   return value.get<std::string>();
@@ -207,6 +220,43 @@ Result<ContactPairSpec> contactPair(const json& value, const Where& where, const
   return pair;
 }
 
+/// "path": [{"t": s, "position": [x, y, z], "orientation": [w, x, y, z]}, ...], at least one key,
+/// in strictly increasing time from t >= 0; a key without "orientation" keeps the one before
+/// (the first: [1, 0, 0, 0]).
+Result<std::vector<PathKey>> pathKeys(const json& value, const Where& where) {
+  if (!value.is_array() || value.empty())
+    return where.error("expected a list of keyframes like {\"t\": 0, \"position\": [0, 0, 0.1]}, got " +
+                       show(value));
+  std::vector<PathKey> keys;
+  for (size_t k = 0; k < value.size(); ++k) {
+    const json& item = value[k];
+    const Where at = where.index(k);
+    Status known = checkKeys(item, at, keysOf("path[]"));
+    if (!known) return known.error();
+    for (const char* key : {"t", "position"})
+      if (!item.contains(key)) return at.at(key).error("missing (a keyframe needs \"t\" and \"position\")");
+    PathKey pathKey;
+    Result<double> t = number(item["t"], at.at("t"));
+    if (!t) return t.error();
+    if (*t < 0) return at.at("t").error("must be >= 0 s, got " + show(item["t"]));
+    if (!keys.empty() && !(*t > keys.back().t_s))
+      return at.at("t").error("must be later than the key before (" + show(value[k - 1]["t"]) + "), got " +
+                              show(item["t"]));
+    pathKey.t_s = *t;
+    Result<std::array<double, 3>> p = vector<3>(item["position"], at.at("position"));
+    if (!p) return p.error();
+    pathKey.position_m = *p;
+    if (!keys.empty()) pathKey.orientation_wxyz = keys.back().orientation_wxyz;
+    if (item.contains("orientation")) {
+      Result<std::array<double, 4>> q = unitQuaternion(item["orientation"], at.at("orientation"));
+      if (!q) return q.error();
+      pathKey.orientation_wxyz = *q;
+    }
+    keys.push_back(pathKey);
+  }
+  return keys;
+}
+
 std::string resolvePath(const std::string& scene_path, const std::string& relative) {
   namespace fs = std::filesystem;
   if (relative.empty() || fs::path(relative).is_absolute()) return relative;
@@ -299,14 +349,20 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
     *f.out = *v;
   }
   if (value.contains("orientation")) {
-    Result<std::array<double, 4>> q = vector<4>(value["orientation"], where.at("orientation"));
+    Result<std::array<double, 4>> q = unitQuaternion(value["orientation"], where.at("orientation"));
     if (!q) return q.error();
-    const double norm = std::sqrt((*q)[0] * (*q)[0] + (*q)[1] * (*q)[1] + (*q)[2] * (*q)[2] + (*q)[3] * (*q)[3]);
-    if (std::fabs(norm - 1.0) > 1e-3)
-      return where.at("orientation")
-          .error("expected a unit quaternion [w, x, y, z], got " + show(value["orientation"]) + " (norm " +
-                 std::to_string(norm) + ")");
-    for (int i = 0; i < 4; ++i) o.orientation_wxyz[i] = (*q)[i] / norm;
+    o.orientation_wxyz = *q;
+  }
+  if (value.contains("path")) {
+    Result<std::vector<PathKey>> path_keys = pathKeys(value["path"], where.at("path"));
+    if (!path_keys) return path_keys.error();
+    if (o.is_static)
+      return where.at("path").error("a static object never moves: remove \"static\" or the path");
+    for (const char* key : {"position", "orientation", "velocity", "angular_velocity"})
+      if (value.contains(key))
+        return where.at(key).error("not used with \"path\", got " + show(value[key]) +
+                                   ": the path's first key is where the object starts, and it moves as the path says");
+    o.path = std::move(*path_keys);
   }
   Status coefficients = contactCoefficients(value, where, o.restitution, o.friction, o.rolling_resistance);
   if (!coefficients) return coefficients.error();
@@ -336,7 +392,8 @@ const std::vector<SceneKeyTable>& sceneKeyTables() {
       {"objects[]",
        {"name", "mesh", "units", "bank", "material", "order", "size", "static", "shape", "position", "orientation",
         "velocity", "angular_velocity", "restitution", "friction", "rolling_resistance", "roughness_rms_m",
-        "roughness_correlation_m"}},
+        "roughness_correlation_m", "path"}},
+      {"path[]", {"t", "position", "orientation"}},
       {"material",
        {"name", "youngs_pa", "poisson", "density_kg_m3", "loss_factor", "rayleigh_stiffness", "rayleigh_mass"}},
   };

@@ -34,6 +34,28 @@ Status checkFinite(const std::array<double, N>& values, const SimBodyDesc& body,
   return {};
 }
 
+/// A driven body's keyframes: finite, in strictly increasing time, unit quaternions.
+Status checkPath(const SimBodyDesc& body, const std::string& label) {
+  if (body.path.empty()) return {};
+  if (body.is_static) return badInput(label + ": a static body cannot follow a path");
+  for (size_t k = 0; k < body.path.size(); ++k) {
+    const PathKey& key = body.path[k];
+    const std::string at = label + ": path[" + std::to_string(k) + "]";
+    bool finite = std::isfinite(key.t_s);
+    for (double x : key.position_m) finite = finite && std::isfinite(x);
+    for (double x : key.orientation_wxyz) finite = finite && std::isfinite(x);
+    if (!finite) return badInput(at + ": t_s, position_m and orientation_wxyz must be finite");
+    if (k > 0 && !(key.t_s > body.path[k - 1].t_s))
+      return badInput(at + ": t_s = " + fmt(key.t_s) + " (must be later than the key before, " +
+                      fmt(body.path[k - 1].t_s) + ")");
+    const auto& q = key.orientation_wxyz;
+    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (std::abs(norm - 1.0) > 1e-9)
+      return badInput(at + ": orientation_wxyz has norm " + fmt(norm) + " (must be a unit quaternion)");
+  }
+  return {};
+}
+
 }  // namespace
 
 Status checkSettings(const SimSettings& settings) {
@@ -135,6 +157,7 @@ Status checkBody(const SimBodyDesc& body, size_t index, btQuaternion& orientatio
       return badInput(label + ": " + name + " = " + fmt(value) + " (must be finite and >= 0)");
     }
   }
+  if (Status s = checkPath(body, label); !s) return s;
   if (body.is_static) return {};
   if (!std::isfinite(body.mass_kg) || body.mass_kg <= 0.0) {
     return badInput(label + ": mass_kg = " + fmt(body.mass_kg) + " (a dynamic body needs a mass > 0)");

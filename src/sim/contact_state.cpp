@@ -79,7 +79,7 @@ void Simulation::contactState(ContactEvent& ev, const int index[2], const btVect
   btVector3 centre[2] = {btVector3(0, 0, 0), btVector3(0, 0, 0)};    // velocity of the centre of curvature
   double sphere_radius[2] = {0.0, 0.0}, contact_radius[2] = {0.0, 0.0};
   double compliance[2] = {settings_.ground_compliance_per_pa, settings_.ground_compliance_per_pa};
-  bool moving[2] = {false, false};
+  bool moving[2] = {false, false}, driven[2] = {false, false};
   for (int k = 0; k < 2; ++k) {
     if (index[k] < 0) continue;
     const BodyState& b = *bodies_[size_t(index[k])];
@@ -88,6 +88,7 @@ void Simulation::contactState(ContactEvent& ev, const int index[2], const btVect
     compliance[k] = b.compliance_per_pa;
     if (b.is_static) continue;
     moving[k] = true;
+    driven[k] = b.driven;
     const btRigidBody& rb = *b.rigid;
     centre[k] = rb.getLinearVelocity();
     material[k] = centre[k] + rb.getAngularVelocity().cross(point_world - b.pre_transform.getOrigin());
@@ -95,7 +96,8 @@ void Simulation::contactState(ContactEvent& ev, const int index[2], const btVect
   // Where the contact point goes. Two spheres touch on the line between their centres at
   // (R_b c_a + R_a c_b) / (R_a + R_b); a sphere on any other shape (taken locally flat) keeps the
   // contact under its centre. Two non-spheres touch at a vertex, edge or face of the moving one
-  // (a box sliding on a table drags its contact with it); two moving ones share it equally.
+  // (a box sliding on a table drags its contact with it); two moving ones share it equally,
+  // unless one is driven (SimBodyDesc::path): the tool a hand draws over the other drags it.
   btVector3 point_velocity;
   const double ra = sphere_radius[0], rb = sphere_radius[1];
   if (ra > 0.0 && rb > 0.0)
@@ -104,6 +106,8 @@ void Simulation::contactState(ContactEvent& ev, const int index[2], const btVect
     point_velocity = centre[0];
   else if (rb > 0.0)
     point_velocity = centre[1];
+  else if (moving[0] && moving[1] && driven[0] != driven[1])
+    point_velocity = driven[0] ? material[0] : material[1];
   else if (moving[0] && moving[1])
     point_velocity = 0.5 * (material[0] + material[1]);
   else

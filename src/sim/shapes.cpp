@@ -267,7 +267,13 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
     }
   }
 
-  const btTransform world_from_mesh(orientation, toBt(desc.position_m));
+  // A driven body starts where its path is at t = 0 (drive() moves it on from there).
+  const PathPose start = pathPose(desc.path, 0.0);
+  const btTransform world_from_mesh =
+      desc.path.empty() ? btTransform(orientation, toBt(desc.position_m))
+                        : btTransform(btQuaternion(start.orientation_wxyz[1], start.orientation_wxyz[2],
+                                                   start.orientation_wxyz[3], start.orientation_wxyz[0]),
+                                      toBt(start.position_m));
   const btTransform world_from_body = world_from_mesh * state->mesh_from_body;
   btRigidBody::btRigidBodyConstructionInfo info(desc.is_static ? 0.0 : desc.mass_kg, nullptr, state->shape.get(),
                                                 desc.is_static ? btVector3(0, 0, 0) : state->principal_inertia);
@@ -298,6 +304,18 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
       state->rigid->setCcdSweptSphereRadius(0.4 * state->min_extent_m);
     }
     if (!settings_.allow_sleep) state->rigid->setActivationState(DISABLE_DEACTIVATION);
+    if (!desc.path.empty()) {
+      // The hand sets its velocities every substep (drive()): it must never sleep. It holds the
+      // orientation, so nothing turns the body but the hand: no inverse inertia for the solver.
+      // (Correcting between substeps instead is an explicit controller against a rigid contact:
+      // a spoon touching down with its tip away from its centre of mass rocked up to m/s.) The
+      // gyroscopic term goes with it.
+      state->driven = true;
+      state->rigid->setActivationState(DISABLE_DEACTIVATION);
+      state->rigid->setInvInertiaDiagLocal(btVector3(0, 0, 0));
+      state->rigid->updateInertiaTensor();
+      state->rigid->setFlags(state->rigid->getFlags() & ~BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY);
+    }
   }
   world_->addRigidBody(state->rigid.get());
   // A static body is asleep for good: Bullet skips a pair only when both bodies are inactive, so

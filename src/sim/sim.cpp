@@ -130,6 +130,7 @@ void Simulation::hastenSleep() {
   const double dt = settings_.substep_s;
   for (auto& b : bodies_) {
     btRigidBody& rigid = *b->rigid;
+    if (b->driven) continue;  // never asleep (buildBody)
     if (b->is_static || !rigid.isActive()) {
       if (!b->is_static && rigid.getActivationState() == ISLAND_SLEEPING && std::isnan(b->sleep_start_s))
         b->sleep_start_s = double(step_ + 1) * dt;
@@ -179,6 +180,9 @@ double Simulation::energy(std::vector<double>* kinetic) const {
 }
 
 void Simulation::preTick() {
+  // Driven bodies first: the contact events take the velocities the substep starts with.
+  for (size_t i = 0; i < bodies_.size(); ++i)
+    if (bodies_[i]->driven) drive(i);
   for (auto& b : bodies_) {
     b->pre_transform = b->rigid->getWorldTransform();
     b->pre_linear = b->rigid->getLinearVelocity();

@@ -78,6 +78,7 @@ struct BodyState {
   double compliance_per_pa = 0.0;  // (1 - nu^2) / E of its material
   SimBodyDesc::Shape shape_used = SimBodyDesc::Shape::ConvexHull;
   bool is_static = false;
+  bool driven = false;  // follows SimBodyDesc::path (Simulation::drive)
   // Storage for concave shapes (btTriangleIndexVertexArray points into these).
   std::vector<btScalar> body_xyz;
   std::vector<int> indices;
@@ -158,6 +159,7 @@ class Simulation {
  private:
   Status buildBody(size_t index, const btQuaternion& orientation);
   void preTick();
+  void drive(size_t index);
   void timeImpacts();
   void moveImpactsToTheirTime();
   void postTick();

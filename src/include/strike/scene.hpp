@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "strike/material.hpp"
+#include "strike/path.hpp"
 #include "strike/result.hpp"
 
 namespace strike {
@@ -36,6 +37,9 @@ struct SceneObject {
   /// Own surface roughness for rolling and sliding sound ("roughness_rms_m",
   /// "roughness_correlation_m", m); NaN: the material's (docs/contact.md).
   double roughness_rms_m = NAN, roughness_correlation_m = NAN;
+  /// "path": keyframes a hand moves the object along (a driven body, SimBodyDesc::path); empty:
+  /// it moves freely from position_m with its velocities.
+  std::vector<PathKey> path;
 };
 
 /// A scene's "contacts" entry: coefficients for one pair of objects ("ground" names the ground),

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "strike/path.hpp"
 #include "strike/progress.hpp"
 #include "strike/result.hpp"
 
@@ -49,6 +50,15 @@ struct SimBodyDesc {
   /// A ConvexPieces shape's pieces, if known (from a previous run, SimResult::convex_pieces_m):
   /// per piece its hull points (x, y, z, ...), mesh frame. Empty: computed (~0.1-1 s a body).
   std::vector<std::vector<double>> convex_pieces_m;
+  /// A driven body (scene key "path"): not empty, it follows these keyframes of its mesh frame's
+  /// pose as a hand would move it, and position_m, orientation_wxyz and the velocities are not
+  /// used (it starts on its path). Each substep its velocities are set so that it ends the substep
+  /// where its path is then: exactly in free air, and against friction too (a lag is made up in the
+  /// next substep). Upward (against gravity) the hand only holds it: where its path goes into
+  /// something it rests on that under its own weight, above its path, and it is lifted again when
+  /// its path rises above it. Nothing but the hand turns it (no inverse inertia in the solver).
+  /// Never asleep. See docs/scene-format.md.
+  std::vector<PathKey> path;
 };
 
 struct SimSettings {

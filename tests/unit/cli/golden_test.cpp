@@ -183,7 +183,8 @@ TEST_P(ViaLibrary, EqualsTheRenderWithin100dB) {
 
 INSTANTIATE_TEST_SUITE_P(EveryExample, ViaLibrary,
                          testing::Values("ball-rolls-across-plate", "bar-drop", "block-slides-down-plank",
-                                         "blocks-falling", "coin-spin", "glass-on-table", "marbles-in-bowl"),
+                                         "blocks-falling", "coin-spin", "glass-on-table", "marbles-in-bowl",
+                                         "spoon-scrapes-plate"),
                          [](const testing::TestParamInfo<const char*>& param) {
                            std::string name = param.param;
                            std::replace(name.begin(), name.end(), '-', '_');

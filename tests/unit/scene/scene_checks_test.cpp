@@ -113,5 +113,14 @@ TEST(SceneChecks, NeverStruckSaysHowLongTheFallTakes) {
       << w;
 }
 
+TEST(SceneChecks, NeverStruckOnAPathSaysWhereThePathEnds) {
+  SimBodyDesc held = box("held", 0.02, {0, 0, 0.5});
+  held.path = {{0.0, {0, 0, 0.5}, {1, 0, 0, 0}}, {1.5, {0.2, 0, 0.5}, {1, 0, 0, 0}}};
+  Scene scene = sceneOf({held});
+  const std::string w = neverStruckWarning(scene, held, 3.0);
+  EXPECT_NE(w.find("its path ends at (0.2, 0, 0.5) m at 1.5 s without touching anything"), std::string::npos) << w;
+  EXPECT_EQ(w.find("falling"), std::string::npos) << w;
+}
+
 }  // namespace
 }  // namespace strike

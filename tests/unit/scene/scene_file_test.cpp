@@ -86,6 +86,56 @@ TEST(SceneFile, ErrorsNameTheKeyPathAndValue) {
   for (const BadCase& c : cases) expectError(c);
 }
 
+TEST(SceneFile, PathKeyframesAreReadAndCheckedNamingTheKey) {
+  const std::string obj = R"("mesh": "box:0.1,0.02,0.002", "material": "steel")";
+  Result<Scene> ok = parseScene(R"({"objects": [{)" + obj + R"(, "path": [
+      {"t": 0, "position": [0, 0, 0.1], "orientation": [0.965925826, 0, 0.258819045, 0]},
+      {"t": 0.5, "position": [0.1, 0, 0.1]},
+      {"t": 1, "position": [0.1, 0, 0.2], "orientation": [1, 0, 0, 0]}]}]})",
+                                "s.json");
+  ASSERT_TRUE(ok) << ok.error().message;
+  const std::vector<PathKey>& path = ok->objects[0].path;
+  ASSERT_EQ(path.size(), 3u);
+  EXPECT_EQ(path[1].t_s, 0.5);
+  EXPECT_EQ(path[1].position_m[0], 0.1);
+  // A key without an orientation keeps the one before.
+  EXPECT_NEAR(path[1].orientation_wxyz[2], 0.258819045, 1e-9);
+  EXPECT_EQ(path[2].orientation_wxyz[0], 1.0);
+
+  const std::string key0 = R"({"t": 0, "position": [0, 0, 0.1]})";
+  const BadCase cases[] = {
+      {R"({"objects": [{)" + obj + R"(, "path": []}]})", "objects[0].path: expected a list of keyframes"},
+      {R"({"objects": [{)" + obj + R"(, "path": {"t": 0}}]})", "objects[0].path: expected a list of keyframes"},
+      {R"({"objects": [{)" + obj + R"(, "path": [)" + key0 + R"(, {"t": 0, "position": [0, 0, 0]}]}]})",
+       "objects[0].path[1].t: must be later than the key before (0), got 0"},
+      {R"({"objects": [{)" + obj + R"(, "path": [)" + key0 + R"(, {"t": 1, "position": [0, 0, 0]}, )" +
+           R"({"t": 0.5, "position": [0, 0, 0]}]}]})",
+       "objects[0].path[2].t: must be later than the key before (1), got 0.5"},
+      {R"({"objects": [{)" + obj + R"(, "path": [{"t": -1, "position": [0, 0, 0]}]}]})",
+       "objects[0].path[0].t: must be >= 0 s, got -1"},
+      {R"({"objects": [{)" + obj + R"(, "path": [{"t": "soon", "position": [0, 0, 0]}]}]})",
+       "objects[0].path[0].t: expected a number, got \"soon\""},
+      {R"({"objects": [{)" + obj + R"(, "path": [{"position": [0, 0, 0]}]}]})",
+       "objects[0].path[0].t: missing (a keyframe needs \"t\" and \"position\")"},
+      {R"({"objects": [{)" + obj + R"(, "path": [{"t": 0}]}]})", "objects[0].path[0].position: missing"},
+      {R"({"objects": [{)" + obj + R"(, "path": [{"t": 0, "position": [0, 0]}]}]})",
+       "objects[0].path[0].position: expected an array of 3 numbers, got [0,0]"},
+      {R"({"objects": [{)" + obj + R"(, "path": [{"t": 0, "position": [0, null, 0]}]}]})",
+       "objects[0].path[0].position[1]: expected a number, got null"},
+      {R"({"objects": [{)" + obj + R"(, "path": [)" + key0 + R"(, {"t": 1, "position": [0, 0, 0], "orientation": [1, 1, 0, 0]}]}]})",
+       "objects[0].path[1].orientation: expected a unit quaternion [w, x, y, z], got [1,1,0,0]"},
+      {R"({"objects": [{)" + obj + R"(, "path": [{"t": 0, "position": [0, 0, 0], "speed": 1}]}]})",
+       "objects[0].path[0].speed: unknown key (known keys here: t, position, orientation)"},
+      {R"({"objects": [{)" + obj + R"(, "static": true, "path": [)" + key0 + R"(]}]})",
+       "objects[0].path: a static object never moves"},
+      {R"({"objects": [{)" + obj + R"(, "velocity": [1, 0, 0], "path": [)" + key0 + R"(]}]})",
+       "objects[0].velocity: not used with \"path\", got [1,0,0]"},
+      {R"({"objects": [{)" + obj + R"(, "position": [0, 0, 1], "path": [)" + key0 + R"(]}]})",
+       "objects[0].position: not used with \"path\""},
+  };
+  for (const BadCase& c : cases) expectError(c);
+}
+
 TEST(SceneFile, GroundCanBeRemovedOrRaised) {
   const std::string obj = R"([{"mesh": "box:0.1,0.1,0.1", "material": "steel"}])";
   Result<Scene> none = parseScene(R"({"ground": null, "objects": )" + obj + "}", "s.json");

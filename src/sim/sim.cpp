@@ -27,7 +27,17 @@ namespace strike {
 namespace detail {
 
 Status Simulation::build(const std::vector<btQuaternion>& orientations) {
-  config_ = std::make_unique<btDefaultCollisionConfiguration>();
+  // Bullet's default pools hold 4096 contact manifolds and 4096 collision algorithms (MBs in
+  // double precision), which its allocator zeroes whenever a world is made: a few percent of a
+  // small render's time. Pools sized to the scene (a manifold per touching pair, one per touching
+  // piece of a compound) suffice; past them Bullet allocates from the heap, which changes where a
+  // manifold lives and nothing it computes.
+  btDefaultCollisionConstructionInfo pools;
+  size_t parts = 1;  // the ground
+  for (const SimBodyDesc& d : descs_) parts += std::max<size_t>(1, d.convex_pieces_m.size());
+  pools.m_defaultMaxPersistentManifoldPoolSize = int(std::clamp<size_t>(8 * parts, 64, 4096));
+  pools.m_defaultMaxCollisionAlgorithmPoolSize = pools.m_defaultMaxPersistentManifoldPoolSize;
+  config_ = std::make_unique<btDefaultCollisionConfiguration>(pools);
   // A box landing flat on the ground must touch with all four corners in the same substep;
   // the default plane-convex algorithm reports one support point per substep, and the box
   // tips on it. Perturbed support queries find the rest of the face [Bullet

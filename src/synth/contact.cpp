@@ -250,7 +250,13 @@ void SurfaceLocator::projectImpulseInto(const double point[3], const double impu
 }
 
 ContactProjector::ContactProjector(const ModeBank& bank, size_t max_points)
-    : locator_(bank), bank_(&bank), max_points_(std::max<size_t>(max_points, 1)) {
+    : ContactProjector(bank, nullptr, max_points) {}
+
+ContactProjector::ContactProjector(const ModeBank& bank, std::shared_ptr<const SurfaceLocator> locator,
+                                   size_t max_points)
+    : locator_(locator && locator->builtFor(bank) ? std::move(locator) : std::make_shared<const SurfaceLocator>(bank)),
+      bank_(&bank),
+      max_points_(std::max<size_t>(max_points, 1)) {
   // All the memory it will use, now: projecting never allocates (libstrike's audio thread).
   points_.reserve(3 * max_points_);
   weights_.reserve(3 * max_points_);
@@ -266,8 +272,8 @@ void ContactProjector::projectImpulseInto(const double point[3], const double im
   const ModeBank& bank = *bank_;
   const size_t nm = bank.modeCount();
   const bool has_shapes = use_rows_ ? rows_.modes == nm : bank.shapes.size() >= nm * bank.surfaceVertexCount() * 3;
-  if (!has_shapes || !locator_.hasTriangles()) {
-    locator_.projectImpulseInto(point, impulse, out);  // degenerate banks: the plain path handles them
+  if (!has_shapes || !locator_->hasTriangles()) {
+    locator_->projectImpulseInto(point, impulse, out);  // degenerate banks: the plain path handles them
     return;
   }
   const size_t remembered = points_.size() / 3;
@@ -280,7 +286,7 @@ void ContactProjector::projectImpulseInto(const double point[3], const double im
   if (slot == remembered) {
     uint32_t v[3];
     double w[3];
-    locator_.nearest(point, v, w);
+    locator_->nearest(point, v, w);
     if (remembered < max_points_) {
       points_.resize(points_.size() + 3);
       weights_.resize(weights_.size() + 3);
@@ -319,16 +325,16 @@ void ContactProjector::projectImpulseInto(const double point[3], const double im
 
 void ContactProjector::projectOnce(const double point[3], const double impulse[3], double* out) const {
   const size_t nm = bank_->modeCount();
-  if (!use_rows_ || rows_.modes != nm || !locator_.hasTriangles()) {
+  if (!use_rows_ || rows_.modes != nm || !locator_->hasTriangles()) {
     if (use_rows_ && rows_.modes != nm)
       std::fill_n(out, nm, 0.0);
     else
-      locator_.projectImpulseInto(point, impulse, out);
+      locator_->projectImpulseInto(point, impulse, out);
     return;
   }
   uint32_t v[3];
   double w[3];
-  locator_.nearest(point, v, w);
+  locator_->nearest(point, v, w);
   const float* read[3] = {rows_.row(v[0]), rows_.row(v[1]), rows_.row(v[2])};
   // The same sums in the same order as projectImpulseInto (a missing row projects to zero).
   for (size_t m = 0; m < nm; ++m) {

@@ -20,3 +20,13 @@ for workers in 1 2; do
   /usr/bin/python3 -m strike batch bench.jsonl -o "out$workers" --workers "$workers" --cache cache 2>&1 | tail -1
 done
 cmp <(cat out1/*.wav) <(cat out2/*.wav) && echo "bench-batch: 1- and 2-worker outputs identical"
+# Per render inside the 1-worker process (each ID.json's timings_s): on a shared machine the
+# renders/s above move with the neighbours' load, these medians less so.
+/usr/bin/python3 - <<'PY'
+import glob, json, statistics
+timings = [json.load(open(f))["timings_s"] for f in glob.glob("out1/*.json")]
+med = {k: 1000 * statistics.median(t[k] for t in timings) for k in ("job", "total", "simulate", "modes", "synthesize")}
+print("bench-batch: 1 worker, median per render: job %.1f ms (engine %.1f: simulate %.1f, banks %.1f, synthesize %.1f)"
+      % (med["job"], med["total"], med["simulate"], med["modes"], med["synthesize"]))
+PY
+echo "bench-batch: $(uptime)"

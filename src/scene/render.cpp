@@ -58,6 +58,7 @@ struct Body {
   bool sounded = false;           ///< struck audibly: gets a bank and an oscillator
   bool silent = false;            ///< ...but no mode in the synthesized band
   std::optional<ShapeRows> rows;  ///< shapes read at the struck vertices only (readStruckShapes)
+  std::shared_ptr<const SurfaceLocator> locator;  ///< built for `bank` by readStruckShapes, for its voice
   double contact_radius_m = 0.0;  ///< radius of the sphere of equal volume, for Hertz
   // With RenderSettings::similar_reuse: cache_key, file, from_cache and mesh are the normalized
   // solve's, and bank its scaled copy (geometry only until phase 2).
@@ -292,8 +293,10 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
 Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEvent>& events, bool whole,
                         RenderReport& report) {
   body.rows.reset();
+  body.locator.reset();
   const bool has_radiation = body.bank.radiation_m2.size() == body.bank.modeCount();
-  const SurfaceLocator locator(body.bank);
+  auto shared_locator = std::make_shared<const SurfaceLocator>(body.bank);
+  const SurfaceLocator& locator = *shared_locator;
   if (!has_radiation || !locator.hasTriangles() || whole) {
     // Radiation strengths computed from every shape (banks written before the RADI chunk), no
     // triangles to locate on, or a library that loads whole bank files: the whole bank.
@@ -324,6 +327,7 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   report.shape_vertices_read += rows->vertices.size();
   report.shape_vertices_total += body.bank.surfaceVertexCount();
   body.rows = std::move(*rows);
+  body.locator = std::move(shared_locator);  // the voice projects with it (the same bank object)
   return {};
 }
 
@@ -662,6 +666,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     VoiceDesc voice;
     voice.bank = std::shared_ptr<const ModeBank>(std::shared_ptr<const ModeBank>(), &body.bank);  // not owned
     if (body.rows) voice.rows = std::move(*body.rows), voice.use_rows = true;
+    voice.locator = body.locator;
     voice.weights = radiationWeights(body.bank, engine_settings.reference_distance_m);
     for (double& w : voice.weights) w *= settings.gain / kFullScalePascal;
     voice.pressure_scale = settings.gain / kFullScalePascal;

@@ -27,7 +27,17 @@ namespace strike {
 namespace detail {
 
 Status Simulation::build(const std::vector<btQuaternion>& orientations) {
-  config_ = std::make_unique<btDefaultCollisionConfiguration>();
+  // Bullet's default pools hold 4096 contact manifolds and 4096 collision algorithms (MBs in
+  // double precision), which its allocator zeroes whenever a world is made: a few percent of a
+  // small render's time. Pools sized to the scene (a manifold per touching pair, one per touching
+  // piece of a compound) suffice; past them Bullet allocates from the heap, which changes where a
+  // manifold lives and nothing it computes.
+  btDefaultCollisionConstructionInfo pools;
+  size_t parts = 1;  // the ground
+  for (const SimBodyDesc& d : descs_) parts += std::max<size_t>(1, d.convex_pieces_m.size());
+  pools.m_defaultMaxPersistentManifoldPoolSize = int(std::clamp<size_t>(8 * parts, 64, 4096));
+  pools.m_defaultMaxCollisionAlgorithmPoolSize = pools.m_defaultMaxPersistentManifoldPoolSize;
+  config_ = std::make_unique<btDefaultCollisionConfiguration>(pools);
   // A box landing flat on the ground must touch with all four corners in the same substep;
   // the default plane-convex algorithm reports one support point per substep, and the box
   // tips on it. Perturbed support queries find the rest of the face [Bullet
@@ -190,6 +200,33 @@ void Simulation::preTick() {
   }
 }
 
+bool Simulation::allAsleep() const {
+  for (const auto& b : bodies_)
+    if (!b->is_static && b->rigid->getActivationState() != ISLAND_SLEEPING) return false;
+  return true;
+}
+
+void Simulation::fillAsleep(uint64_t substeps, SimResult& result) {
+  // Every moving body is asleep after substep step_, and nothing is left that could wake one: a
+  // sleeping island wakes only when an active body touches it, and static bodies and the ground
+  // never move. Bullet then neither integrates nor collides them (both sides of every pair are
+  // inactive), postTick() records no event for a sleeping island, and the velocities were zeroed
+  // when the islands fell asleep. So every later substep would record the same poses, no event
+  // and the same energy: those are written here instead of stepped, the same values to the bit
+  // (SimSettings::end_when_all_asleep; a test compares both ways).
+  const size_t n = bodies_.size();
+  const uint64_t remaining = substeps - (step_ + 1);
+  if (settings_.record_states && n > 0) {
+    const size_t last = result.states.size() - n;
+    result.states.reserve(result.states.size() + remaining * n);
+    for (uint64_t k = 0; k < remaining; ++k)
+      for (size_t i = 0; i < n; ++i) result.states.push_back(result.states[last + i]);
+  }
+  const double energy_j = result.energy_trace_j.back();
+  result.energy_trace_j.insert(result.energy_trace_j.end(), remaining, energy_j);
+  step_ = substeps;
+}
+
 Result<SimResult> Simulation::run() {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
@@ -217,6 +254,10 @@ Result<SimResult> Simulation::run() {
     result.energy_trace_j.push_back(energy(&kinetic));
     for (size_t i = 0; i < n; ++i)
       result.max_kinetic_energy_j[i] = std::max(result.max_kinetic_energy_j[i], kinetic[i]);
+    if (settings_.end_when_all_asleep && allAsleep()) {
+      fillAsleep(substeps, result);
+      break;
+    }
     if (settings_.progress) {
       const auto now = Clock::now();
       if (now - last_report >= std::chrono::milliseconds(100)) {

@@ -165,6 +165,10 @@ class Simulation {
   void postTick();
   double energy(std::vector<double>* kinetic) const;
   void hastenSleep();
+  /// True when every moving body is asleep (Bullet's ISLAND_SLEEPING).
+  bool allAsleep() const;
+  /// The substeps after step_ once every moving body is asleep (see sim.cpp).
+  void fillAsleep(uint64_t substeps, SimResult& result);
   void recordStates(std::vector<SimBodyState>& states) const;
   ContactCoefficients coefficients(int index_a, int index_b) const;
   void setRollingResistance(btPersistentManifold& manifold, const ContactCoefficients& pair) const;

@@ -141,7 +141,7 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
 }
 
 Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
-    : bank_(desc.bank), synth_(settings.synth), click_synth_(settings.synth), projector_(*desc.bank) {
+    : bank_(desc.bank), synth_(settings.synth), click_synth_(settings.synth), projector_(*desc.bank, desc.locator) {
   const ModeBank& bank = *bank_;
   if (desc.use_rows) projector_.useRows(desc.rows);
   ModalObjectDesc modal;

@@ -114,6 +114,9 @@ struct VoiceDesc {
   /// empty: the bank's own shapes.
   ShapeRows rows;
   bool use_rows = false;
+  /// A SurfaceLocator built for this very `bank` object, or null: the voice builds its own (one
+  /// per bank surface: ~5 M instructions for a few thousand triangles).
+  std::shared_ptr<const SurfaceLocator> locator;
   /// Per mode: output units per unit modal acceleration at the reference distance (pressure
   /// weights over the output's full scale); empty means 1 (modal acceleration).
   std::vector<double> weights;

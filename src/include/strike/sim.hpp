@@ -99,6 +99,11 @@ struct SimSettings {
   /// steady force, which the render turns into silence, so simulating them longer buys nothing:
   /// 20 plates resting from 0.25 s cost 2 s of solver steps each at Bullet's 2 s.
   double sleep_after_still_s = 0.5;
+  /// Stop stepping once every moving body is asleep, and write the remaining substeps' states
+  /// and energy as they would be (a sleeping world records no event and does not move: see
+  /// Simulation::fillAsleep in sim.cpp). The same result either way, to the bit; false steps to
+  /// the end (for the test that says so).
+  bool end_when_all_asleep = true;
   /// Memory cap: a run that records more contact events than this stops with an error naming
   /// the cap (`strike render --max-events`). ~100 bytes each: the default is ~2 GB.
   size_t max_events = 20'000'000;

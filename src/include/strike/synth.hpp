@@ -238,6 +238,8 @@ class SurfaceLocator {
   void projectImpulseInto(const double point[3], const double impulse[3], double* out) const;
   /// False when the bank has no usable triangles (projection falls back to the nearest vertex).
   bool hasTriangles() const { return !cell_tris_.empty(); }
+  /// Whether it was built for this very bank object (it keeps a pointer to it).
+  bool builtFor(const ModeBank& bank) const { return bank_ == &bank; }
 
  private:
   const ModeBank* bank_;
@@ -256,18 +258,21 @@ class SurfaceLocator {
 class ContactProjector {
  public:
   explicit ContactProjector(const ModeBank& bank, size_t max_points = 64);
+  /// With a locator already built for this bank (SurfaceLocator::builtFor; else one is built):
+  /// a render that located its contacts to read the shapes they touch builds it once.
+  ContactProjector(const ModeBank& bank, std::shared_ptr<const SurfaceLocator> locator, size_t max_points = 64);
   /// Projects with these shape rows instead of bank.shapes (a bank opened with BankFile, whose
   /// shapes are read only at the vertices its contacts touch). The rows must hold every vertex
   /// locator().nearest() gives for the points projected; a missing vertex projects to zero.
   void useRows(ShapeRows rows);
-  const SurfaceLocator& locator() const { return locator_; }
+  const SurfaceLocator& locator() const { return *locator_; }
   void projectImpulseInto(const double point[3], const double impulse[3], double* out);
   /// The same result without remembering the point: for a point that will not come back (an
   /// impact), where filling the memory's row (9 floats per mode) would cost more than it saves.
   void projectOnce(const double point[3], const double impulse[3], double* out) const;
 
  private:
-  SurfaceLocator locator_;
+  std::shared_ptr<const SurfaceLocator> locator_;
   const ModeBank* bank_;
   bool use_rows_ = false;
   ShapeRows rows_;

@@ -44,6 +44,84 @@ TEST(SceneChecks, DepthInsideAClosedBoxIsTheDistanceToItsNearestFace) {
   EXPECT_EQ(depthInside(outside, b.surface_positions, b.surface_triangles), 0.0);
 }
 
+/// A closed latitude-longitude sphere (poles as single vertices), CCW from outside, moved by
+/// `centre`: many triangles meeting at the poles, and slanted faces everywhere.
+void uvSphere(double r, const std::array<double, 3>& centre, std::vector<double>& xyz, std::vector<uint32_t>& tris) {
+  const int rings = 9, segments = 14;
+  xyz = {centre[0], centre[1], centre[2] + r};
+  for (int i = 1; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
+      xyz.insert(xyz.end(), {centre[0] + r * std::sin(theta) * std::cos(phi),
+                             centre[1] + r * std::sin(theta) * std::sin(phi), centre[2] + r * std::cos(theta)});
+    }
+  xyz.insert(xyz.end(), {centre[0], centre[1], centre[2] - r});
+  const uint32_t south = uint32_t(xyz.size() / 3 - 1);
+  auto at = [&](int i, int j) { return uint32_t(1 + (i - 1) * segments + (j % segments)); };
+  for (int j = 0; j < segments; ++j) {
+    tris.insert(tris.end(), {0, at(1, j), at(1, j + 1)});
+    for (int i = 1; i + 1 < rings; ++i)
+      tris.insert(tris.end(), {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    tris.insert(tris.end(), {at(rings - 1, j), south, at(rings - 1, j + 1)});
+  }
+}
+
+TEST(SceneChecks, InsideTestDecidesAsDepthInsideDoes) {
+  // Random points in and around a rotated box and a sphere: every point the ray test decides, it
+  // decides as depthInside's winding number does (depth > 0 inside), and it decides nearly all.
+  std::vector<std::pair<std::vector<double>, std::vector<uint32_t>>> surfaces;
+  {
+    SimBodyDesc b = box("b", 0.1, {0, 0, 0});
+    const double c = std::cos(0.7), s = std::sin(0.7), c2 = std::cos(0.4), s2 = std::sin(0.4);
+    for (size_t v = 0; v < b.surface_positions.size(); v += 3) {
+      double* p = &b.surface_positions[v];
+      const double x = c * p[0] - s * p[1], y = s * p[0] + c * p[1];
+      const double y2 = c2 * y - s2 * p[2], z2 = s2 * y + c2 * p[2];
+      p[0] = x + 0.3, p[1] = y2 - 0.1, p[2] = z2 + 0.2;
+    }
+    surfaces.emplace_back(b.surface_positions, b.surface_triangles);
+  }
+  {
+    std::vector<double> xyz;
+    std::vector<uint32_t> tris;
+    uvSphere(0.03, {-0.1, 0.05, 0.12}, xyz, tris);
+    surfaces.emplace_back(xyz, tris);
+  }
+  uint64_t seed = 12345;
+  auto uniform = [&] {
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    return double(seed >> 11) / double(1ull << 53);
+  };
+  for (const auto& [xyz, tris] : surfaces) {
+    const InsideTest test(xyz, tris);
+    ASSERT_TRUE(test.closed());
+    double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < xyz.size(); v += 3)
+      for (int k = 0; k < 3; ++k) low[k] = std::min(low[k], xyz[v + k]), high[k] = std::max(high[k], xyz[v + k]);
+    int decided = 0, inside = 0;
+    const int points = 4000;
+    for (int n = 0; n < points; ++n) {
+      double p[3];
+      for (int k = 0; k < 3; ++k) p[k] = low[k] - 0.1 * (high[k] - low[k]) + 1.2 * (high[k] - low[k]) * uniform();
+      if (n % 10 == 0) p[0] = xyz[3 * size_t(n / 10 % (xyz.size() / 3))], p[1] = xyz[3 * size_t(n / 10 % (xyz.size() / 3)) + 1];
+      const int verdict = test.classify(p);
+      if (verdict < 0) continue;
+      ++decided;
+      inside += verdict;
+      EXPECT_EQ(verdict == 1, depthInside(p, xyz, tris) > 0.0) << "point " << p[0] << ", " << p[1] << ", " << p[2];
+    }
+    EXPECT_GT(decided, points * 8 / 10);  // the points above a vertex are left to depthInside
+    EXPECT_GT(inside, points / 10);
+  }
+  // An open surface (a box without its top) has no integer winding number: always undecided.
+  SimBodyDesc open = box("open", 0.1, {0, 0, 0});
+  open.surface_triangles.resize(open.surface_triangles.size() - 6);
+  const InsideTest test(open.surface_positions, open.surface_triangles);
+  EXPECT_FALSE(test.closed());
+  const double centre[3] = {0.01, 0.02, 0.0};
+  EXPECT_EQ(test.classify(centre), -1);
+}
+
 TEST(SceneChecks, OverlapsAndTheGroundAreNamedWithTheirDepth) {
   // a and b overlap by 3 cm along x (b's corner x = -0.02 lies 0.03 m inside a, whose face is at 0.05).
   const std::vector<SimBodyDesc> bodies = {box("a", 0.1, {0, 0, 0.2}), box("b", 0.1, {0.07, 0.0, 0.2}),

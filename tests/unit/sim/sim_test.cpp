@@ -494,6 +494,72 @@ TEST(SimDeterminism, TwoRunsGiveIdenticalEvents) {
   EXPECT_GT(timed, 0);
 }
 
+TEST(SimDeterminism, EndingOnceAllAsleepGivesTheFullRunToTheBit) {
+  // SimSettings::end_when_all_asleep stops stepping once every moving body sleeps and writes the
+  // rest; it must be exactly what stepping to the end records. Two boxes land on a static slab
+  // and the ground, a third drops onto one of them, and all sleep well before the 3 s end.
+  std::vector<SimBodyDesc> bodies;
+  SimBodyDesc slab = makeBox("slab", {0.3, 0.3, 0.02}, 1.0);
+  slab.is_static = true;
+  slab.position_m = {0.3, 0, 0.01};
+  bodies.push_back(slab);
+  SimBodyDesc a = makeBox("a", {0.06, 0.04, 0.02}, 0.2, {0.005, 0, 0}, rotation({0, 1, 1}, 0.3));
+  a.orientation_wxyz = quaternion({1, 2, 3}, 0.8);
+  a.position_m = {0.3, 0.02, 0.12};
+  a.angular_velocity_rad_s = {0, 3, 1};
+  bodies.push_back(a);
+  SimBodyDesc b = makeBox("b", {0.05, 0.05, 0.03}, 0.3);
+  b.position_m = {-0.2, 0, 0.1};
+  b.velocity_m_s = {0.3, 0, 0};
+  bodies.push_back(b);
+  SimBodyDesc c = makeBox("c", {0.03, 0.02, 0.01}, 0.05);
+  c.position_m = {-0.19, 0.01, 0.3};
+  bodies.push_back(c);
+  SimSettings full = settingsFor(3.0);
+  full.record_states = true;
+  full.end_when_all_asleep = false;
+  SimSettings early = full;
+  early.end_when_all_asleep = true;
+  const SimResult x = run(bodies, full, "settling boxes, stepped");
+  const SimResult y = run(bodies, early, "settling boxes, ended early");
+  // All asleep before 2 s: the early end had a second to skip.
+  ASSERT_EQ(x.sleep_start_s.size(), 4u);
+  for (size_t i = 1; i < 4; ++i) EXPECT_LT(x.sleep_start_s[i], 2.0) << "body " << i;
+  ASSERT_GT(x.events.size(), 50u);
+  ASSERT_EQ(x.events.size(), y.events.size());
+  for (size_t k = 0; k < x.events.size(); ++k) {
+    const ContactEvent& p = x.events[k];
+    const ContactEvent& q = y.events[k];
+    ASSERT_TRUE(p.time_s == q.time_s && p.step_time_s == q.step_time_s && p.body_a == q.body_a &&
+                p.body_b == q.body_b && p.point_a_mesh == q.point_a_mesh && p.point_b_mesh == q.point_b_mesh &&
+                p.impulse_on_a_mesh == q.impulse_on_a_mesh && p.impulse_on_b_mesh == q.impulse_on_b_mesh &&
+                p.point_world == q.point_world && p.normal_world == q.normal_world &&
+                p.normal_impulse_n_s == q.normal_impulse_n_s && p.normal_speed_m_s == q.normal_speed_m_s &&
+                p.new_contact == q.new_contact && p.slip_velocity_m_s == q.slip_velocity_m_s &&
+                p.rolling_speed_m_s == q.rolling_speed_m_s && p.patch_radius_m == q.patch_radius_m)
+        << "event " << k << " differs";
+  }
+  EXPECT_EQ(x.substeps, y.substeps);
+  ASSERT_EQ(x.states.size(), y.states.size());
+  ASSERT_EQ(x.states.size(), x.substeps * bodies.size());
+  for (size_t k = 0; k < x.states.size(); ++k) {
+    const SimBodyState& p = x.states[k];
+    const SimBodyState& q = y.states[k];
+    ASSERT_TRUE(p.position_m == q.position_m && p.orientation_wxyz == q.orientation_wxyz &&
+                p.velocity_m_s == q.velocity_m_s && p.asleep == q.asleep)
+        << "state " << k << " (substep " << k / bodies.size() << ") differs";
+  }
+  EXPECT_TRUE(test::sameValues(x.energy_trace_j, y.energy_trace_j));
+  EXPECT_TRUE(test::sameValues(x.max_kinetic_energy_j, y.max_kinetic_energy_j));
+  ASSERT_EQ(x.sleep_start_s.size(), y.sleep_start_s.size());
+  for (size_t i = 0; i < x.sleep_start_s.size(); ++i)  // NaN for the static slab
+    EXPECT_TRUE(x.sleep_start_s[i] == y.sleep_start_s[i] || (std::isnan(x.sleep_start_s[i]) && std::isnan(y.sleep_start_s[i])))
+        << "body " << i;
+  EXPECT_EQ(x.final_position_m, y.final_position_m);
+  EXPECT_EQ(x.final_velocity_m_s, y.final_velocity_m_s);
+  EXPECT_EQ(x.final_angular_velocity_rad_s, y.final_angular_velocity_rad_s);
+}
+
 TEST(SimBadInput, ErrorsNameTheBodyFieldAndValue) {
   SimBodyDesc box = makeBox("cube", {0.05, 0.05, 0.05}, 0.1);
   box.position_m = {0, 0, 0.5};

@@ -308,8 +308,10 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
     report.shape_vertices_total += body.bank.surfaceVertexCount();
     return {};
   }
+  // A bank with no mode in the band (a marble) needs no shape anywhere.
   std::vector<std::array<double, 3>> points;
   for (const ContactEvent& event : events) {
+    if (body.bank.modeCount() == 0) break;
     if (event.body_a == index) points.push_back(event.point_a_mesh);
     if (event.body_b == index) points.push_back(event.point_b_mesh);
   }

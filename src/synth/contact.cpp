@@ -271,6 +271,7 @@ void ContactProjector::useRows(ShapeRows rows) {
 void ContactProjector::projectImpulseInto(const double point[3], const double impulse[3], double* out) {
   const ModeBank& bank = *bank_;
   const size_t nm = bank.modeCount();
+  if (nm == 0) return;  // a bank with no mode in the band (a marble): nothing to find the point for
   const bool has_shapes = use_rows_ ? rows_.modes == nm : bank.shapes.size() >= nm * bank.surfaceVertexCount() * 3;
   if (!has_shapes || !locator_->hasTriangles()) {
     locator_->projectImpulseInto(point, impulse, out);  // degenerate banks: the plain path handles them

@@ -157,6 +157,8 @@ py::dict reportDict(const PyRenderResult& r) {
   d["sustained_contacts"] = s.sustained_contacts;
   d["load_changes"] = s.load_changes;
   d["load_holds"] = s.load_holds;
+  d["continuous_contacts"] = s.continuous_contacts;
+  d["continuous_dropped"] = s.continuous_dropped;
   d["modes_total"] = s.modes_total;
   d["modes_out_of_band"] = s.modes_out_of_band;
   d["mode_samples"] = s.mode_samples;

@@ -721,6 +721,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   report.load_changes = engine_stats.load_changes;
   report.load_holds = engine_stats.load_holds;
   report.continuous_contacts = engine_stats.continuous_contacts;
+  report.continuous_dropped = engine_stats.continuous_dropped;
   report.continuous_lost_samples = engine_stats.continuous_lost_samples;
   report.continuous_last_force_s = engine_stats.continuous_last_force_s;
   for (std::string& text : output->warnings()) warn(std::move(text));

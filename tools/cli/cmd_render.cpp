@@ -11,6 +11,7 @@
 #include "strike/audio.hpp"
 #include "strike/bank_cache.hpp"
 #include "strike/render.hpp"
+#include "strike/synth.hpp"
 #include "strike/scene.hpp"
 #include "via_library.hpp"
 
@@ -105,6 +106,16 @@ void printSummary(const RenderResult& result, const std::string& output, double 
       "  heard       %zu impact pulses and %zu resting/sliding impulses on sounding bodies "
       "(an event counts once per sounding body it touches), making %zu changes of load (a steady load is silent)\n",
       r.impacts, r.sustained_contacts, r.load_changes);
+  if (r.continuous_contacts > 0 || r.continuous_dropped > 0) {
+    std::fprintf(stderr, "  rolling     %zu rolling or sliding contacts heard (a body and a partner its surface moves over)",
+                 r.continuous_contacts);
+    if (r.continuous_dropped > 0)
+      std::fprintf(stderr, ", %zu contact points of further partners not heard (a body sounds with at most %u at once)",
+                   r.continuous_dropped,
+                   static_cast<unsigned>(kForceChannels));
+    if (r.continuous_last_force_s >= 0.0) std::fprintf(stderr, "; the last stopped at %.3f s", r.continuous_last_force_s);
+    std::fprintf(stderr, "\n");
+  }
   std::fprintf(stderr, "  modes       %llu in the banks, %llu out of the audible band, at most %llu ringing at once\n",
                static_cast<unsigned long long>(r.modes_total), static_cast<unsigned long long>(r.modes_out_of_band),
                static_cast<unsigned long long>(r.max_active_modes));

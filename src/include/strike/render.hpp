@@ -128,6 +128,7 @@ struct RenderReport {
   /// Rolling, sliding and scraping (docs/contact.md): contact generators started, samples in
   /// which a rough contact lost contact, and the time the last one's force stopped (-1: none).
   size_t continuous_contacts = 0;
+  size_t continuous_dropped = 0;  ///< contact points not heard: the body already sounded with kForceChannels partners
   uint64_t continuous_lost_samples = 0;
   double continuous_last_force_s = -1.0;
   /// Scenes that cannot be right, and silent results, in words with numbers (scene_checks.hpp).

@@ -286,7 +286,8 @@ typedef struct strike_stats {
   uint64_t clock_frames;                /**< frames since creation or the last strike_context_reset() */
   /* 0.4 */
   uint64_t continuous_contacts; /**< rolling/sliding contacts whose roughness began to drive an object */
-  uint64_t continuous_dropped;  /**< ...that could not: all of the object's contact sources were busy */
+  uint64_t continuous_dropped;  /**< contact points of further partners not heard: the object already
+                                     sounded with 4 (docs/contact.md) */
 } strike_stats;
 
 /** Copies the counters. [any-thread]

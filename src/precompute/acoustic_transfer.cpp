@@ -26,7 +26,6 @@ constexpr double kCellPhase = 0.6;      // a triangle's 1-point rule: k D at mos
 constexpr double kPointPhase = 2.0;     // a far piece as one point with its phase spread: k D at most this
 constexpr double kNearRatio = 2.5;      // a triangle's 3-point rule: this many diameters away
 constexpr int kNearMaxDepth = 7;        // subdivision levels at most (4^7 pieces)
-constexpr double kFarFieldPhase = 0.5;  // far-field projection cells: kappa D at most this
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -474,12 +473,87 @@ Coarse coarsen(const Surface& s, const Cut& cut) {
   return coarse;
 }
 
-/// One row of the system at x: M[col] += int_cluster dG/dn_y, and int G q over the surface.
-/// host: the triangle x is the centroid of (-1 for interior points).
-void assembleRow(const Surface& s, const Cut& cut, const NodeData& data, double k, const V3& x, int64_t host, cd* M,
-                 cd& lq, std::vector<int32_t>& stack) {
+/// The pieces of a solve at wavenumber k: the largest nodes inside one cluster that one point
+/// with its moments can stand for (k D <= kPointPhase), or single triangles too large for that.
+/// They are the same for every collocation point, so each row is one flat loop over them
+/// (structure of arrays), and the far field is summed over them too.
+struct Pieces {
+  std::vector<int32_t> node, col;
+  std::vector<char> one_point;            // k D <= kPointPhase: one point with its moments will do
+  std::vector<double> x, y, z;            // centroid
+  std::vector<double> ax, ay, az;         // vector area
+  std::vector<double> cxx, cxy, cxz, cyy, cyz, czz, trace;  // covariance of the piece's points
+  std::vector<double> diameter;
+  size_t size() const { return node.size(); }
+};
+
+Pieces makePieces(const Surface& s, const Cut& cut, double k) {
+  Pieces p;
+  std::vector<int32_t> stack{0};
+  while (!stack.empty()) {
+    const int32_t i = stack.back();
+    stack.pop_back();
+    const Node& n = s.nodes[i];
+    const int32_t col = cut.cluster_of_node[i];
+    const bool one_point = k * 2.0 * n.radius <= kPointPhase;
+    if ((col >= 0 && one_point) || n.leaf()) {
+      p.node.push_back(i);
+      p.col.push_back(col);
+      p.one_point.push_back(col >= 0 && one_point ? 1 : 0);
+      p.x.push_back(n.centroid[0]);
+      p.y.push_back(n.centroid[1]);
+      p.z.push_back(n.centroid[2]);
+      p.ax.push_back(n.vector_area[0]);
+      p.ay.push_back(n.vector_area[1]);
+      p.az.push_back(n.vector_area[2]);
+      p.cxx.push_back(n.cov(0, 0));
+      p.cxy.push_back(n.cov(0, 1));
+      p.cxz.push_back(n.cov(0, 2));
+      p.cyy.push_back(n.cov(1, 1));
+      p.cyz.push_back(n.cov(1, 2));
+      p.czz.push_back(n.cov(2, 2));
+      p.trace.push_back(n.cov.trace());
+      p.diameter.push_back(2.0 * n.radius);
+      continue;
+    }
+    stack.push_back(n.right);
+    stack.push_back(n.left);
+  }
+  return p;
+}
+
+/// The boundary data of several modes at one wavenumber, per piece: Q = int q dS and the first
+/// moment D = int (y - centroid) q dS (index rhs * pieces + piece).
+struct PieceData {
+  std::vector<double> Q, Dx, Dy, Dz;
+};
+
+PieceData pieceData(const Pieces& p, const std::vector<NodeData>& data) {
+  PieceData out;
+  const size_t count = p.size();
+  out.Q.resize(data.size() * count);
+  out.Dx.resize(data.size() * count);
+  out.Dy.resize(data.size() * count);
+  out.Dz.resize(data.size() * count);
+  for (size_t r = 0; r < data.size(); ++r)
+    for (size_t j = 0; j < count; ++j) {
+      const int32_t node = p.node[j];
+      out.Q[r * count + j] = data[r].Q[node];
+      out.Dx[r * count + j] = data[r].D[node][0];
+      out.Dy[r * count + j] = data[r].D[node][1];
+      out.Dz[r * count + j] = data[r].D[node][2];
+    }
+  return out;
+}
+
+/// The part of a row at x from the subtree of `start`, walked as before the pieces existed:
+/// M[col] += int_cluster dG/dn_y, lq[r] += int G q_r. host: the triangle x is the centroid of
+/// (-1 for interior points).
+void assembleNear(const Surface& s, const Cut& cut, const std::vector<NodeData>& data, double k, const V3& x,
+                  int64_t host, int32_t start, cd* M, cd* lq, std::vector<int32_t>& stack) {
+  const size_t rhs = data.size();
   stack.clear();
-  stack.push_back(0);
+  stack.push_back(start);
   while (!stack.empty()) {
     const int32_t i = stack.back();
     stack.pop_back();
@@ -492,7 +566,7 @@ void assembleRow(const Surface& s, const Cut& cut, const NodeData& data, double 
       const Kernel kr = kernel(k, dist);
       const cd spread = phaseSpread(k, n.cov, yx, dist);
       M[col] += kr.dg_dr * yx.dot(n.vector_area) * spread;
-      lq += (kr.g * data.Q[i] + kr.dg_dr * yx.dot(data.D[i])) * spread;
+      for (size_t r = 0; r < rhs; ++r) lq[r] += (kr.g * data[r].Q[i] + kr.dg_dr * yx.dot(data[r].D[i])) * spread;
       continue;
     }
     if (!n.leaf()) {
@@ -503,174 +577,264 @@ void assembleRow(const Surface& s, const Cut& cut, const NodeData& data, double 
     const uint32_t t = s.order[n.begin];
     const Triangle& tri = s.tris[t];
     if (static_cast<int64_t>(t) == host) {
-      lq += selfTriangle(tri, k) * data.q[t];  // int dG/dn_y over a flat triangle through x is 0
+      const cd self = selfTriangle(tri, k);  // int dG/dn_y over a flat triangle through x is 0
+      for (size_t r = 0; r < rhs; ++r) lq[r] += self * data[r].q[t];
       continue;
     }
     cd int_g = 0.0, int_dg = 0.0;
     integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
     M[col] += int_dg;
-    lq += int_g * data.q[t];
+    for (size_t r = 0; r < rhs; ++r) lq[r] += int_g * data[r].q[t];
   }
 }
 
-/// Spherical Bessel j_0..j_n at x (Miller's downward recurrence, normalized by j_0 or j_1).
-void sphericalBessel(int n, double x, double* out) {
-  if (x < 1e-12) {
-    out[0] = 1.0;
-    for (int i = 1; i <= n; ++i) out[i] = 0.0;
-    return;
-  }
-  const int start = std::max(n, static_cast<int>(x)) + 16 + static_cast<int>(std::sqrt(40.0 * std::max<double>(n, x)));
-  double next = 0.0, cur = 1e-300;
-  for (int i = start; i > 0; --i) {
-    const double prev = (2.0 * i + 1.0) / x * cur - next;
-    next = cur;
-    cur = prev;
-    if (i - 1 <= n) out[i - 1] = cur;
-    if (i <= n) out[i] = next;
-    if (std::abs(cur) > 1e200) {
-      cur *= 1e-200;
-      next *= 1e-200;
-      for (int j = i - 1; j <= n; ++j)
-        if (j >= 0) out[j] *= 1e-200;
-    }
-  }
-  const double j0 = std::sin(x) / x, j1 = std::sin(x) / (x * x) - std::cos(x) / x;
-  const double scale = std::abs(j0) >= std::abs(j1) ? j0 / out[0] : j1 / out[1];
-  for (int i = 0; i <= n; ++i) out[i] *= scale;
-}
-
-/// A point of the far-field quadrature.
-struct FarPoint {
-  V3 y;
-  V3 vector_area;  // for the p term: int p dG_inf/dn ~= p grad f . vector_area
-  double Q;        // int q over the piece (first moment folded in by small pieces)
-  int32_t cluster;
-};
-
-void farFieldPoints(const Surface& s, const Cut& cut, const NodeData& data, double kappa,
-                    std::vector<FarPoint>& points) {
-  points.clear();
-  std::vector<int32_t> stack{0};
-  while (!stack.empty()) {
-    const int32_t i = stack.back();
-    stack.pop_back();
-    const Node& n = s.nodes[i];
-    const int32_t cluster = cut.cluster_of_node[i];
-    if (cluster >= 0 && 2.0 * n.radius * kappa <= kFarFieldPhase) {
-      points.push_back({n.centroid, n.vector_area, data.Q[i], cluster});
+/// One row of the system at x: M[col] += int_cluster dG/dn_y, and lq[r] += int G q_r over the
+/// surface. Pieces farther than kFarRatio diameters are one point with their phase spread
+/// (phaseSpread); the rest are walked down the tree (assembleNear).
+void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceData& pd,
+                 const std::vector<NodeData>& data, double k, const V3& x, int64_t host, cd* M, cd* lq,
+                 std::vector<int32_t>& stack) {
+  const size_t count = p.size(), rhs = data.size();
+  for (size_t j = 0; j < count; ++j) {
+    const double dx = p.x[j] - x[0], dy = p.y[j] - x[1], dz = p.z[j] - x[2];
+    const double r2 = dx * dx + dy * dy + dz * dz;
+    const double far = kFarRatio * p.diameter[j];
+    if (!p.one_point[j] || !(r2 > far * far)) {
+      assembleNear(s, cut, data, k, x, host, p.node[j], M, lq, stack);
       continue;
     }
-    if (!n.leaf()) {
-      stack.push_back(n.left);
-      stack.push_back(n.right);
-      continue;
+    const double r = std::sqrt(r2), inv_r = 1.0 / r;
+    // G = e^{ikr} / (4 pi r); grad_y G = (y - x) e^{ikr} (ikr - 1) / (4 pi r^3).
+    const double phase = k * r;
+    const cd g(std::cos(phase) * inv_r / kFourPi, std::sin(phase) * inv_r / kFourPi);
+    const cd dg_dr = g * cd(-inv_r * inv_r, k * inv_r);
+    // phaseSpread: 1 - k^2 rhat.C.rhat / 2 + ik (tr C - rhat.C.rhat) / (2r).
+    const double along = (p.cxx[j] * dx * dx + p.cyy[j] * dy * dy + p.czz[j] * dz * dz +
+                          2.0 * (p.cxy[j] * dx * dy + p.cxz[j] * dx * dz + p.cyz[j] * dy * dz)) /
+                         r2;
+    const cd spread(1.0 - 0.5 * k * k * along, k * (p.trace[j] - along) / (2.0 * r));
+    const cd dg_spread = dg_dr * spread, g_spread = g * spread;
+    M[p.col[j]] += dg_spread * (dx * p.ax[j] + dy * p.ay[j] + dz * p.az[j]);
+    for (size_t rr = 0; rr < rhs; ++rr) {
+      const size_t at = rr * count + j;
+      lq[rr] += g_spread * pd.Q[at] + dg_spread * (dx * pd.Dx[at] + dy * pd.Dy[at] + dz * pd.Dz[at]);
     }
-    const Triangle& t = s.tris[s.order[n.begin]];
-    const double q = data.q[s.order[n.begin]] * t.area / 3.0;
-    const V3 va = t.normal * (t.area / 3.0);
-    points.push_back({(4.0 * t.v[0] + t.v[1] + t.v[2]) / 6.0, va, q, cluster});
-    points.push_back({(t.v[0] + 4.0 * t.v[1] + t.v[2]) / 6.0, va, q, cluster});
-    points.push_back({(t.v[0] + t.v[1] + 4.0 * t.v[2]) / 6.0, va, q, cluster});
   }
 }
 
-/// Spherical-harmonic coefficients of the far field, c_nm = (-i)^n int (p d/dn - q) f_nm dS with
-/// f_nm(y) = j_n(k |y - c|) Y_nm(y - c) (the plane wave's expansion, Colton & Kress 2013, 2.46),
-/// for two pressure vectors at once (the solution and the coarse solve's difference).
-void projectFarField(const Surface& s, const std::vector<FarPoint>& points, double k, int n_cap,
-                     const Eigen::VectorXcd& p, const Eigen::VectorXcd& dp, std::vector<cd>& coef,
-                     std::vector<cd>& dcoef) {
-  const size_t count = static_cast<size_t>((n_cap + 1) * (n_cap + 1));
-  coef.assign(count, 0.0);
-  dcoef.assign(count, 0.0);
-  std::vector<double> f0(count), fp(count), fm(count), j(n_cap + 1), jp(n_cap + 1), jm(n_cap + 1);
-  const double kappa = std::max(k, (n_cap + 1.0) / s.radius);
-  const double eps = 1e-4 / kappa;
-  auto evaluate = [&](const V3& y, double* f, double* jn) {
-    const V3 r = y - s.centre;
-    const double d[3] = {r[0], r[1], r[2]};
-    realSphericalHarmonics(static_cast<uint32_t>(n_cap), d, f);
-    sphericalBessel(n_cap, k * r.norm(), jn);
-    for (int n = 0; n <= n_cap; ++n)
-      for (int m = -n; m <= n; ++m) f[n * n + n + m] *= jn[n];
-  };
-  for (const FarPoint& pt : points) {
-    const double area = pt.vector_area.norm();
-    evaluate(pt.y, f0.data(), j.data());
-    const cd pc = p[pt.cluster], dpc = dp[pt.cluster];
-    if (area > 0) {
-      const V3 step = pt.vector_area * (eps / area);
-      evaluate(pt.y + step, fp.data(), jp.data());
-      evaluate(pt.y - step, fm.data(), jm.data());
-      const double scale = area / (2.0 * eps);
-      for (size_t i = 0; i < count; ++i) {
-        const double df = (fp[i] - fm[i]) * scale;
-        coef[i] += pc * df - pt.Q * f0[i];
-        dcoef[i] += dpc * df;
+/// Gauss-Legendre nodes and weights on [-1, 1] (Newton on P_n; symmetric by construction).
+void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
+  x.assign(n, 0.0);
+  w.assign(n, 0.0);
+  for (int i = 0; i < (n + 1) / 2; ++i) {
+    double t = std::cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 1.0;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1.0, p1 = t;  // P_0, P_1
+      for (int j = 2; j <= n; ++j) {
+        const double p2 = ((2.0 * j - 1.0) * t * p1 - (j - 1.0) * p0) / j;
+        p0 = p1;
+        p1 = p2;
       }
-    } else {
-      for (size_t i = 0; i < count; ++i) coef[i] -= pt.Q * f0[i];
+      const double pn = n == 0 ? 1.0 : p1, pn1 = n == 0 ? 0.0 : p0;
+      dp = n * (t * pn - pn1) / (t * t - 1.0);
+      const double step = pn / dp;
+      t -= step;
+      if (std::abs(step) < 1e-16) break;
+    }
+    double p0 = 1.0, p1 = t;  // the derivative at the converged node
+    for (int j = 2; j <= n; ++j) {
+      const double p2 = ((2.0 * j - 1.0) * t * p1 - (j - 1.0) * p0) / j;
+      p0 = p1;
+      p1 = p2;
+    }
+    dp = n * (t * p1 - p0) / (t * t - 1.0);
+    x[i] = t;
+    x[n - 1 - i] = -t;
+    w[i] = w[n - 1 - i] = 2.0 / ((1.0 - t * t) * dp * dp);
+  }
+  if (n % 2 == 1) x[n / 2] = 0.0;
+}
+
+/// Spherical-harmonic coefficients of the far fields of several solutions at one wavenumber.
+/// F(d) = (1/4pi) int (p dE/dn - q E) dS with E = e^{-ik d.(y - c)} (c: the centre), summed
+/// over the pieces with their moments (E over a piece ~ E(centroid) (1 - k^2 d.C.d / 2), and
+/// int q E ~ E(centroid) (Q - ik d.D)), at the nodes of a product rule (Gauss-Legendre in
+/// cos theta, uniform in phi) that integrates Y_nm Y_n'm' exactly up to n_cap + 1; then
+/// c_nm = int F Y_nm dOmega. A direction d and its opposite share their exponentials
+/// (E(-d) = conj E(d)). p[r], p_diff[r]: per cluster; coef[r], dcoef[r]: (n_cap + 1)^2 each.
+void projectFarField(const Surface& s, const Pieces& pc, const PieceData& pd, const std::vector<NodeData>& data,
+                     double k, int n_cap, const std::vector<Eigen::VectorXcd>& p,
+                     const std::vector<Eigen::VectorXcd>& p_diff, std::vector<std::vector<cd>>& coef,
+                     std::vector<std::vector<cd>>& dcoef) {
+  const size_t rhs = data.size();
+  const size_t count = static_cast<size_t>((n_cap + 1) * (n_cap + 1));
+  coef.assign(rhs, std::vector<cd>(count, 0.0));
+  dcoef.assign(rhs, std::vector<cd>(count, 0.0));
+  // Points: the one-point pieces with their moments, and a 7-point rule on each larger triangle.
+  struct Point {
+    V3 y;       // relative to the centre
+    V3 va;      // vector area
+    double cxx, cxy, cxz, cyy, cyz, czz;
+    int32_t col;
+    int32_t piece;  // moments Q, D from the piece (-1: a rule point of triangle `tri`)
+    uint32_t tri;
+    double weight;  // of a rule point: its share of the triangle's area
+  };
+  std::vector<Point> points;
+  points.reserve(pc.size());
+  for (size_t j = 0; j < pc.size(); ++j) {
+    if (pc.one_point[j] || pc.col[j] < 0) {
+      points.push_back({V3(pc.x[j], pc.y[j], pc.z[j]) - s.centre, V3(pc.ax[j], pc.ay[j], pc.az[j]), pc.cxx[j],
+                        pc.cxy[j], pc.cxz[j], pc.cyy[j], pc.cyz[j], pc.czz[j], pc.col[j], static_cast<int32_t>(j), 0,
+                        1.0});
+      continue;
+    }
+    const uint32_t t = s.order[s.nodes[pc.node[j]].begin];
+    const Triangle& tri = s.tris[t];
+    for (int i = 0; i < 7; ++i) {
+      const V3 y = kRule7[i][0] * tri.v[0] + kRule7[i][1] * tri.v[1] + kRule7[i][2] * tri.v[2];
+      points.push_back({y - s.centre, tri.normal * (kRule7[i][3] * tri.area), 0, 0, 0, 0, 0, 0, pc.col[j], -1, t,
+                        kRule7[i][3]});
     }
   }
-  cd phase = 1.0;  // (-i)^n
-  for (int n = 0; n <= n_cap; ++n) {
-    for (int m = -n; m <= n; ++m) {
-      coef[n * n + n + m] *= phase;
-      dcoef[n * n + n + m] *= phase;
+  // Per point and solution: the factors of E and of -ik E d.va, -(Q - ik d.D) split by d.
+  const size_t np = points.size();
+  std::vector<cd> a(rhs * np), b(rhs * np);  // p and p_diff at the point's cluster
+  std::vector<double> Q(rhs * np), Dx(rhs * np), Dy(rhs * np), Dz(rhs * np);
+  for (size_t r = 0; r < rhs; ++r)
+    for (size_t j = 0; j < np; ++j) {
+      const Point& pt = points[j];
+      const size_t at = r * np + j;
+      a[at] = p[r][pt.col];
+      b[at] = p_diff[r][pt.col];
+      if (pt.piece >= 0) {
+        const size_t from = r * pc.size() + static_cast<size_t>(pt.piece);
+        Q[at] = pd.Q[from];
+        Dx[at] = pd.Dx[from];
+        Dy[at] = pd.Dy[from];
+        Dz[at] = pd.Dz[from];
+      } else {
+        Q[at] = data[r].q[pt.tri] * s.tris[pt.tri].area * pt.weight;
+        Dx[at] = Dy[at] = Dz[at] = 0.0;
+      }
     }
-    phase *= cd(0.0, -1.0);
+  const int rings = n_cap + 2, around = 2 * n_cap + 4;
+  std::vector<double> cos_theta, ring_weight;
+  gaussLegendre(rings, cos_theta, ring_weight);
+  std::vector<double> Y(count);
+  std::vector<cd> F(rhs), Fd(rhs), G(rhs), Gd(rhs);  // at d and at -d
+  const double dphi = 2.0 * M_PI / around;
+  for (int i = 0; i < (rings + 1) / 2; ++i) {
+    const double ct = cos_theta[i], st = std::sqrt(std::max(0.0, 1.0 - ct * ct));
+    const bool middle = 2 * i + 1 == rings;  // its opposite directions are on the ring itself
+    const int phis = middle ? around / 2 : around;
+    for (int l = 0; l < phis; ++l) {
+      const double phi = dphi * l;
+      const V3 d(st * std::cos(phi), st * std::sin(phi), ct);
+      std::fill(F.begin(), F.end(), cd(0.0));
+      std::fill(Fd.begin(), Fd.end(), cd(0.0));
+      std::fill(G.begin(), G.end(), cd(0.0));
+      std::fill(Gd.begin(), Gd.end(), cd(0.0));
+      for (size_t j = 0; j < np; ++j) {
+        const Point& pt = points[j];
+        const double phase = -k * d.dot(pt.y);
+        const double along = pt.cxx * d[0] * d[0] + pt.cyy * d[1] * d[1] + pt.czz * d[2] * d[2] +
+                             2.0 * (pt.cxy * d[0] * d[1] + pt.cxz * d[0] * d[2] + pt.cyz * d[1] * d[2]);
+        const double spread = 1.0 - 0.5 * k * k * along;
+        const cd e(std::cos(phase) * spread, std::sin(phase) * spread);  // at d; conj(e) at -d
+        const double kdva = k * d.dot(pt.va);
+        for (size_t r = 0; r < rhs; ++r) {
+          const size_t at = r * np + j;
+          const double kdD = k * (d[0] * Dx[at] + d[1] * Dy[at] + d[2] * Dz[at]);
+          // at d: -ik d.va p - Q + ik d.D; at -d the odd terms change sign.
+          const cd odd = cd(0.0, -kdva) * a[at] + cd(0.0, kdD), odd_diff = cd(0.0, -kdva) * b[at];
+          F[r] += e * (odd - Q[at]);
+          Fd[r] += e * odd_diff;
+          G[r] += std::conj(e) * (-odd - Q[at]);
+          Gd[r] -= std::conj(e) * odd_diff;
+        }
+      }
+      const double weight = ring_weight[i] * dphi / kFourPi;
+      for (int side = 0; side < 2; ++side) {
+        const double dd[3] = {side ? -d[0] : d[0], side ? -d[1] : d[1], side ? -d[2] : d[2]};
+        realSphericalHarmonics(static_cast<uint32_t>(n_cap), dd, Y.data());
+        for (size_t r = 0; r < rhs; ++r) {
+          const cd f = (side ? G[r] : F[r]) * weight, fd = (side ? Gd[r] : Fd[r]) * weight;
+          cd* c = coef[r].data();
+          cd* dc = dcoef[r].data();
+          for (size_t m = 0; m < count; ++m) {
+            c[m] += f * Y[m];
+            dc[m] += fd * Y[m];
+          }
+        }
+      }
+    }
   }
 }
 
 struct ModeSolve {
-  Eigen::VectorXcd p;       // per cluster
-  Eigen::VectorXcd p_diff;  // p minus the coarse solve's, per cluster
+  std::vector<Eigen::VectorXcd> p;       // per right-hand side, per cluster
+  std::vector<Eigen::VectorXcd> p_diff;  // p minus the coarse solve's, per cluster
   size_t elements = 0, chief = 0;
   Cut cut;
+  Pieces pieces;
+  PieceData piece_data;
+  double assembly_seconds = 0.0, factor_seconds = 0.0;
 };
 
-/// Solves the exterior Neumann problem for boundary data `data` at wavenumber k with `elements`
-/// unknowns (about) and `chief` interior points; several right-hand sides are not needed here.
-ModeSolve solveSystem(const Surface& s, const NodeData& data, double k, size_t elements, size_t chief) {
+/// Solves the exterior Neumann problem for the boundary data `data` (one right-hand side each:
+/// modes of one frequency share the matrix and its factorization) at wavenumber k with
+/// `elements` unknowns (about) and `chief` interior points.
+ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, double k, size_t elements, size_t chief) {
   ModeSolve out;
+  const auto assembly_start = std::chrono::steady_clock::now();
   out.cut = cutWithCount(s, elements);
   const Cut& cut = out.cut;
-  const size_t n = cut.nodes.size();
+  out.pieces = makePieces(s, cut, k);
+  out.piece_data = pieceData(out.pieces, data);
+  const size_t n = cut.nodes.size(), rhs = data.size();
   chief = std::min(chief, s.chief_candidates.size());
   const size_t rows = n + chief;
+  const auto R = static_cast<Eigen::Index>(rhs);
   Eigen::MatrixXcd A = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(n));
-  Eigen::VectorXcd b(static_cast<Eigen::Index>(rows));
-  std::vector<cd> M(n);
+  Eigen::MatrixXcd b(static_cast<Eigen::Index>(rows), R);
+  std::vector<cd> M(n), lq(rhs);
   std::vector<int32_t> stack;
   for (size_t r = 0; r < rows; ++r) {
     std::fill(M.begin(), M.end(), cd(0.0));
-    cd lq = 0.0;
+    std::fill(lq.begin(), lq.end(), cd(0.0));
     if (r < n) {
       const uint32_t host = s.nodes[cut.nodes[r]].rep;
-      assembleRow(s, cut, data, k, s.tris[host].centroid, host, M.data(), lq, stack);
+      assembleRow(s, cut, out.pieces, out.piece_data, data, k, s.tris[host].centroid, host, M.data(), lq.data(),
+                  stack);
     } else {
-      assembleRow(s, cut, data, k, s.chief_candidates[r - n], -1, M.data(), lq, stack);
+      assembleRow(s, cut, out.pieces, out.piece_data, data, k, s.chief_candidates[r - n], -1, M.data(), lq.data(),
+                  stack);
     }
     // 1/2 p(x) - int p dG/dn = - int G q (x on S); 0 - int p dG/dn = - int G q (x inside).
     for (size_t c = 0; c < n; ++c) A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = -M[c];
     if (r < n) A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r)) += 0.5;
-    b[static_cast<Eigen::Index>(r)] = -lq;
+    for (size_t q = 0; q < rhs; ++q) b(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(q)) = -lq[q];
   }
-  auto solve = [](const Eigen::MatrixXcd& matrix, const Eigen::VectorXcd& rhs) -> Eigen::VectorXcd {
-    if (matrix.rows() == matrix.cols()) return matrix.partialPivLu().solve(rhs);
-    return matrix.householderQr().solve(rhs);
+  auto solve = [](const Eigen::MatrixXcd& matrix, const Eigen::MatrixXcd& rhs_m) -> Eigen::MatrixXcd {
+    if (matrix.rows() == matrix.cols()) return matrix.partialPivLu().solve(rhs_m);
+    return matrix.householderQr().solve(rhs_m);
   };
-  out.p = solve(A, b);
+  out.assembly_seconds = secondsSince(assembly_start);
+  const auto factor_start = std::chrono::steady_clock::now();
+  const Eigen::MatrixXcd P = solve(A, b);
   out.elements = n;
   out.chief = chief;
+  out.p.resize(rhs);
+  out.p_diff.resize(rhs);
+  for (size_t q = 0; q < rhs; ++q) out.p[q] = P.col(static_cast<Eigen::Index>(q));
 
   // The coarse solve: clusters merged with their siblings, rows a subset, columns summed.
   const Coarse coarse = coarsen(s, cut);
   const size_t nc = coarse.count;
   if (nc < n && nc > 0) {
     Eigen::MatrixXcd Ac = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(nc + chief), static_cast<Eigen::Index>(nc));
-    Eigen::VectorXcd bc(static_cast<Eigen::Index>(nc + chief));
+    Eigen::MatrixXcd bc(static_cast<Eigen::Index>(nc + chief), R);
     for (size_t j = 0; j < nc + chief; ++j) {
       const size_t fine_row = j < nc ? static_cast<size_t>(coarse.row_cluster[j]) : n + (j - nc);
       for (size_t c = 0; c < n; ++c) {
@@ -679,18 +843,21 @@ ModeSolve solveSystem(const Surface& s, const NodeData& data, double k, size_t e
         Ac(static_cast<Eigen::Index>(j), coarse.of_cluster[c]) += m;
       }
       if (j < nc) Ac(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j)) += 0.5;
-      bc[static_cast<Eigen::Index>(j)] = b[static_cast<Eigen::Index>(fine_row)];
+      bc.row(static_cast<Eigen::Index>(j)) = b.row(static_cast<Eigen::Index>(fine_row));
     }
-    const Eigen::VectorXcd pc = solve(Ac, bc);
-    out.p_diff.resize(static_cast<Eigen::Index>(n));
-    for (size_t c = 0; c < n; ++c)
-      out.p_diff[static_cast<Eigen::Index>(c)] = out.p[static_cast<Eigen::Index>(c)] - pc[coarse.of_cluster[c]];
+    const Eigen::MatrixXcd pc = solve(Ac, bc);
+    for (size_t q = 0; q < rhs; ++q) {
+      out.p_diff[q].resize(static_cast<Eigen::Index>(n));
+      for (size_t c = 0; c < n; ++c)
+        out.p_diff[q][static_cast<Eigen::Index>(c)] =
+            out.p[q][static_cast<Eigen::Index>(c)] - pc(coarse.of_cluster[c], static_cast<Eigen::Index>(q));
+    }
   } else {
-    out.p_diff = Eigen::VectorXcd::Zero(static_cast<Eigen::Index>(n));
+    for (size_t q = 0; q < rhs; ++q) out.p_diff[q] = Eigen::VectorXcd::Zero(static_cast<Eigen::Index>(n));
   }
+  out.factor_seconds = secondsSince(factor_start);
   return out;
 }
-
 /// Unknowns the target error asks for at wavenumber k, within the budget.
 size_t elementsFor(const Surface& s, const TransferSettings& settings, double k) {
   if (settings.fixed_elements > 0) return std::min<size_t>(settings.fixed_elements, s.tris.size());
@@ -749,79 +916,132 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     if ((p1 - p0).cross(p2 - p0).norm() > 0) corners.push_back({v[0], v[1], v[2]});
   }
 
-  NodeData data;
-  std::vector<FarPoint> points;
-  std::vector<cd> coef, dcoef;
+  // Modes of (nearly) one frequency, as degenerate pairs of symmetric bodies are, share the
+  // system and its factorization: solved at the first one's wavenumber, which changes the
+  // others' far fields by about (relative frequency gap) x (1 + ka), added to their estimates.
+  constexpr double kSameFrequency = 1e-4;
+  std::vector<size_t> group_start;
   for (size_t mode = 0; mode < modes; ++mode) {
-    const auto mode_start = std::chrono::steady_clock::now();
     const double omega = std::sqrt(std::max(bank.eigenvalues[mode], 0.0));
+    const double first = group_start.empty()
+                             ? -1.0
+                             : std::sqrt(std::max(bank.eigenvalues[group_start.back()], 0.0));
+    if (group_start.empty() || !(std::abs(omega - first) <= kSameFrequency * first)) group_start.push_back(mode);
+  }
+  group_start.push_back(modes);
+
+  std::vector<NodeData> data;
+  std::vector<std::vector<cd>> coef;
+  std::vector<double> energy, diff;
+  for (size_t g = 0; g + 1 < group_start.size(); ++g) {
+    const auto group_begin = std::chrono::steady_clock::now();
+    const size_t first = group_start[g], last = group_start[g + 1], rhs = last - first;
+    const double omega = std::sqrt(std::max(bank.eigenvalues[first], 0.0));
     const double k = omega / c_air;
     // q = dp/dn = -rho a_n, a_n the normal component of the shape (per unit modal acceleration).
-    data.q.resize(s.tris.size());
-    for (size_t t = 0; t < s.tris.size(); ++t) {
-      V3 shape = V3::Zero();
-      for (uint32_t v : corners[t]) {
-        const float* u = bank.shapeAt(mode, v);
-        shape += V3(u[0], u[1], u[2]);
+    data.assign(rhs, {});
+    for (size_t r = 0; r < rhs; ++r) {
+      data[r].q.resize(s.tris.size());
+      for (size_t t = 0; t < s.tris.size(); ++t) {
+        V3 shape = V3::Zero();
+        for (uint32_t v : corners[t]) {
+          const float* u = bank.shapeAt(first + r, v);
+          shape += V3(u[0], u[1], u[2]);
+        }
+        data[r].q[t] = -rho * s.tris[t].normal.dot(shape / 3.0);
       }
-      data.q[t] = -rho * s.tris[t].normal.dot(shape / 3.0);
+      nodeData(s, data[r]);
     }
-    nodeData(s, data);
     const double kr = k * s.radius;
     const int n_cap = std::min(120, static_cast<int>(std::ceil(kr + 4.0 * std::cbrt(kr))) + 6);
-    const double kappa = std::max(k, (n_cap + 1.0) / s.radius);
-    // Refine while the estimate exceeds the target and the budget allows: the mode's pattern
+    // Refine while an estimate exceeds the target and the budget allows: the mode's pattern
     // (not only the wavelength) sets the resolution, and the estimate sees it.
     size_t elements = elementsFor(s, settings, k);
     const size_t cap = settings.fixed_elements > 0 ? elements : std::min<size_t>(settings.max_elements, s.tris.size());
-    ModeSolve solved;
-    std::vector<double> energy;
-    double total = 0.0, diff = 0.0;
+    // Per mode: the far field of the first resolution that met the target (or the last).
+    std::vector<double> total(rhs, 0.0);
+    std::vector<char> done(rhs, 0);
+    std::vector<uint32_t> mode_elements(rhs, 0), mode_chief(rhs, 0);
+    diff.assign(rhs, 0.0);
+    energy.assign(rhs * (n_cap + 1), 0.0);
+    coef.assign(rhs, {});
+    double assembly_seconds = 0.0, factor_seconds = 0.0, far_field_seconds = 0.0;
+    uint32_t solves = 0;
+    std::vector<std::vector<cd>> step_coef, step_dcoef;
     while (true) {
       const size_t chief = chiefPointsFor(s, settings, k, elements);
-      solved = solveSystem(s, data, k, elements, chief);
-      farFieldPoints(s, solved.cut, data, kappa, points);
-      projectFarField(s, points, k, n_cap, solved.p, solved.p_diff, coef, dcoef);
-      energy.assign(n_cap + 1, 0.0);
-      total = 0.0;
-      diff = 0.0;
-      for (int n = 0; n <= n_cap; ++n)
-        for (int m = -n; m <= n; ++m) {
-          energy[n] += std::norm(coef[n * n + n + m]);
-          diff += std::norm(dcoef[n * n + n + m]);
-        }
-      for (double e : energy) total += e;
-      if (!(diff > std::pow(settings.target_relative_error, 2) * total) || elements >= cap) break;
+      const ModeSolve solved = solveSystem(s, data, k, elements, chief);
+      ++solves;
+      assembly_seconds += solved.assembly_seconds;
+      factor_seconds += solved.factor_seconds;
+      const auto far_start = std::chrono::steady_clock::now();
+      projectFarField(s, solved.pieces, solved.piece_data, data, k, n_cap, solved.p, solved.p_diff, step_coef,
+                      step_dcoef);
+      far_field_seconds += secondsSince(far_start);
+      const bool last_step = elements >= cap;
+      for (size_t r = 0; r < rhs; ++r) {
+        if (done[r]) continue;
+        double* e = &energy[r * (n_cap + 1)];
+        std::fill(e, e + n_cap + 1, 0.0);
+        total[r] = 0.0;
+        diff[r] = 0.0;
+        for (int n = 0; n <= n_cap; ++n)
+          for (int m = -n; m <= n; ++m) {
+            e[n] += std::norm(step_coef[r][n * n + n + m]);
+            diff[r] += std::norm(step_dcoef[r][n * n + n + m]);
+          }
+        for (int n = 0; n <= n_cap; ++n) total[r] += e[n];
+        coef[r] = step_coef[r];
+        mode_elements[r] = static_cast<uint32_t>(solved.elements);
+        mode_chief[r] = static_cast<uint32_t>(solved.chief);
+        done[r] = last_step || !(diff[r] > std::pow(settings.target_relative_error, 2) * total[r]);
+      }
+      if (std::all_of(done.begin(), done.end(), [](char d) { return d != 0; })) break;
       elements = std::min(cap, elements * 5 / 2);
     }
+    const double group_seconds = secondsSince(group_begin);
 
-    // Order: the smallest whose tail holds at most 1e-8 of the energy (-80 dB), far below the
-    // target, so that the modes of a degenerate pair, truncated apart, still sum basis-free.
-    const double tail_allowed = 1e-8 * total;
-    int order = n_cap;
-    double tail = 0.0;
-    while (order > 0 && tail + energy[order] <= tail_allowed) tail += energy[order--];
-    // Error: the coarse solve's difference, the dropped tail, and what the last computed orders
-    // still hold (a series not yet converged at n_cap).
-    const double unresolved = energy[n_cap] + (n_cap > 0 ? energy[n_cap - 1] : 0.0);
-    const double relative = total > 0 ? std::sqrt((diff + tail + (order == n_cap ? unresolved : 0.0)) / total) : 0.0;
+    for (size_t r = 0; r < rhs; ++r) {
+      const size_t mode = first + r;
+      const double* e = &energy[r * (n_cap + 1)];
+      // Order: the smallest whose tail holds at most 1e-8 of the energy (-80 dB), far below the
+      // target, so that the modes of a degenerate pair, truncated apart, still sum basis-free.
+      const double tail_allowed = 1e-8 * total[r];
+      int order = n_cap;
+      double tail = 0.0;
+      while (order > 0 && tail + e[order] <= tail_allowed) tail += e[order--];
+      // Error: the coarse solve's difference, the dropped tail, what the last computed orders
+      // still hold (a series not yet converged at n_cap), and a shared solve's frequency gap.
+      const double unresolved = e[n_cap] + (n_cap > 0 ? e[n_cap - 1] : 0.0);
+      const double omega_mode = std::sqrt(std::max(bank.eigenvalues[mode], 0.0));
+      const double gap = omega > 0 ? std::abs(omega_mode - omega) / omega * (1.0 + kr) : 0.0;
+      const double relative =
+          total[r] > 0
+              ? std::sqrt((diff[r] + tail + (order == n_cap ? unresolved : 0.0)) / total[r] + gap * gap)
+              : 0.0;
 
-    out.order.push_back(static_cast<uint32_t>(order));
-    for (int i = 0; i < (order + 1) * (order + 1); ++i)
-      out.coefficients.push_back(
-          std::complex<float>(static_cast<float>(coef[i].real()), static_cast<float>(coef[i].imag())));
-    out.offset.push_back(out.coefficients.size());
-    out.relative_error.push_back(static_cast<float>(relative));
-    if (stats) {
-      TransferModeStats& st = (*stats)[mode];
-      st.ka = kr;
-      st.elements = static_cast<uint32_t>(solved.elements);
-      st.chief_points = static_cast<uint32_t>(solved.chief);
-      st.order = static_cast<uint32_t>(order);
-      st.relative_error = relative;
-      st.seconds = secondsSince(mode_start);
+      out.order.push_back(static_cast<uint32_t>(order));
+      for (int i = 0; i < (order + 1) * (order + 1); ++i)
+        out.coefficients.push_back(
+            std::complex<float>(static_cast<float>(coef[r][i].real()), static_cast<float>(coef[r][i].imag())));
+      out.offset.push_back(out.coefficients.size());
+      out.relative_error.push_back(static_cast<float>(relative));
+      if (stats) {
+        TransferModeStats& st = (*stats)[mode];
+        st.ka = omega_mode / c_air * s.radius;
+        st.elements = mode_elements[r];
+        st.chief_points = mode_chief[r];
+        st.order = static_cast<uint32_t>(order);
+        st.relative_error = relative;
+        // A shared solve's time is split evenly between its modes.
+        st.seconds = group_seconds / static_cast<double>(rhs);
+        st.assembly_seconds = assembly_seconds / static_cast<double>(rhs);
+        st.factor_seconds = factor_seconds / static_cast<double>(rhs);
+        st.far_field_seconds = far_field_seconds / static_cast<double>(rhs);
+        st.solves = solves;
+      }
     }
-    if (progress) progress("transfer", static_cast<double>(mode + 1) / static_cast<double>(modes + 1));
+    if (progress) progress("transfer", static_cast<double>(last) / static_cast<double>(modes + 1));
   }
 
   // Rigid translation in the compact limit: the Laplace problem (k = 0) with dp/dn = -n_j
@@ -830,16 +1050,18 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
   {
     Eigen::Matrix3d dipole = Eigen::Matrix3d::Identity() * s.volume;
     const size_t elements = std::min<size_t>(settings.max_elements, s.tris.size());
+    data.assign(3, {});
     for (int j = 0; j < 3; ++j) {
-      data.q.resize(s.tris.size());
-      for (size_t t = 0; t < s.tris.size(); ++t) data.q[t] = -s.tris[t].normal[j];
-      nodeData(s, data);
-      const ModeSolve solved = solveSystem(s, data, 0.0, elements, 0);
+      data[j].q.resize(s.tris.size());
+      for (size_t t = 0; t < s.tris.size(); ++t) data[j].q[t] = -s.tris[t].normal[j];
+      nodeData(s, data[j]);
+    }
+    const ModeSolve solved = solveSystem(s, data, 0.0, elements, 0);  // the three right-hand sides at once
+    for (int j = 0; j < 3; ++j)
       for (size_t c = 0; c < solved.cut.nodes.size(); ++c) {
         const V3 va = s.nodes[solved.cut.nodes[c]].vector_area;
-        for (int i = 0; i < 3; ++i) dipole(i, j) += va[i] * solved.p[static_cast<Eigen::Index>(c)].real();
+        for (int i = 0; i < 3; ++i) dipole(i, j) += va[i] * solved.p[j][static_cast<Eigen::Index>(c)].real();
       }
-    }
     const Eigen::Matrix3d symmetric = 0.5 * (dipole + dipole.transpose());
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) out.translation_dipole_m3[i * 3 + j] = symmetric(i, j);
@@ -855,3 +1077,4 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
 }
 
 }  // namespace strike
+

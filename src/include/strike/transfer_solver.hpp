@@ -58,6 +58,10 @@ struct TransferModeStats {
   uint32_t order = 0;           ///< spherical-harmonic order kept
   double relative_error = 0.0;  ///< the estimate stored in the transfer
   double seconds = 0.0;
+  double assembly_seconds = 0.0;   ///< of `seconds`: the system's matrix and right-hand side
+  double factor_seconds = 0.0;     ///< of `seconds`: LU / QR and the coarse solve
+  double far_field_seconds = 0.0;  ///< of `seconds`: the spherical-harmonic projection
+  uint32_t solves = 0;             ///< systems solved (refinement steps)
 };
 
 /// Solves the transfer of every mode of `bank` (its eigenvalues, shapes on surface vertices,

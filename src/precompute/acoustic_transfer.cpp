@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <complex>
+#include <map>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -26,6 +27,7 @@ constexpr double kCellPhase = 0.6;      // a triangle's 1-point rule: k D at mos
 constexpr double kPointPhase = 2.0;     // a far piece as one point with its phase spread: k D at most this
 constexpr double kNearRatio = 2.5;      // a triangle's 3-point rule: this many diameters away
 constexpr int kNearMaxDepth = 7;        // subdivision levels at most (4^7 pieces)
+constexpr double kPieceEdges = 4.0;     // a row's pieces: at most this many median triangle edges across
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -54,6 +56,7 @@ struct Node {
   V3 vector_area = V3::Zero();  // sum of area * normal
   double area = 0.0;
   double radius = 0.0;  // every point of its triangles lies within this of the centroid
+  double max_edge = 0.0;  // the longest edge of its triangles
   uint32_t rep = 0;     // triangle whose centroid is nearest the node's: its collocation point
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // covariance of its points about the centroid
   bool leaf() const { return left < 0; }
@@ -69,6 +72,8 @@ struct Surface {
   double volume = 0.0;
   std::vector<V3> chief_candidates;  // interior points, deepest kind first
   double inner_radius = 0.0;         // largest distance of a candidate from the surface
+  std::vector<int32_t> leaf_of_tri;  // the leaf node of each triangle
+  double max_piece_m = 1e300;        // pieces of a row's sum: at most this across (makePieces)
 };
 
 /// Splits triangles recursively: along the widest spread of centroids, or between normals when
@@ -118,6 +123,9 @@ void buildTree(Surface& s) {
     s.nodes[at].left = left;
     s.nodes[at].right = left + 1;
   }
+  s.leaf_of_tri.assign(count, -1);
+  for (size_t i = 0; i < s.nodes.size(); ++i)
+    if (s.nodes[i].leaf()) s.leaf_of_tri[s.order[s.nodes[i].begin]] = static_cast<int32_t>(i);
   // Moments bottom-up (children come after parents).
   for (size_t i = s.nodes.size(); i-- > 0;) {
     Node& n = s.nodes[i];
@@ -130,6 +138,7 @@ void buildTree(Surface& s) {
       for (const V3& v : t.v) n.radius = std::max(n.radius, (v - t.centroid).norm());
       n.rep = s.order[n.begin];
       n.cov = t.cov;
+      n.max_edge = t.diameter;
       continue;
     }
     const Node& a = s.nodes[n.left];
@@ -137,6 +146,7 @@ void buildTree(Surface& s) {
     n.area = a.area + b.area;
     n.centroid = n.area > 0 ? V3((a.area * a.centroid + b.area * b.centroid) / n.area) : V3(a.centroid);
     n.vector_area = a.vector_area + b.vector_area;
+    n.max_edge = std::max(a.max_edge, b.max_edge);
     n.radius = std::max((a.centroid - n.centroid).norm() + a.radius, (b.centroid - n.centroid).norm() + b.radius);
     const double da = (s.tris[a.rep].centroid - n.centroid).squaredNorm();
     const double db = (s.tris[b.rep].centroid - n.centroid).squaredNorm();
@@ -235,6 +245,12 @@ Result<Surface> makeSurface(const ModeBank& bank) {
     s.tris.push_back(tri);
   }
   if (s.tris.empty()) return badInput("the bank's surface triangles all have zero area");
+  // Pieces at most a few triangles across, so that the near ones (walked down the tree, one
+  // by one) stay few; the far ones are summed in vectorized loops.
+  std::vector<double> edges;
+  for (const Triangle& t : s.tris) edges.push_back(t.diameter);
+  std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
+  s.max_piece_m = kPieceEdges * edges[edges.size() / 2];
   buildTree(s);
   findInteriorPoints(s);
   return s;
@@ -392,23 +408,6 @@ void integrateTriangle(const V3& x, const V3& a, const V3& b, const V3& c, const
   }
 }
 
-/// int_T G dS for x the centroid of T (weakly singular): three Duffy-transformed pieces.
-cd selfTriangle(const Triangle& t, double k) {
-  const V3 x = t.centroid;
-  cd sum = 0.0;
-  for (int e = 0; e < 3; ++e) {
-    const V3 a = t.v[e] - x, ab = t.v[(e + 1) % 3] - t.v[e];
-    const double jacobian = a.cross(ab).norm();  // 2 * area of the piece
-    for (int iv = 0; iv < 8; ++iv) {
-      const double rho = (a + kGaussX[iv] * ab).norm();  // r = u rho
-      cd inner = 0.0;
-      for (int iu = 0; iu < 8; ++iu) inner += kGaussW[iu] * unitPhase(k * kGaussX[iu] * rho);
-      sum += kGaussW[iv] * inner * (jacobian / (kFourPi * rho));
-    }
-  }
-  return sum;
-}
-
 // ---- one mode: boundary data, the system, the far field -------------------------------------
 
 /// Per-node integrals of the boundary data q = dp/dn (real: the shapes are real): Q = int q dS
@@ -541,6 +540,7 @@ Coarse coarsen(const Surface& s, const Cut& cut) {
 struct Pieces {
   std::vector<int32_t> node, col;
   std::vector<char> one_point;            // k D <= kPointPhase: one point with its moments will do
+  std::vector<int8_t> quarter;            // 1-4: a quarter of the leaf triangle (0: the whole node)
   std::vector<double> x, y, z;            // centroid
   std::vector<double> ax, ay, az;         // vector area
   std::vector<double> cxx, cxy, cxz, cyy, cyz, czz, trace;  // covariance of the piece's points
@@ -550,34 +550,53 @@ struct Pieces {
 
 Pieces makePieces(const Surface& s, const Cut& cut, double k) {
   Pieces p;
+  auto add = [&](int32_t node, int32_t col, bool one_point, int8_t quarter, const V3& centroid, const V3& vector_area,
+                 const Eigen::Matrix3d& cov, double diameter) {
+    p.node.push_back(node);
+    p.col.push_back(col);
+    p.one_point.push_back(one_point ? 1 : 0);
+    p.quarter.push_back(quarter);
+    p.x.push_back(centroid[0]);
+    p.y.push_back(centroid[1]);
+    p.z.push_back(centroid[2]);
+    p.ax.push_back(vector_area[0]);
+    p.ay.push_back(vector_area[1]);
+    p.az.push_back(vector_area[2]);
+    p.cxx.push_back(cov(0, 0));
+    p.cxy.push_back(cov(0, 1));
+    p.cxz.push_back(cov(0, 2));
+    p.cyy.push_back(cov(1, 1));
+    p.cyz.push_back(cov(1, 2));
+    p.czz.push_back(cov(2, 2));
+    p.trace.push_back(cov.trace());
+    p.diameter.push_back(diameter);
+  };
   std::vector<int32_t> stack{0};
   while (!stack.empty()) {
     const int32_t i = stack.back();
     stack.pop_back();
     const Node& n = s.nodes[i];
     const int32_t col = cut.cluster_of_node[i];
-    // A single triangle's size is its longest edge (as integrateTriangle judges it), a larger
-    // node's its bounding diameter.
-    const double diameter = n.leaf() ? s.tris[s.order[n.begin]].diameter : 2.0 * n.radius;
-    const bool one_point = k * diameter <= kPointPhase;
-    if ((col >= 0 && one_point) || n.leaf()) {
-      p.node.push_back(i);
-      p.col.push_back(col);
-      p.one_point.push_back(col >= 0 && one_point ? 1 : 0);
-      p.x.push_back(n.centroid[0]);
-      p.y.push_back(n.centroid[1]);
-      p.z.push_back(n.centroid[2]);
-      p.ax.push_back(n.vector_area[0]);
-      p.ay.push_back(n.vector_area[1]);
-      p.az.push_back(n.vector_area[2]);
-      p.cxx.push_back(n.cov(0, 0));
-      p.cxy.push_back(n.cov(0, 1));
-      p.cxz.push_back(n.cov(0, 2));
-      p.cyy.push_back(n.cov(1, 1));
-      p.cyz.push_back(n.cov(1, 2));
-      p.czz.push_back(n.cov(2, 2));
-      p.trace.push_back(n.cov.trace());
-      p.diameter.push_back(diameter);
+    if (n.leaf()) {
+      // A single triangle's size is its longest edge (as integrateTriangle judges it); one too
+      // large for one point is four quarters (each with its own moments) while they are small
+      // enough, else integrated by integrateTriangle's rules.
+      const Triangle& t = s.tris[s.order[n.begin]];
+      if (k * t.diameter <= kPointPhase || k * t.diameter > 2.0 * kPointPhase) {
+        add(i, col, k * t.diameter <= kPointPhase, 0, n.centroid, n.vector_area, n.cov, t.diameter);
+        continue;
+      }
+      const V3 ab = 0.5 * (t.v[0] + t.v[1]), bc = 0.5 * (t.v[1] + t.v[2]), ca = 0.5 * (t.v[2] + t.v[0]);
+      const V3 centroids[4] = {(t.v[0] + ab + ca) / 3.0, (ab + t.v[1] + bc) / 3.0, (ca + bc + t.v[2]) / 3.0,
+                               (ab + bc + ca) / 3.0};
+      for (int8_t q = 0; q < 4; ++q)
+        add(i, col, true, static_cast<int8_t>(q + 1), centroids[q], 0.25 * n.vector_area, 0.25 * n.cov,
+            0.5 * t.diameter);
+      continue;
+    }
+    const double diameter = 2.0 * n.radius;
+    if (col >= 0 && k * diameter <= kPointPhase && diameter <= s.max_piece_m) {
+      add(i, col, true, 0, n.centroid, n.vector_area, n.cov, diameter);
       continue;
     }
     stack.push_back(n.right);
@@ -592,7 +611,7 @@ struct PieceData {
   std::vector<double> Q, Dx, Dy, Dz;
 };
 
-PieceData pieceData(const Pieces& p, const std::vector<NodeData>& data) {
+PieceData pieceData(const Surface& s, const Pieces& p, const std::vector<NodeData>& data) {
   PieceData out;
   const size_t count = p.size();
   out.Q.resize(data.size() * count);
@@ -602,6 +621,12 @@ PieceData pieceData(const Pieces& p, const std::vector<NodeData>& data) {
   for (size_t r = 0; r < data.size(); ++r)
     for (size_t j = 0; j < count; ++j) {
       const int32_t node = p.node[j];
+      if (p.quarter[j] > 0) {  // q is constant on a triangle: a quarter's first moment is 0
+        const uint32_t t = s.order[s.nodes[node].begin];
+        out.Q[r * count + j] = 0.25 * data[r].q[t] * s.tris[t].area;
+        out.Dx[r * count + j] = out.Dy[r * count + j] = out.Dz[r * count + j] = 0.0;
+        continue;
+      }
       out.Q[r * count + j] = data[r].Q[node];
       out.Dx[r * count + j] = data[r].D[node][0];
       out.Dy[r * count + j] = data[r].D[node][1];
@@ -610,41 +635,163 @@ PieceData pieceData(const Pieces& p, const std::vector<NodeData>& data) {
   return out;
 }
 
-/// The part of a row at x from the subtree of `start`, walked as before the pieces existed:
-/// M[col] += int_cluster dG/dn_y, lq[r] += int G q_r. host: the triangle x is the centroid of
-/// (-1 for interior points).
+/// Is triangle t (centroid c, longest edge d) near x: too close for one point with its moments
+/// (integrateTriangle's test), so integrated by a finer rule or subdivided. One expression for
+/// every caller, so that they agree to the bit.
+inline bool nearLeaf(const V3& x, const V3& c, double d) {
+  const double dx = c[0] - x[0], dy = c[1] - x[1], dz = c[2] - x[2];
+  return !(std::sqrt(dx * dx + dy * dy + dz * dz) > kFarRatio * d);
+}
+
+/// The quadrature of the near triangles of each collocation point, which does not depend on the
+/// wavenumber once its rules are chosen: chosen once per cut at the bank's largest wavenumber
+/// k_ref (a rule fine enough at k_ref is at every lower k), then every mode only evaluates
+/// e^{ikr} at the stored distances. Per point: int G += w_g G(r), int dG/dn += w_dn dG/dr / r.
+struct NearCache {
+  std::vector<size_t> begin;         // per row: its points are [begin[row], begin[row + 1])
+  std::vector<double> r, w_g, w_dn;  // per point
+  std::vector<uint32_t> tri;         // per point: the triangle (its cluster and data)
+  std::vector<size_t> near_begin;    // per row: its near triangles
+  std::vector<uint32_t> near_tris;
+};
+
+/// Records the points that integrateTriangle's rules and subdivisions use for a near triangle
+/// (depth >= 0 past its one-point test) at wavenumber k.
+void nearRule(const V3& x, const V3& a, const V3& b, const V3& c, const V3& normal, double area, double k, int depth,
+              uint32_t t, NearCache& out) {
+  const V3 m = (a + b + c) / 3.0;
+  const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  const double dist = (x - m).norm();
+  const double kd = k * d;
+  const double(*rule)[4] = nullptr;
+  int points = 0;
+  if (dist > kFarRatio * d && kd <= kCellPhase) {
+    points = 1;
+  } else if (dist > kNearRatio * d && kd <= 2.0 * kCellPhase) {
+    rule = kRule3;
+    points = 3;
+  } else if ((dist > 2.0 * d && kd <= 2.5) || depth >= kNearMaxDepth) {
+    rule = kRule7;
+    points = 7;
+  }
+  if (points == 0) {
+    const V3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
+    const double quarter = 0.25 * area;
+    nearRule(x, a, ab, ca, normal, quarter, k, depth + 1, t, out);
+    nearRule(x, ab, b, bc, normal, quarter, k, depth + 1, t, out);
+    nearRule(x, ca, bc, c, normal, quarter, k, depth + 1, t, out);
+    nearRule(x, ab, bc, ca, normal, quarter, k, depth + 1, t, out);
+    return;
+  }
+  for (int i = 0; i < points; ++i) {
+    const V3 y = rule ? V3(rule[i][0] * a + rule[i][1] * b + rule[i][2] * c) : m;
+    const double w = rule ? rule[i][3] * area : area;
+    const V3 yx = y - x;
+    const double r = yx.norm();
+    if (!(r > 0)) continue;
+    out.r.push_back(r);
+    out.w_g.push_back(w);
+    out.w_dn.push_back(w * yx.dot(normal));
+    out.tri.push_back(t);
+  }
+}
+
+/// The near quadrature of every row of `cut`, then of every interior candidate, at k_ref.
+NearCache buildNearCache(const Surface& s, const Cut& cut, double k_ref) {
+  NearCache out;
+  const size_t rows = cut.nodes.size() + s.chief_candidates.size();
+  std::vector<int32_t> stack;
+  for (size_t row = 0; row < rows; ++row) {
+    out.begin.push_back(out.r.size());
+    out.near_begin.push_back(out.near_tris.size());
+    const bool on_surface = row < cut.nodes.size();
+    const int64_t host = on_surface ? static_cast<int64_t>(s.nodes[cut.nodes[row]].rep) : -1;
+    const V3 x = on_surface ? s.tris[host].centroid : s.chief_candidates[row - cut.nodes.size()];
+    // Near triangles: walk down the nodes that may hold one (within 3 longest edges of x).
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+      const Node& n = s.nodes[stack.back()];
+      stack.pop_back();
+      if (!((n.centroid - x).norm() <= 1.01 * (n.radius + kFarRatio * n.max_edge))) continue;
+      if (!n.leaf()) {
+        stack.push_back(n.right);
+        stack.push_back(n.left);
+        continue;
+      }
+      const uint32_t t = s.order[n.begin];
+      const Triangle& tri = s.tris[t];
+      if (static_cast<int64_t>(t) != host && !nearLeaf(x, tri.centroid, tri.diameter)) continue;
+      out.near_tris.push_back(t);
+      if (static_cast<int64_t>(t) == host) {
+        // int_T G dS for x the centroid of T (weakly singular): three Duffy-transformed pieces,
+        // sum w_iv w_iu e^{ikr} J / (4 pi rho) with r = x_iu rho, i.e. w_g = w_iv w_iu J x_iu
+        // against G = e^{ikr} / (4 pi r); int dG/dn_y over a flat triangle through x is 0.
+        for (int e = 0; e < 3; ++e) {
+          const V3 a = tri.v[e] - x, ab = tri.v[(e + 1) % 3] - tri.v[e];
+          const double jacobian = a.cross(ab).norm();
+          for (int iv = 0; iv < 8; ++iv) {
+            const double rho = (a + kGaussX[iv] * ab).norm();
+            for (int iu = 0; iu < 8; ++iu) {
+              out.r.push_back(kGaussX[iu] * rho);
+              out.w_g.push_back(kGaussW[iv] * kGaussW[iu] * jacobian * kGaussX[iu]);
+              out.w_dn.push_back(0.0);
+              out.tri.push_back(t);
+            }
+          }
+        }
+        continue;
+      }
+      nearRule(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k_ref, 0, t, out);
+    }
+  }
+  out.begin.push_back(out.r.size());
+  out.near_begin.push_back(out.near_tris.size());
+  return out;
+}
+
+/// Whether a node's triangles are all far from x (none of them near, nearLeaf), with a margin
+/// that rounding cannot cross.
+inline bool noNearLeaf(const Node& n, double dist) { return dist > 1.001 * (n.radius + kFarRatio * n.max_edge); }
+
+/// Scratch of assembleRow.
+struct RowScratch {
+  std::vector<double> r, phase, sin_kr, cos_kr;  // per piece, then per near point
+  std::vector<int32_t> stack;
+  std::vector<uint32_t> near_stamp;  // per triangle: the row that found it near (+1)
+  uint32_t stamp = 0;
+};
+
+/// The part of a row at x from the subtree of `start`, the triangles near x left out (the
+/// NearCache has them): M[col] += int_cluster dG/dn_y, lq[r] += int G q_r.
 void assembleNear(const Surface& s, const Cut& cut, const std::vector<NodeData>& data, double k, const V3& x,
-                  int64_t host, int32_t start, cd* M, cd* lq, std::vector<int32_t>& stack) {
+                  int32_t start, cd* M, cd* lq, RowScratch& w) {
   const size_t rhs = data.size();
-  stack.clear();
-  stack.push_back(start);
-  while (!stack.empty()) {
-    const int32_t i = stack.back();
-    stack.pop_back();
+  w.stack.clear();
+  w.stack.push_back(start);
+  while (!w.stack.empty()) {
+    const int32_t i = w.stack.back();
+    w.stack.pop_back();
     const Node& n = s.nodes[i];
     const int32_t col = cut.cluster_of_node[i];
     const V3 yx = n.centroid - x;
     const double dist = yx.norm();
     const double diameter = 2.0 * n.radius;
-    if (col >= 0 && dist > kFarRatio * diameter && k * diameter <= kPointPhase) {
-      const Kernel kr = kernel(k, dist);
-      const cd spread = phaseSpread(k, n.cov, yx, dist);
-      M[col] += kr.dg_dr * yx.dot(n.vector_area) * spread;
-      for (size_t r = 0; r < rhs; ++r) lq[r] += (kr.g * data[r].Q[i] + kr.dg_dr * yx.dot(data[r].D[i])) * spread;
-      continue;
-    }
     if (!n.leaf()) {
-      stack.push_back(n.left);
-      stack.push_back(n.right);
+      if (col >= 0 && dist > kFarRatio * diameter && k * diameter <= kPointPhase && noNearLeaf(n, dist)) {
+        const Kernel kr = kernel(k, dist);
+        const cd spread = phaseSpread(k, n.cov, yx, dist);
+        M[col] += kr.dg_dr * yx.dot(n.vector_area) * spread;
+        for (size_t r = 0; r < rhs; ++r)
+          lq[r] += (kr.g * data[r].Q[i] + kr.dg_dr * yx.dot(data[r].D[i])) * spread;
+        continue;
+      }
+      w.stack.push_back(n.left);
+      w.stack.push_back(n.right);
       continue;
     }
     const uint32_t t = s.order[n.begin];
+    if (w.near_stamp[t] == w.stamp) continue;  // near: in the cache
     const Triangle& tri = s.tris[t];
-    if (static_cast<int64_t>(t) == host) {
-      const cd self = selfTriangle(tri, k);  // int dG/dn_y over a flat triangle through x is 0
-      for (size_t r = 0; r < rhs; ++r) lq[r] += self * data[r].q[t];
-      continue;
-    }
     cd int_g = 0.0, int_dg = 0.0;
     integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
     M[col] += int_dg;
@@ -652,24 +799,39 @@ void assembleNear(const Surface& s, const Cut& cut, const std::vector<NodeData>&
   }
 }
 
-/// Scratch of assembleRow, per piece.
-struct RowScratch {
-  std::vector<double> r, phase, sin_kr, cos_kr;
-  std::vector<int32_t> stack;
-};
-
-/// One row of the system at x: M[col] += int_cluster dG/dn_y, and lq[r] += int G q_r over the
-/// surface. Pieces farther than kFarRatio diameters are one point with their phase spread
-/// (phaseSpread); the rest are walked down the tree (assembleNear). The distances and the
-/// exponentials of every piece are computed first, in vectorizable loops.
+/// One row of the system at x (row `row` of the cut, or an interior point after them):
+/// M[col] += int_cluster dG/dn_y, and lq[r] += int G q_r over the surface. The near triangles
+/// from the cache's points; pieces far from x as one point with their phase spread
+/// (phaseSpread); the rest walked down the tree (assembleNear). Distances and exponentials are
+/// computed in vectorizable loops first.
 void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceData& pd,
-                 const std::vector<NodeData>& data, double k, const V3& x, int64_t host, cd* M, cd* lq,
-                 RowScratch& w) {
+                 const std::vector<NodeData>& data, const NearCache& near, size_t row, double k, const V3& x, cd* M,
+                 cd* lq, RowScratch& w) {
   const size_t count = p.size(), rhs = data.size();
+  // The near triangles.
+  w.near_stamp.resize(s.tris.size(), 0);
+  ++w.stamp;
+  for (size_t i = near.near_begin[row]; i < near.near_begin[row + 1]; ++i) w.near_stamp[near.near_tris[i]] = w.stamp;
+  {
+    const size_t first = near.begin[row], points = near.begin[row + 1] - first;
+    w.phase.resize(std::max(points, count));
+    w.sin_kr.resize(std::max(points, count));
+    w.cos_kr.resize(std::max(points, count));
+    for (size_t i = 0; i < points; ++i) w.phase[i] = k * near.r[first + i];
+    sinCosArray(w.phase.data(), w.sin_kr.data(), w.cos_kr.data(), points);
+    for (size_t i = 0; i < points; ++i) {
+      const size_t at = first + i;
+      const double r = near.r[at], inv_r = 1.0 / r;
+      const cd g(w.cos_kr[i] * inv_r / kFourPi, w.sin_kr[i] * inv_r / kFourPi);
+      const cd dg_dr = g * cd(-inv_r * inv_r, k * inv_r);
+      const uint32_t t = near.tri[at];
+      M[cut.cluster_of_node[s.leaf_of_tri[t]]] += near.w_dn[at] * dg_dr;
+      const cd gw = near.w_g[at] * g;
+      for (size_t rr = 0; rr < rhs; ++rr) lq[rr] += gw * data[rr].q[t];
+    }
+  }
+  // The pieces.
   w.r.resize(count);
-  w.phase.resize(count);
-  w.sin_kr.resize(count);
-  w.cos_kr.resize(count);
   const double x0 = x[0], x1 = x[1], x2 = x[2];
   for (size_t j = 0; j < count; ++j) {
     const double dx = p.x[j] - x0, dy = p.y[j] - x1, dz = p.z[j] - x2;
@@ -679,8 +841,20 @@ void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceD
   sinCosArray(w.phase.data(), w.sin_kr.data(), w.cos_kr.data(), count);
   for (size_t j = 0; j < count; ++j) {
     const double r = w.r[j];
-    if (!p.one_point[j] || !(r > kFarRatio * p.diameter[j])) {
-      assembleNear(s, cut, data, k, x, host, p.node[j], M, lq, w.stack);
+    const Node& n = s.nodes[p.node[j]];
+    if (n.leaf()) {
+      const uint32_t t = s.order[n.begin];
+      if (w.near_stamp[t] == w.stamp) continue;  // near: done above
+      if (!p.one_point[j]) {                    // too large for one point at this k
+        const Triangle& tri = s.tris[t];
+        cd int_g = 0.0, int_dg = 0.0;
+        integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
+        M[p.col[j]] += int_dg;
+        for (size_t rr = 0; rr < rhs; ++rr) lq[rr] += int_g * data[rr].q[t];
+        continue;
+      }
+    } else if (!p.one_point[j] || !(r > kFarRatio * p.diameter[j]) || !noNearLeaf(n, r)) {
+      assembleNear(s, cut, data, k, x, p.node[j], M, lq, w);
       continue;
     }
     const double dx = p.x[j] - x0, dy = p.y[j] - x1, dz = p.z[j] - x2;
@@ -926,13 +1100,17 @@ struct ModeSolve {
 /// Solves the exterior Neumann problem for the boundary data `data` (one right-hand side each:
 /// modes of one frequency share the matrix and its factorization) at wavenumber k with
 /// `elements` unknowns (about) and `chief` interior points.
-ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, double k, size_t elements, size_t chief) {
+ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, double k, size_t elements, size_t chief,
+                      double k_ref, std::map<size_t, NearCache>& near_caches) {
   ModeSolve out;
   const auto assembly_start = std::chrono::steady_clock::now();
   out.cut = cutWithCount(s, elements);
   const Cut& cut = out.cut;
+  auto cached = near_caches.find(elements);
+  if (cached == near_caches.end()) cached = near_caches.emplace(elements, buildNearCache(s, cut, k_ref)).first;
+  const NearCache& near = cached->second;
   out.pieces = makePieces(s, cut, k);
-  out.piece_data = pieceData(out.pieces, data);
+  out.piece_data = pieceData(s, out.pieces, data);
   const size_t n = cut.nodes.size(), rhs = data.size();
   chief = std::min(chief, s.chief_candidates.size());
   const size_t rows = n + chief;
@@ -946,10 +1124,10 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
     std::fill(lq.begin(), lq.end(), cd(0.0));
     if (r < n) {
       const uint32_t host = s.nodes[cut.nodes[r]].rep;
-      assembleRow(s, cut, out.pieces, out.piece_data, data, k, s.tris[host].centroid, host, M.data(), lq.data(),
+      assembleRow(s, cut, out.pieces, out.piece_data, data, near, r, k, s.tris[host].centroid, M.data(), lq.data(),
                   stack);
     } else {
-      assembleRow(s, cut, out.pieces, out.piece_data, data, k, s.chief_candidates[r - n], -1, M.data(), lq.data(),
+      assembleRow(s, cut, out.pieces, out.piece_data, data, near, r, k, s.chief_candidates[r - n], M.data(), lq.data(),
                   stack);
     }
     // 1/2 p(x) - int p dG/dn = - int G q (x on S); 0 - int p dG/dn = - int G q (x inside).
@@ -1071,6 +1249,11 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
   }
   group_start.push_back(modes);
 
+  // The near quadrature per cut, its rules chosen at the largest wavenumber.
+  double k_ref = 0.0;
+  for (size_t mode = 0; mode < modes; ++mode) k_ref = std::max(k_ref, std::sqrt(std::max(bank.eigenvalues[mode], 0.0)) / c_air);
+  std::map<size_t, NearCache> near_caches;
+
   std::vector<NodeData> data;
   std::vector<std::vector<cd>> coef;
   std::vector<double> energy, diff;
@@ -1111,7 +1294,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     std::vector<std::vector<cd>> step_coef, step_dcoef;
     while (true) {
       const size_t chief = chiefPointsFor(s, settings, k, elements);
-      const ModeSolve solved = solveSystem(s, data, k, elements, chief);
+      const ModeSolve solved = solveSystem(s, data, k, elements, chief, k_ref, near_caches);
       ++solves;
       assembly_seconds += solved.assembly_seconds;
       factor_seconds += solved.factor_seconds;
@@ -1205,7 +1388,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
       for (size_t t = 0; t < s.tris.size(); ++t) data[j].q[t] = -s.tris[t].normal[j];
       nodeData(s, data[j]);
     }
-    const ModeSolve solved = solveSystem(s, data, 0.0, elements, 0);  // the three right-hand sides at once
+    const ModeSolve solved = solveSystem(s, data, 0.0, elements, 0, k_ref, near_caches);  // the three right-hand sides at once
     for (int j = 0; j < 3; ++j)
       for (size_t c = 0; c < solved.cut.nodes.size(); ++c) {
         const V3 va = s.nodes[solved.cut.nodes[c]].vector_area;

@@ -541,6 +541,8 @@ struct Pieces {
   std::vector<int32_t> node, col;
   std::vector<char> one_point;            // k D <= kPointPhase: one point with its moments will do
   std::vector<int8_t> quarter;            // 1-4: a quarter of the leaf triangle (0: the whole node)
+  std::vector<int64_t> leaf_tri;          // the triangle of a leaf node (-1: a larger node)
+  std::vector<double> clear_of_near;      // a larger node: beyond this none of its triangles is near
   std::vector<double> x, y, z;            // centroid
   std::vector<double> ax, ay, az;         // vector area
   std::vector<double> cxx, cxy, cxz, cyy, cyz, czz, trace;  // covariance of the piece's points
@@ -556,6 +558,9 @@ Pieces makePieces(const Surface& s, const Cut& cut, double k) {
     p.col.push_back(col);
     p.one_point.push_back(one_point ? 1 : 0);
     p.quarter.push_back(quarter);
+    const Node& n = s.nodes[node];
+    p.leaf_tri.push_back(n.leaf() ? static_cast<int64_t>(s.order[n.begin]) : -1);
+    p.clear_of_near.push_back(1.001 * (n.radius + kFarRatio * n.max_edge));
     p.x.push_back(centroid[0]);
     p.y.push_back(centroid[1]);
     p.z.push_back(centroid[2]);
@@ -648,11 +653,12 @@ inline bool nearLeaf(const V3& x, const V3& c, double d) {
 /// k_ref (a rule fine enough at k_ref is at every lower k), then every mode only evaluates
 /// e^{ikr} at the stored distances. Per point: int G += w_g G(r), int dG/dn += w_dn dG/dr / r.
 struct NearCache {
-  std::vector<size_t> begin;         // per row: its points are [begin[row], begin[row + 1])
-  std::vector<double> r, w_g, w_dn;  // per point
-  std::vector<uint32_t> tri;         // per point: the triangle (its cluster and data)
-  std::vector<size_t> near_begin;    // per row: its near triangles
-  std::vector<uint32_t> near_tris;
+  std::vector<size_t> begin;                // per row: its points are [begin[row], begin[row + 1])
+  std::vector<double> r, inv_r, w_g, w_dn;  // per point
+  std::vector<uint32_t> tri;                // per point: the triangle (its cluster and data)
+  std::vector<size_t> near_begin;           // per row: its near triangles
+  std::vector<uint32_t> near_tris;          // their points: [near_first[i], near_first[i + 1])
+  std::vector<size_t> near_first;
 };
 
 /// Records the points that integrateTriangle's rules and subdivisions use for a near triangle
@@ -722,6 +728,7 @@ NearCache buildNearCache(const Surface& s, const Cut& cut, double k_ref) {
       const Triangle& tri = s.tris[t];
       if (static_cast<int64_t>(t) != host && !nearLeaf(x, tri.centroid, tri.diameter)) continue;
       out.near_tris.push_back(t);
+      out.near_first.push_back(out.r.size());
       if (static_cast<int64_t>(t) == host) {
         // int_T G dS for x the centroid of T (weakly singular): three Duffy-transformed pieces,
         // sum w_iv w_iu e^{ikr} J / (4 pi rho) with r = x_iu rho, i.e. w_g = w_iv w_iu J x_iu
@@ -746,16 +753,23 @@ NearCache buildNearCache(const Surface& s, const Cut& cut, double k_ref) {
   }
   out.begin.push_back(out.r.size());
   out.near_begin.push_back(out.near_tris.size());
+  out.near_first.push_back(out.r.size());
+  out.inv_r.resize(out.r.size());
+  for (size_t i = 0; i < out.r.size(); ++i) out.inv_r[i] = 1.0 / out.r[i];
   return out;
 }
 
 /// Whether a node's triangles are all far from x (none of them near, nearLeaf), with a margin
 /// that rounding cannot cross.
+/// (Pieces::clear_of_near holds the same bound.)
 inline bool noNearLeaf(const Node& n, double dist) { return dist > 1.001 * (n.radius + kFarRatio * n.max_edge); }
 
 /// Scratch of assembleRow.
 struct RowScratch {
   std::vector<double> r, phase, sin_kr, cos_kr;  // per piece, then per near point
+  std::vector<double> far, dx, dy, dz;           // per piece: 1 if summed as one point, 0 if not
+  std::vector<double> g_re, g_im, dg_re, dg_im;  // G and dG/dr / r (times the spread, the weight)
+  std::vector<double> m_re, m_im;                // the contribution to M[col]
   std::vector<int32_t> stack;
   std::vector<uint32_t> near_stamp;  // per triangle: the row that found it near (+1)
   uint32_t stamp = 0;
@@ -799,80 +813,139 @@ void assembleNear(const Surface& s, const Cut& cut, const std::vector<NodeData>&
   }
 }
 
+/// sum_j (a_re_j + i a_im_j) w_j + (b_re_j + i b_im_j) v_j in four fixed interleaved partial
+/// sums (vectorizable without reassociating: the same order on every machine). v may be null.
+cd sumTwo(const double* a_re, const double* a_im, const double* w, const double* b_re, const double* b_im,
+          const double* v, size_t n) {
+  double re[4] = {0, 0, 0, 0}, im[4] = {0, 0, 0, 0};
+  size_t j = 0;
+  for (; j + 4 <= n; j += 4)
+    for (int l = 0; l < 4; ++l) {
+      re[l] += a_re[j + l] * w[j + l] + (v ? b_re[j + l] * v[j + l] : 0.0);
+      im[l] += a_im[j + l] * w[j + l] + (v ? b_im[j + l] * v[j + l] : 0.0);
+    }
+  for (int l = 0; j < n; ++j, ++l) {
+    re[l] += a_re[j] * w[j] + (v ? b_re[j] * v[j] : 0.0);
+    im[l] += a_im[j] * w[j] + (v ? b_im[j] * v[j] : 0.0);
+  }
+  return {(re[0] + re[1]) + (re[2] + re[3]), (im[0] + im[1]) + (im[2] + im[3])};
+}
+
 /// One row of the system at x (row `row` of the cut, or an interior point after them):
 /// M[col] += int_cluster dG/dn_y, and lq[r] += int G q_r over the surface. The near triangles
 /// from the cache's points; pieces far from x as one point with their phase spread
-/// (phaseSpread); the rest walked down the tree (assembleNear). Distances and exponentials are
-/// computed in vectorizable loops first.
+/// (phaseSpread); the rest walked down the tree (assembleNear). The sums are split into
+/// passes over arrays (distances, exponentials, kernels, then the sums) that vectorize, with
+/// complex products written out (no library complex multiplication and its NaN checks).
 void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceData& pd,
                  const std::vector<NodeData>& data, const NearCache& near, size_t row, double k, const V3& x, cd* M,
                  cd* lq, RowScratch& w) {
   const size_t count = p.size(), rhs = data.size();
+  const double x0 = x[0], x1 = x[1], x2 = x[2];
+  const double inv_four_pi = 1.0 / kFourPi;
   // The near triangles.
   w.near_stamp.resize(s.tris.size(), 0);
   ++w.stamp;
   for (size_t i = near.near_begin[row]; i < near.near_begin[row + 1]; ++i) w.near_stamp[near.near_tris[i]] = w.stamp;
+  const size_t first = near.begin[row], points = near.begin[row + 1] - first;
+  const size_t size = std::max(points, count);
+  for (auto* v : {&w.r, &w.phase, &w.sin_kr, &w.cos_kr, &w.far, &w.dx, &w.dy, &w.dz, &w.g_re, &w.g_im, &w.dg_re,
+                  &w.dg_im, &w.m_re, &w.m_im})
+    v->resize(size);
   {
-    const size_t first = near.begin[row], points = near.begin[row + 1] - first;
-    w.phase.resize(std::max(points, count));
-    w.sin_kr.resize(std::max(points, count));
-    w.cos_kr.resize(std::max(points, count));
-    for (size_t i = 0; i < points; ++i) w.phase[i] = k * near.r[first + i];
+    const double* r = near.r.data() + first;
+    for (size_t i = 0; i < points; ++i) w.phase[i] = k * r[i];
     sinCosArray(w.phase.data(), w.sin_kr.data(), w.cos_kr.data(), points);
+    const double* inv = near.inv_r.data() + first;
+    const double* w_g = near.w_g.data() + first;
+    const double* w_dn = near.w_dn.data() + first;
     for (size_t i = 0; i < points; ++i) {
-      const size_t at = first + i;
-      const double r = near.r[at], inv_r = 1.0 / r;
-      const cd g(w.cos_kr[i] * inv_r / kFourPi, w.sin_kr[i] * inv_r / kFourPi);
-      const cd dg_dr = g * cd(-inv_r * inv_r, k * inv_r);
-      const uint32_t t = near.tri[at];
-      M[cut.cluster_of_node[s.leaf_of_tri[t]]] += near.w_dn[at] * dg_dr;
-      const cd gw = near.w_g[at] * g;
-      for (size_t rr = 0; rr < rhs; ++rr) lq[rr] += gw * data[rr].q[t];
+      const double inv_r = inv[i];
+      const double g_re = w.cos_kr[i] * inv_r * inv_four_pi, g_im = w.sin_kr[i] * inv_r * inv_four_pi;
+      const double a = -inv_r * inv_r, b = k * inv_r;  // dG/dr / r = G (-1/r^2 + ik/r)
+      w.m_re[i] = w_dn[i] * (g_re * a - g_im * b);
+      w.m_im[i] = w_dn[i] * (g_re * b + g_im * a);
+      w.g_re[i] = w_g[i] * g_re;
+      w.g_im[i] = w_g[i] * g_im;
+    }
+    // Per near triangle (its points are consecutive): one sum, then its cluster and data.
+    for (size_t i = near.near_begin[row]; i < near.near_begin[row + 1]; ++i) {
+      const uint32_t t = near.near_tris[i];
+      double m_re = 0.0, m_im = 0.0, g_re = 0.0, g_im = 0.0;
+      for (size_t at = near.near_first[i] - first; at < near.near_first[i + 1] - first; ++at) {
+        m_re += w.m_re[at];
+        m_im += w.m_im[at];
+        g_re += w.g_re[at];
+        g_im += w.g_im[at];
+      }
+      M[cut.cluster_of_node[s.leaf_of_tri[t]]] += cd(m_re, m_im);
+      for (size_t rr = 0; rr < rhs; ++rr) lq[rr] += cd(g_re * data[rr].q[t], g_im * data[rr].q[t]);
     }
   }
-  // The pieces.
-  w.r.resize(count);
-  const double x0 = x[0], x1 = x[1], x2 = x[2];
+  // The pieces: which are one point far from x (the others are done one by one below).
   for (size_t j = 0; j < count; ++j) {
-    const double dx = p.x[j] - x0, dy = p.y[j] - x1, dz = p.z[j] - x2;
-    w.r[j] = std::sqrt(dx * dx + dy * dy + dz * dz);
+    w.dx[j] = p.x[j] - x0;
+    w.dy[j] = p.y[j] - x1;
+    w.dz[j] = p.z[j] - x2;
+    w.r[j] = std::sqrt(w.dx[j] * w.dx[j] + w.dy[j] * w.dy[j] + w.dz[j] * w.dz[j]);
     w.phase[j] = k * w.r[j];
   }
-  sinCosArray(w.phase.data(), w.sin_kr.data(), w.cos_kr.data(), count);
   for (size_t j = 0; j < count; ++j) {
-    const double r = w.r[j];
+    bool far = p.one_point[j] != 0;
+    if (p.leaf_tri[j] >= 0)
+      far = far && w.near_stamp[p.leaf_tri[j]] != w.stamp;
+    else
+      far = far && w.r[j] > kFarRatio * p.diameter[j] && w.r[j] > p.clear_of_near[j];
+    w.far[j] = far ? 1.0 : 0.0;
+  }
+  sinCosArray(w.phase.data(), w.sin_kr.data(), w.cos_kr.data(), count);
+  const double half_kk = 0.5 * k * k;
+  for (size_t j = 0; j < count; ++j) {
+    const double r = w.far[j] > 0 ? w.r[j] : 1.0;  // (no division by a near piece's 0)
+    const double inv_r = 1.0 / r, inv_r2 = inv_r * inv_r;
+    const double dx = w.dx[j], dy = w.dy[j], dz = w.dz[j];
+    // G = e^{ikr} / (4 pi r); grad_y G = (y - x) G (ik/r - 1/r^2).
+    const double g_re = w.far[j] * w.cos_kr[j] * inv_r * inv_four_pi, g_im = w.far[j] * w.sin_kr[j] * inv_r * inv_four_pi;
+    const double a = -inv_r2, b = k * inv_r;
+    const double dg_re = g_re * a - g_im * b, dg_im = g_re * b + g_im * a;
+    // phaseSpread: 1 - k^2 rhat.C.rhat / 2 + ik (tr C - rhat.C.rhat) / (2r).
+    const double along = (p.cxx[j] * dx * dx + p.cyy[j] * dy * dy + p.czz[j] * dz * dz +
+                          2.0 * (p.cxy[j] * dx * dy + p.cxz[j] * dx * dz + p.cyz[j] * dy * dz)) *
+                         inv_r2;
+    const double sp_re = 1.0 - half_kk * along, sp_im = k * (p.trace[j] - along) * 0.5 * inv_r;
+    w.g_re[j] = g_re * sp_re - g_im * sp_im;
+    w.g_im[j] = g_re * sp_im + g_im * sp_re;
+    w.dg_re[j] = dg_re * sp_re - dg_im * sp_im;
+    w.dg_im[j] = dg_re * sp_im + dg_im * sp_re;
+    const double along_va = dx * p.ax[j] + dy * p.ay[j] + dz * p.az[j];
+    w.m_re[j] = w.dg_re[j] * along_va;
+    w.m_im[j] = w.dg_im[j] * along_va;
+  }
+  for (size_t j = 0; j < count; ++j) M[p.col[j]] += cd(w.m_re[j], w.m_im[j]);
+  for (size_t rr = 0; rr < rhs; ++rr) {
+    const double* Q = pd.Q.data() + rr * count;
+    const double* Dx = pd.Dx.data() + rr * count;
+    const double* Dy = pd.Dy.data() + rr * count;
+    const double* Dz = pd.Dz.data() + rr * count;
+    for (size_t j = 0; j < count; ++j) w.phase[j] = w.dx[j] * Dx[j] + w.dy[j] * Dy[j] + w.dz[j] * Dz[j];
+    lq[rr] += sumTwo(w.g_re.data(), w.g_im.data(), Q, w.dg_re.data(), w.dg_im.data(), w.phase.data(), count);
+  }
+  // The pieces not summed as one point.
+  for (size_t j = 0; j < count; ++j) {
+    if (w.far[j] > 0) continue;
     const Node& n = s.nodes[p.node[j]];
-    if (n.leaf()) {
-      const uint32_t t = s.order[n.begin];
-      if (w.near_stamp[t] == w.stamp) continue;  // near: done above
-      if (!p.one_point[j]) {                    // too large for one point at this k
-        const Triangle& tri = s.tris[t];
-        cd int_g = 0.0, int_dg = 0.0;
-        integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
-        M[p.col[j]] += int_dg;
-        for (size_t rr = 0; rr < rhs; ++rr) lq[rr] += int_g * data[rr].q[t];
-        continue;
-      }
-    } else if (!p.one_point[j] || !(r > kFarRatio * p.diameter[j]) || !noNearLeaf(n, r)) {
+    if (!n.leaf()) {
       assembleNear(s, cut, data, k, x, p.node[j], M, lq, w);
       continue;
     }
-    const double dx = p.x[j] - x0, dy = p.y[j] - x1, dz = p.z[j] - x2;
-    const double inv_r = 1.0 / r, r2 = r * r;
-    // G = e^{ikr} / (4 pi r); grad_y G = (y - x) e^{ikr} (ikr - 1) / (4 pi r^3).
-    const cd g(w.cos_kr[j] * inv_r / kFourPi, w.sin_kr[j] * inv_r / kFourPi);
-    const cd dg_dr = g * cd(-inv_r * inv_r, k * inv_r);
-    // phaseSpread: 1 - k^2 rhat.C.rhat / 2 + ik (tr C - rhat.C.rhat) / (2r).
-    const double along = (p.cxx[j] * dx * dx + p.cyy[j] * dy * dy + p.czz[j] * dz * dz +
-                          2.0 * (p.cxy[j] * dx * dy + p.cxz[j] * dx * dz + p.cyz[j] * dy * dz)) /
-                         r2;
-    const cd spread(1.0 - 0.5 * k * k * along, k * (p.trace[j] - along) / (2.0 * r));
-    const cd dg_spread = dg_dr * spread, g_spread = g * spread;
-    M[p.col[j]] += dg_spread * (dx * p.ax[j] + dy * p.ay[j] + dz * p.az[j]);
-    for (size_t rr = 0; rr < rhs; ++rr) {
-      const size_t at = rr * count + j;
-      lq[rr] += g_spread * pd.Q[at] + dg_spread * (dx * pd.Dx[at] + dy * pd.Dy[at] + dz * pd.Dz[at]);
-    }
+    const uint32_t t = s.order[n.begin];
+    if (w.near_stamp[t] == w.stamp) continue;  // near: done above
+    if (p.quarter[j] > 1) continue;            // (a quarter's triangle is done with its first)
+    const Triangle& tri = s.tris[t];            // too large for one point at this k
+    cd int_g = 0.0, int_dg = 0.0;
+    integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
+    M[p.col[j]] += int_dg;
+    for (size_t rr = 0; rr < rhs; ++rr) lq[rr] += int_g * data[rr].q[t];
   }
 }
 

@@ -1027,48 +1027,56 @@ void projectFarField(const Surface& s, const Pieces& pc, const PieceData& pd, co
                         rule[i][3]});
     }
   }
-  // F(d) = -S_Q - ik d.(A + iB), with S_Q = sum E Q, A = sum E (va Re p - D), B = sum E va Im p
-  // (E including the spread), and F(-d) from the conjugates; the coarse difference likewise with
-  // va p_diff. So every sum is sum_j E_j w_j with real weights w: 13 columns per solution.
-  constexpr size_t kColumns = 13;
+  // With E_j = e^{-ik d.y_j} (1 - k^2 d.C_j.d / 2) at point j (real weights after it):
+  //   F(d)  = -S_Q + ik S_D - ik sum_c p_c d.U_c,   S_Q = sum_j E_j Q_j, S_D = sum_j E_j d.D_j,
+  //   F(-d) = -conj(S_Q) - ik conj(S_D) + ik sum_c p_c d.conj(U_c),   U_c = sum_{j in c} E_j va_j,
+  // and the coarse difference likewise with p_diff alone: the pressure's term is summed per
+  // cluster (the points of a cluster are consecutive), shared by every solution.
   const size_t np = points.size();
-  std::vector<double> weights(rhs * kColumns * np);
+  std::vector<double> py(np), pyy(np), pz(np), cxx(np), cxy(np), cxz(np), cyy(np), cyz(np), czz(np);
+  std::vector<double> vx(np), vy(np), vz(np);
+  std::vector<size_t> segment_begin;  // runs of one cluster
+  std::vector<int32_t> segment_col;
+  for (size_t j = 0; j < np; ++j) {
+    const Point& pt = points[j];
+    py[j] = pt.y[0];
+    pyy[j] = pt.y[1];
+    pz[j] = pt.y[2];
+    cxx[j] = pt.cxx;
+    cxy[j] = pt.cxy;
+    cxz[j] = pt.cxz;
+    cyy[j] = pt.cyy;
+    cyz[j] = pt.cyz;
+    czz[j] = pt.czz;
+    vx[j] = pt.va[0];
+    vy[j] = pt.va[1];
+    vz[j] = pt.va[2];
+    if (j == 0 || pt.col != points[j - 1].col) {
+      segment_begin.push_back(j);
+      segment_col.push_back(pt.col);
+    }
+  }
+  segment_begin.push_back(np);
+  const size_t segments = segment_col.size();
+  std::vector<double> Q(rhs * np), Dx(rhs * np), Dy(rhs * np), Dz(rhs * np);
   for (size_t r = 0; r < rhs; ++r)
     for (size_t j = 0; j < np; ++j) {
       const Point& pt = points[j];
-      double* w = &weights[r * kColumns * np + j];
-      const cd a = p[r][pt.col], b = p_diff[r][pt.col];
-      V3 D = V3::Zero();
-      double Q = 0.0;
+      const size_t at = r * np + j;
       if (pt.piece >= 0) {
         const size_t from = r * pc.size() + static_cast<size_t>(pt.piece);
-        Q = pd.Q[from];
-        D = V3(pd.Dx[from], pd.Dy[from], pd.Dz[from]);
+        Q[at] = pd.Q[from];
+        Dx[at] = pd.Dx[from];
+        Dy[at] = pd.Dy[from];
+        Dz[at] = pd.Dz[from];
       } else {
-        Q = data[r].q[pt.tri] * s.tris[pt.tri].area * pt.weight;
-      }
-      w[0] = Q;
-      for (int i = 0; i < 3; ++i) {
-        w[(1 + i) * np] = pt.va[i] * a.real() - D[i];
-        w[(4 + i) * np] = pt.va[i] * a.imag();
-        w[(7 + i) * np] = pt.va[i] * b.real();
-        w[(10 + i) * np] = pt.va[i] * b.imag();
+        Q[at] = data[r].q[pt.tri] * s.tris[pt.tri].area * pt.weight;
+        Dx[at] = Dy[at] = Dz[at] = 0.0;
       }
     }
-  std::vector<double> py(np), pyy(np), pz(np), cxx(np), cxy(np), cxz(np), cyy(np), cyz(np), czz(np);
-  for (size_t j = 0; j < np; ++j) {
-    py[j] = points[j].y[0];
-    pyy[j] = points[j].y[1];
-    pz[j] = points[j].y[2];
-    cxx[j] = points[j].cxx;
-    cxy[j] = points[j].cxy;
-    cxz[j] = points[j].cxz;
-    cyy[j] = points[j].cyy;
-    cyz[j] = points[j].cyz;
-    czz[j] = points[j].czz;
-  }
-  std::vector<double> phase(np), spread(np), sin_e(np), cos_e(np);
-  std::vector<cd> sums(rhs * kColumns);
+  std::vector<double> phase(np), spread(np), sin_e(np), cos_e(np), dD(np), ex(np), ey(np), ez(np);
+  std::vector<cd> U(3 * segments);  // per cluster run: U_c's three components
+  std::vector<cd> F(rhs), G(rhs), Fd(rhs), Gd(rhs);
 
   const int rings = n_cap + 2, around = 2 * n_cap + 4;
   std::vector<double> cos_theta, ring_weight;
@@ -1095,36 +1103,55 @@ void projectFarField(const Surface& s, const Pieces& pc, const PieceData& pd, co
       for (size_t j = 0; j < np; ++j) {
         cos_e[j] *= spread[j];
         sin_e[j] *= spread[j];
+        ex[j] = d0 * vx[j] + d1 * vy[j] + d2 * vz[j];  // d.va
       }
-      for (size_t c = 0; c < rhs * kColumns; ++c) {
+      // Per cluster: d.U_c = sum E_j d.va_j (one complex number: d is known here).
+      for (size_t c = 0; c < segments; ++c) {
         double re = 0.0, im = 0.0;
-        dotTwo(cos_e.data(), sin_e.data(), &weights[c * np], np, re, im);
-        sums[c] = cd(re, im);
+        for (size_t j = segment_begin[c]; j < segment_begin[c + 1]; ++j) {
+          re += cos_e[j] * ex[j];
+          im += sin_e[j] * ex[j];
+        }
+        U[c] = cd(re, im);
+      }
+      for (size_t r = 0; r < rhs; ++r) {
+        const double* Qr = &Q[r * np];
+        const double* Dxr = &Dx[r * np];
+        const double* Dyr = &Dy[r * np];
+        const double* Dzr = &Dz[r * np];
+        for (size_t j = 0; j < np; ++j) dD[j] = d0 * Dxr[j] + d1 * Dyr[j] + d2 * Dzr[j];
+        double q_re = 0.0, q_im = 0.0, d_re = 0.0, d_im = 0.0;
+        dotTwo(cos_e.data(), sin_e.data(), Qr, np, q_re, q_im);
+        dotTwo(cos_e.data(), sin_e.data(), dD.data(), np, d_re, d_im);
+        const cd SQ(q_re, q_im), SD(d_re, d_im);
+        // sum_c p_c d.U_c and sum_c p_c conj(d.U_c), and the same with p_diff.
+        double t_re = 0, t_im = 0, u_re = 0, u_im = 0, td_re = 0, td_im = 0, ud_re = 0, ud_im = 0;
+        const cd* pr = p[r].data();
+        const cd* dr = p_diff[r].data();
+        for (size_t c = 0; c < segments; ++c) {
+          const double a_re = pr[segment_col[c]].real(), a_im = pr[segment_col[c]].imag();
+          const double b_re = dr[segment_col[c]].real(), b_im = dr[segment_col[c]].imag();
+          const double x_re = U[c].real(), x_im = U[c].imag();
+          t_re += a_re * x_re - a_im * x_im;
+          t_im += a_re * x_im + a_im * x_re;
+          u_re += a_re * x_re + a_im * x_im;  // a conj(x)
+          u_im += a_im * x_re - a_re * x_im;
+          td_re += b_re * x_re - b_im * x_im;
+          td_im += b_re * x_im + b_im * x_re;
+          ud_re += b_re * x_re + b_im * x_im;
+          ud_im += b_im * x_re - b_re * x_im;
+        }
+        F[r] = -SQ + ik * SD - ik * cd(t_re, t_im);
+        G[r] = -std::conj(SQ) - ik * std::conj(SD) + ik * cd(u_re, u_im);
+        Fd[r] = -ik * cd(td_re, td_im);
+        Gd[r] = ik * cd(ud_re, ud_im);
       }
       const double weight = ring_weight[i] * dphi / kFourPi;
-      const double d[3] = {d0, d1, d2};
       for (int side = 0; side < 2; ++side) {
         const double dd[3] = {side ? -d0 : d0, side ? -d1 : d1, side ? -d2 : d2};
         realSphericalHarmonics(static_cast<uint32_t>(n_cap), dd, Y.data());
         for (size_t r = 0; r < rhs; ++r) {
-          const cd* S = &sums[r * kColumns];
-          cd dA = 0.0, dB = 0.0, dA2 = 0.0, dB2 = 0.0;
-          for (int q = 0; q < 3; ++q) {
-            dA += d[q] * S[1 + q];
-            dB += d[q] * S[4 + q];
-            dA2 += d[q] * S[7 + q];
-            dB2 += d[q] * S[10 + q];
-          }
-          cd f, fd;
-          if (side == 0) {
-            f = -S[0] - ik * (dA + cd(0.0, 1.0) * dB);
-            fd = -ik * (dA2 + cd(0.0, 1.0) * dB2);
-          } else {
-            f = -std::conj(S[0]) + ik * (std::conj(dA) + cd(0.0, 1.0) * std::conj(dB));
-            fd = ik * (std::conj(dA2) + cd(0.0, 1.0) * std::conj(dB2));
-          }
-          f *= weight;
-          fd *= weight;
+          const cd f = (side ? G[r] : F[r]) * weight, fd = (side ? Gd[r] : Fd[r]) * weight;
           cd* co = coef[r].data();
           cd* dc = dcoef[r].data();
           for (size_t m = 0; m < count; ++m) {

@@ -7,8 +7,8 @@
 #include <chrono>
 #include <cmath>
 #include <complex>
-#include <map>
 #include <cstdio>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,12 +22,12 @@ using V3 = Eigen::Vector3d;
 constexpr double kFourPi = 4.0 * M_PI;
 
 // Accuracy knobs of the quadrature (checked by the analytic-sphere tests).
-constexpr double kFarRatio = 3.0;       // a cell is "far" from x beyond this many diameters
-constexpr double kCellPhase = 0.6;      // a triangle's 1-point rule: k D at most this (3-point: twice)
-constexpr double kPointPhase = 2.0;     // a far piece as one point with its phase spread: k D at most this
-constexpr double kNearRatio = 2.5;      // a triangle's 3-point rule: this many diameters away
-constexpr int kNearMaxDepth = 7;        // subdivision levels at most (4^7 pieces)
-constexpr double kPieceEdges = 4.0;     // a row's pieces: at most this many median triangle edges across
+constexpr double kFarRatio = 3.0;    // a cell is "far" from x beyond this many diameters
+constexpr double kCellPhase = 0.6;   // a triangle's 1-point rule: k D at most this (3-point: twice)
+constexpr double kPointPhase = 2.0;  // a far piece as one point with its phase spread: k D at most this
+constexpr double kNearRatio = 2.5;   // a triangle's 3-point rule: this many diameters away
+constexpr int kNearMaxDepth = 7;     // subdivision levels at most (4^7 pieces)
+constexpr double kPieceEdges = 4.0;  // a row's pieces: at most this many median triangle edges across
 
 // The loops over arrays below write arrays that GCC cannot prove apart from what they read:
 // this tells it they are (GCC only; other compilers ignore the hint's absence).
@@ -63,9 +63,9 @@ struct Node {
   V3 centroid = V3::Zero();     // area-weighted
   V3 vector_area = V3::Zero();  // sum of area * normal
   double area = 0.0;
-  double radius = 0.0;  // every point of its triangles lies within this of the centroid
+  double radius = 0.0;    // every point of its triangles lies within this of the centroid
   double max_edge = 0.0;  // the longest edge of its triangles
-  uint32_t rep = 0;     // triangle whose centroid is nearest the node's: its collocation point
+  uint32_t rep = 0;       // triangle whose centroid is nearest the node's: its collocation point
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // covariance of its points about the centroid
   bool leaf() const { return left < 0; }
 };
@@ -280,19 +280,19 @@ inline void sinCos(double x, double& sin_out, double& cos_out) {
   const double q = (x * kTwoOverPi + kRound) - kRound;
   const double r = ((x - q * kP1) - q * kP2) - q * kP3;
   const double z = r * r;
-  const double sr =
-      r + r * z *
-              (-1.66666666666666307295e-1 +
-               z * (8.33333333332211858878e-3 +
-                    z * (-1.98412698295895385996e-4 +
-                         z * (2.75573136213857245213e-6 + z * (-2.50507477628578072866e-8 + z * 1.58962301576546568060e-10)))));
-  const double cr =
-      1.0 - 0.5 * z +
-      z * z *
-          (4.16666666666665929218e-2 +
-           z * (-1.38888888888730564116e-3 +
-                z * (2.48015872888517045348e-5 +
-                     z * (-2.75573141792967388112e-7 + z * (2.08757008419747316778e-9 - z * 1.13585365213876817300e-11)))));
+  const double sr = r + r * z *
+                            (-1.66666666666666307295e-1 +
+                             z * (8.33333333332211858878e-3 +
+                                  z * (-1.98412698295895385996e-4 +
+                                       z * (2.75573136213857245213e-6 +
+                                            z * (-2.50507477628578072866e-8 + z * 1.58962301576546568060e-10)))));
+  const double cr = 1.0 - 0.5 * z +
+                    z * z *
+                        (4.16666666666665929218e-2 +
+                         z * (-1.38888888888730564116e-3 +
+                              z * (2.48015872888517045348e-5 +
+                                   z * (-2.75573141792967388112e-7 +
+                                        z * (2.08757008419747316778e-9 - z * 1.13585365213876817300e-11)))));
   const int32_t quadrant = static_cast<int32_t>(q) & 3;
   const double sv = (quadrant & 1) ? cr : sr, cv = (quadrant & 1) ? sr : cr;
   sin_out = (quadrant & 2) ? -sv : sv;
@@ -547,12 +547,12 @@ Coarse coarsen(const Surface& s, const Cut& cut) {
 /// (structure of arrays), and the far field is summed over them too.
 struct Pieces {
   std::vector<int32_t> node, col;
-  std::vector<char> one_point;            // k D <= kPointPhase: one point with its moments will do
-  std::vector<int8_t> quarter;            // 1-4: a quarter of the leaf triangle (0: the whole node)
-  std::vector<int64_t> leaf_tri;          // the triangle of a leaf node (-1: a larger node)
-  std::vector<double> clear_of_near;      // a larger node: beyond this none of its triangles is near
-  std::vector<double> x, y, z;            // centroid
-  std::vector<double> ax, ay, az;         // vector area
+  std::vector<char> one_point;                              // k D <= kPointPhase: one point with its moments will do
+  std::vector<int8_t> quarter;                              // 1-4: a quarter of the leaf triangle (0: the whole node)
+  std::vector<int64_t> leaf_tri;                            // the triangle of a leaf node (-1: a larger node)
+  std::vector<double> clear_of_near;                        // a larger node: beyond this none of its triangles is near
+  std::vector<double> x, y, z;                              // centroid
+  std::vector<double> ax, ay, az;                           // vector area
   std::vector<double> cxx, cxy, cxz, cyy, cyz, czz, trace;  // covariance of the piece's points
   std::vector<double> diameter;
   size_t size() const { return node.size(); }
@@ -803,8 +803,7 @@ void assembleNear(const Surface& s, const Cut& cut, const std::vector<NodeData>&
         const Kernel kr = kernel(k, dist);
         const cd spread = phaseSpread(k, n.cov, yx, dist);
         M[col] += kr.dg_dr * yx.dot(n.vector_area) * spread;
-        for (size_t r = 0; r < rhs; ++r)
-          lq[r] += (kr.g * data[r].Q[i] + kr.dg_dr * yx.dot(data[r].D[i])) * spread;
+        for (size_t r = 0; r < rhs; ++r) lq[r] += (kr.g * data[r].Q[i] + kr.dg_dr * yx.dot(data[r].D[i])) * spread;
         continue;
       }
       w.stack.push_back(n.left);
@@ -946,9 +945,9 @@ void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceD
       const double a = -inv_r2, b = k * inv_r;
       const double dg_re = g_re * a - g_im * b, dg_im = g_re * b + g_im * a;
       // phaseSpread: 1 - k^2 rhat.C.rhat / 2 + ik (tr C - rhat.C.rhat) / (2r).
-      const double along =
-          (cxx[j] * dx * dx + cyy[j] * dy * dy + czz[j] * dz * dz + 2.0 * (cxy[j] * dx * dy + cxz[j] * dx * dz + cyz[j] * dy * dz)) *
-          inv_r2;
+      const double along = (cxx[j] * dx * dx + cyy[j] * dy * dy + czz[j] * dz * dz +
+                            2.0 * (cxy[j] * dx * dy + cxz[j] * dx * dz + cyz[j] * dy * dz)) *
+                           inv_r2;
       const double sp_re = 1.0 - half_kk * along, sp_im = k * (trace[j] - along) * 0.5 * inv_r;
       g_re_j[j] = g_re * sp_re - g_im * sp_im;
       g_im_j[j] = g_re * sp_im + g_im * sp_re;
@@ -980,7 +979,7 @@ void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceD
     const uint32_t t = s.order[n.begin];
     if (w.near_stamp[t] == w.stamp) continue;  // near: done above
     if (p.quarter[j] > 1) continue;            // (a quarter's triangle is done with its first)
-    const Triangle& tri = s.tris[t];            // too large for one point at this k
+    const Triangle& tri = s.tris[t];           // too large for one point at this k
     cd int_g = 0.0, int_dg = 0.0;
     integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
     M[p.col[j]] += int_dg;
@@ -1038,8 +1037,8 @@ void projectFarField(const Surface& s, const Pieces& pc, const PieceData& pd, co
   dcoef.assign(rhs, std::vector<cd>(count, 0.0));
   // Points: the one-point pieces with their moments, and a 7-point rule on each larger triangle.
   struct Point {
-    V3 y;       // relative to the centre
-    V3 va;      // vector area
+    V3 y;   // relative to the centre
+    V3 va;  // vector area
     double cxx, cxy, cxz, cyy, cyz, czz;
     int32_t col;
     int32_t piece;  // moments Q, D from the piece (-1: a rule point of triangle `tri`)
@@ -1062,8 +1061,8 @@ void projectFarField(const Surface& s, const Pieces& pc, const PieceData& pd, co
     const double(*rule)[4] = three ? kRule3 : kRule7;
     for (int i = 0; i < (three ? 3 : 7); ++i) {
       const V3 y = rule[i][0] * tri.v[0] + rule[i][1] * tri.v[1] + rule[i][2] * tri.v[2];
-      points.push_back({y - s.centre, tri.normal * (rule[i][3] * tri.area), 0, 0, 0, 0, 0, 0, pc.col[j], -1, t,
-                        rule[i][3]});
+      points.push_back(
+          {y - s.centre, tri.normal * (rule[i][3] * tri.area), 0, 0, 0, 0, 0, 0, pc.col[j], -1, t, rule[i][3]});
     }
   }
   // With E_j = e^{-ik d.y_j} (1 - k^2 d.C_j.d / 2) at point j (real weights after it):
@@ -1381,16 +1380,15 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
   std::vector<size_t> group_start;
   for (size_t mode = 0; mode < modes; ++mode) {
     const double omega = std::sqrt(std::max(bank.eigenvalues[mode], 0.0));
-    const double first = group_start.empty()
-                             ? -1.0
-                             : std::sqrt(std::max(bank.eigenvalues[group_start.back()], 0.0));
+    const double first = group_start.empty() ? -1.0 : std::sqrt(std::max(bank.eigenvalues[group_start.back()], 0.0));
     if (group_start.empty() || !(std::abs(omega - first) <= kSameFrequency * first)) group_start.push_back(mode);
   }
   group_start.push_back(modes);
 
   // The near quadrature per cut, its rules chosen at the largest wavenumber.
   double k_ref = 0.0;
-  for (size_t mode = 0; mode < modes; ++mode) k_ref = std::max(k_ref, std::sqrt(std::max(bank.eigenvalues[mode], 0.0)) / c_air);
+  for (size_t mode = 0; mode < modes; ++mode)
+    k_ref = std::max(k_ref, std::sqrt(std::max(bank.eigenvalues[mode], 0.0)) / c_air);
   std::map<size_t, NearCache> near_caches;
 
   std::vector<NodeData> data;
@@ -1487,9 +1485,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
       const double omega_mode = std::sqrt(std::max(bank.eigenvalues[mode], 0.0));
       const double gap = omega > 0 ? std::abs(omega_mode - omega) / omega * (1.0 + kr) : 0.0;
       const double relative =
-          total[r] > 0
-              ? std::sqrt((diff[r] + tail + (order == n_cap ? unresolved : 0.0)) / total[r] + gap * gap)
-              : 0.0;
+          total[r] > 0 ? std::sqrt((diff[r] + tail + (order == n_cap ? unresolved : 0.0)) / total[r] + gap * gap) : 0.0;
 
       out.order.push_back(static_cast<uint32_t>(order));
       for (int i = 0; i < (order + 1) * (order + 1); ++i)
@@ -1527,7 +1523,8 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
       for (size_t t = 0; t < s.tris.size(); ++t) data[j].q[t] = -s.tris[t].normal[j];
       nodeData(s, data[j]);
     }
-    const ModeSolve solved = solveSystem(s, data, 0.0, elements, 0, k_ref, near_caches);  // the three right-hand sides at once
+    const ModeSolve solved =
+        solveSystem(s, data, 0.0, elements, 0, k_ref, near_caches);  // the three right-hand sides at once
     for (int j = 0; j < 3; ++j)
       for (size_t c = 0; c < solved.cut.nodes.size(); ++c) {
         const V3 va = s.nodes[solved.cut.nodes[c]].vector_area;
@@ -1548,4 +1545,3 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
 }
 
 }  // namespace strike
-

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -21,12 +22,20 @@ using V3 = Eigen::Vector3d;
 constexpr double kFourPi = 4.0 * M_PI;
 
 // Accuracy knobs of the quadrature (checked by the analytic-sphere tests).
-constexpr double kFarRatio = 3.0;       // a cell is "far" from x beyond this many diameters
-constexpr double kCellPhase = 0.6;      // a triangle's 1-point rule: k D at most this (3-point: twice)
-constexpr double kPointPhase = 2.0;     // a far piece as one point with its phase spread: k D at most this
-constexpr double kNearRatio = 2.5;      // a triangle's 3-point rule: this many diameters away
-constexpr int kNearMaxDepth = 7;        // subdivision levels at most (4^7 pieces)
-constexpr double kFarFieldPhase = 0.5;  // far-field projection cells: kappa D at most this
+constexpr double kFarRatio = 3.0;    // a cell is "far" from x beyond this many diameters
+constexpr double kCellPhase = 0.6;   // a triangle's 1-point rule: k D at most this (3-point: twice)
+constexpr double kPointPhase = 2.0;  // a far piece as one point with its phase spread: k D at most this
+constexpr double kNearRatio = 2.5;   // a triangle's 3-point rule: this many diameters away
+constexpr int kNearMaxDepth = 7;     // subdivision levels at most (4^7 pieces)
+constexpr double kPieceEdges = 4.0;  // a row's pieces: at most this many median triangle edges across
+
+// The loops over arrays below write arrays that GCC cannot prove apart from what they read:
+// this tells it they are (GCC only; other compilers ignore the hint's absence).
+#if defined(__GNUC__) && !defined(__clang__)
+#define STRIKE_IVDEP _Pragma("GCC ivdep")
+#else
+#define STRIKE_IVDEP
+#endif
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -54,8 +63,9 @@ struct Node {
   V3 centroid = V3::Zero();     // area-weighted
   V3 vector_area = V3::Zero();  // sum of area * normal
   double area = 0.0;
-  double radius = 0.0;  // every point of its triangles lies within this of the centroid
-  uint32_t rep = 0;     // triangle whose centroid is nearest the node's: its collocation point
+  double radius = 0.0;    // every point of its triangles lies within this of the centroid
+  double max_edge = 0.0;  // the longest edge of its triangles
+  uint32_t rep = 0;       // triangle whose centroid is nearest the node's: its collocation point
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // covariance of its points about the centroid
   bool leaf() const { return left < 0; }
 };
@@ -70,6 +80,8 @@ struct Surface {
   double volume = 0.0;
   std::vector<V3> chief_candidates;  // interior points, deepest kind first
   double inner_radius = 0.0;         // largest distance of a candidate from the surface
+  std::vector<int32_t> leaf_of_tri;  // the leaf node of each triangle
+  double max_piece_m = 1e300;        // pieces of a row's sum: at most this across (makePieces)
 };
 
 /// Splits triangles recursively: along the widest spread of centroids, or between normals when
@@ -119,6 +131,9 @@ void buildTree(Surface& s) {
     s.nodes[at].left = left;
     s.nodes[at].right = left + 1;
   }
+  s.leaf_of_tri.assign(count, -1);
+  for (size_t i = 0; i < s.nodes.size(); ++i)
+    if (s.nodes[i].leaf()) s.leaf_of_tri[s.order[s.nodes[i].begin]] = static_cast<int32_t>(i);
   // Moments bottom-up (children come after parents).
   for (size_t i = s.nodes.size(); i-- > 0;) {
     Node& n = s.nodes[i];
@@ -131,6 +146,7 @@ void buildTree(Surface& s) {
       for (const V3& v : t.v) n.radius = std::max(n.radius, (v - t.centroid).norm());
       n.rep = s.order[n.begin];
       n.cov = t.cov;
+      n.max_edge = t.diameter;
       continue;
     }
     const Node& a = s.nodes[n.left];
@@ -138,6 +154,7 @@ void buildTree(Surface& s) {
     n.area = a.area + b.area;
     n.centroid = n.area > 0 ? V3((a.area * a.centroid + b.area * b.centroid) / n.area) : V3(a.centroid);
     n.vector_area = a.vector_area + b.vector_area;
+    n.max_edge = std::max(a.max_edge, b.max_edge);
     n.radius = std::max((a.centroid - n.centroid).norm() + a.radius, (b.centroid - n.centroid).norm() + b.radius);
     const double da = (s.tris[a.rep].centroid - n.centroid).squaredNorm();
     const double db = (s.tris[b.rep].centroid - n.centroid).squaredNorm();
@@ -236,6 +253,12 @@ Result<Surface> makeSurface(const ModeBank& bank) {
     s.tris.push_back(tri);
   }
   if (s.tris.empty()) return badInput("the bank's surface triangles all have zero area");
+  // Pieces at most a few triangles across, so that the near ones (walked down the tree, one
+  // by one) stay few; the far ones are summed in vectorized loops.
+  std::vector<double> edges;
+  for (const Triangle& t : s.tris) edges.push_back(t.diameter);
+  std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
+  s.max_piece_m = kPieceEdges * edges[edges.size() / 2];
   buildTree(s);
   findInteriorPoints(s);
   return s;
@@ -243,13 +266,74 @@ Result<Surface> makeSurface(const ModeBank& bank) {
 
 // ---- kernels ---------------------------------------------------------------------------------
 
+/// sin and cos of a phase (|x| < 2^30; ours are below ~1e4): Cody & Waite's range reduction by
+/// pi/2 in three parts, then the minimax polynomials of Cephes (S. Moshier, sin.c) on
+/// [-pi/4, pi/4]; within 1 ulp of 1 absolute. Plain branch-free arithmetic (rounding by the
+/// 1.5 * 2^52 trick, no floor()), so loops over it vectorize with the baseline instruction set,
+/// and the same bits on every x86-64 (no FMA: -ffp-contract=off; libm picks FMA code at run time).
+inline void sinCos(double x, double& sin_out, double& cos_out) {
+  constexpr double kTwoOverPi = 0.63661977236758134308;
+  constexpr double kRound = 6755399441055744.0;   // 1.5 * 2^52: (v + kRound) - kRound rounds v
+  constexpr double kP1 = 1.5707963267341256e+00;  // pi/2 = kP1 + kP2 + kP3 (kP1, kP2: 24 bits)
+  constexpr double kP2 = 6.0771005065061922e-11;
+  constexpr double kP3 = 2.0222662487959506e-21;
+  const double q = (x * kTwoOverPi + kRound) - kRound;
+  const double r = ((x - q * kP1) - q * kP2) - q * kP3;
+  const double z = r * r;
+  const double sr = r + r * z *
+                            (-1.66666666666666307295e-1 +
+                             z * (8.33333333332211858878e-3 +
+                                  z * (-1.98412698295895385996e-4 +
+                                       z * (2.75573136213857245213e-6 +
+                                            z * (-2.50507477628578072866e-8 + z * 1.58962301576546568060e-10)))));
+  const double cr = 1.0 - 0.5 * z +
+                    z * z *
+                        (4.16666666666665929218e-2 +
+                         z * (-1.38888888888730564116e-3 +
+                              z * (2.48015872888517045348e-5 +
+                                   z * (-2.75573141792967388112e-7 +
+                                        z * (2.08757008419747316778e-9 - z * 1.13585365213876817300e-11)))));
+  const int32_t quadrant = static_cast<int32_t>(q) & 3;
+  const double sv = (quadrant & 1) ? cr : sr, cv = (quadrant & 1) ? sr : cr;
+  sin_out = (quadrant & 2) ? -sv : sv;
+  cos_out = ((quadrant + 1) & 2) ? -cv : cv;
+}
+
+inline cd unitPhase(double x) {  // e^{ix}
+  double s = 0.0, c = 0.0;
+  sinCos(x, s, c);
+  return {c, s};
+}
+
+void sinCosArray(const double* x, double* sin_out, double* cos_out, size_t n) {
+  for (size_t i = 0; i < n; ++i) sinCos(x[i], sin_out[i], cos_out[i]);
+}
+
+/// sum_j a_j w_j and sum_j b_j w_j in four fixed interleaved partial sums (vectorizable without
+/// reassociating: the same order on every machine).
+void dotTwo(const double* a, const double* b, const double* w, size_t n, double& sum_a, double& sum_b) {
+  double pa[4] = {0, 0, 0, 0}, pb[4] = {0, 0, 0, 0};
+  size_t j = 0;
+  for (; j + 4 <= n; j += 4)
+    for (int l = 0; l < 4; ++l) {
+      pa[l] += a[j + l] * w[j + l];
+      pb[l] += b[j + l] * w[j + l];
+    }
+  for (int l = 0; j < n; ++j, ++l) {
+    pa[l] += a[j] * w[j];
+    pb[l] += b[j] * w[j];
+  }
+  sum_a = (pa[0] + pa[1]) + (pa[2] + pa[3]);
+  sum_b = (pb[0] + pb[1]) + (pb[2] + pb[3]);
+}
+
 struct Kernel {
   cd g;      // G(x, y)
   cd dg_dr;  // dG/dr divided by r: grad_y G = dg_dr * (y - x)
 };
 
 inline Kernel kernel(double k, double r) {
-  const cd e = std::polar(1.0, k * r);
+  const cd e = unitPhase(k * r);
   const double inv_r = 1.0 / r;
   const cd g = e * (inv_r / kFourPi);
   return {g, g * cd(-inv_r * inv_r, k * inv_r)};  // e^{ikr}(ikr - 1) / (4 pi r^3)
@@ -330,23 +414,6 @@ void integrateTriangle(const V3& x, const V3& a, const V3& b, const V3& c, const
     int_g += w * kr.g;
     int_dg += w * kr.dg_dr * yx.dot(normal);
   }
-}
-
-/// int_T G dS for x the centroid of T (weakly singular): three Duffy-transformed pieces.
-cd selfTriangle(const Triangle& t, double k) {
-  const V3 x = t.centroid;
-  cd sum = 0.0;
-  for (int e = 0; e < 3; ++e) {
-    const V3 a = t.v[e] - x, ab = t.v[(e + 1) % 3] - t.v[e];
-    const double jacobian = a.cross(ab).norm();  // 2 * area of the piece
-    for (int iv = 0; iv < 8; ++iv) {
-      const double rho = (a + kGaussX[iv] * ab).norm();  // r = u rho
-      cd inner = 0.0;
-      for (int iu = 0; iu < 8; ++iu) inner += kGaussW[iu] * std::polar(1.0, k * kGaussX[iu] * rho);
-      sum += kGaussW[iv] * inner * (jacobian / (kFourPi * rho));
-    }
-  }
-  return sum;
 }
 
 // ---- one mode: boundary data, the system, the far field -------------------------------------
@@ -474,203 +541,757 @@ Coarse coarsen(const Surface& s, const Cut& cut) {
   return coarse;
 }
 
-/// One row of the system at x: M[col] += int_cluster dG/dn_y, and int G q over the surface.
-/// host: the triangle x is the centroid of (-1 for interior points).
-void assembleRow(const Surface& s, const Cut& cut, const NodeData& data, double k, const V3& x, int64_t host, cd* M,
-                 cd& lq, std::vector<int32_t>& stack) {
-  stack.clear();
-  stack.push_back(0);
-  while (!stack.empty()) {
-    const int32_t i = stack.back();
-    stack.pop_back();
-    const Node& n = s.nodes[i];
-    const int32_t col = cut.cluster_of_node[i];
-    const V3 yx = n.centroid - x;
-    const double dist = yx.norm();
-    const double diameter = 2.0 * n.radius;
-    if (col >= 0 && dist > kFarRatio * diameter && k * diameter <= kPointPhase) {
-      const Kernel kr = kernel(k, dist);
-      const cd spread = phaseSpread(k, n.cov, yx, dist);
-      M[col] += kr.dg_dr * yx.dot(n.vector_area) * spread;
-      lq += (kr.g * data.Q[i] + kr.dg_dr * yx.dot(data.D[i])) * spread;
-      continue;
-    }
-    if (!n.leaf()) {
-      stack.push_back(n.left);
-      stack.push_back(n.right);
-      continue;
-    }
-    const uint32_t t = s.order[n.begin];
-    const Triangle& tri = s.tris[t];
-    if (static_cast<int64_t>(t) == host) {
-      lq += selfTriangle(tri, k) * data.q[t];  // int dG/dn_y over a flat triangle through x is 0
-      continue;
-    }
-    cd int_g = 0.0, int_dg = 0.0;
-    integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
-    M[col] += int_dg;
-    lq += int_g * data.q[t];
-  }
-}
-
-/// Spherical Bessel j_0..j_n at x (Miller's downward recurrence, normalized by j_0 or j_1).
-void sphericalBessel(int n, double x, double* out) {
-  if (x < 1e-12) {
-    out[0] = 1.0;
-    for (int i = 1; i <= n; ++i) out[i] = 0.0;
-    return;
-  }
-  const int start = std::max(n, static_cast<int>(x)) + 16 + static_cast<int>(std::sqrt(40.0 * std::max<double>(n, x)));
-  double next = 0.0, cur = 1e-300;
-  for (int i = start; i > 0; --i) {
-    const double prev = (2.0 * i + 1.0) / x * cur - next;
-    next = cur;
-    cur = prev;
-    if (i - 1 <= n) out[i - 1] = cur;
-    if (i <= n) out[i] = next;
-    if (std::abs(cur) > 1e200) {
-      cur *= 1e-200;
-      next *= 1e-200;
-      for (int j = i - 1; j <= n; ++j)
-        if (j >= 0) out[j] *= 1e-200;
-    }
-  }
-  const double j0 = std::sin(x) / x, j1 = std::sin(x) / (x * x) - std::cos(x) / x;
-  const double scale = std::abs(j0) >= std::abs(j1) ? j0 / out[0] : j1 / out[1];
-  for (int i = 0; i <= n; ++i) out[i] *= scale;
-}
-
-/// A point of the far-field quadrature.
-struct FarPoint {
-  V3 y;
-  V3 vector_area;  // for the p term: int p dG_inf/dn ~= p grad f . vector_area
-  double Q;        // int q over the piece (first moment folded in by small pieces)
-  int32_t cluster;
+/// The pieces of a solve at wavenumber k: the largest nodes inside one cluster that one point
+/// with its moments can stand for (k D <= kPointPhase), or single triangles too large for that.
+/// They are the same for every collocation point, so each row is one flat loop over them
+/// (structure of arrays), and the far field is summed over them too.
+struct Pieces {
+  std::vector<int32_t> node, col;
+  std::vector<char> one_point;                              // k D <= kPointPhase: one point with its moments will do
+  std::vector<int8_t> quarter;                              // 1-4: a quarter of the leaf triangle (0: the whole node)
+  std::vector<int64_t> leaf_tri;                            // the triangle of a leaf node (-1: a larger node)
+  std::vector<double> clear_of_near;                        // a larger node: beyond this none of its triangles is near
+  std::vector<double> x, y, z;                              // centroid
+  std::vector<double> ax, ay, az;                           // vector area
+  std::vector<double> cxx, cxy, cxz, cyy, cyz, czz, trace;  // covariance of the piece's points
+  std::vector<double> diameter;
+  size_t size() const { return node.size(); }
 };
 
-void farFieldPoints(const Surface& s, const Cut& cut, const NodeData& data, double kappa,
-                    std::vector<FarPoint>& points) {
-  points.clear();
+Pieces makePieces(const Surface& s, const Cut& cut, double k) {
+  Pieces p;
+  auto add = [&](int32_t node, int32_t col, bool one_point, int8_t quarter, const V3& centroid, const V3& vector_area,
+                 const Eigen::Matrix3d& cov, double diameter) {
+    p.node.push_back(node);
+    p.col.push_back(col);
+    p.one_point.push_back(one_point ? 1 : 0);
+    p.quarter.push_back(quarter);
+    const Node& n = s.nodes[node];
+    p.leaf_tri.push_back(n.leaf() ? static_cast<int64_t>(s.order[n.begin]) : -1);
+    p.clear_of_near.push_back(1.001 * (n.radius + kFarRatio * n.max_edge));
+    p.x.push_back(centroid[0]);
+    p.y.push_back(centroid[1]);
+    p.z.push_back(centroid[2]);
+    p.ax.push_back(vector_area[0]);
+    p.ay.push_back(vector_area[1]);
+    p.az.push_back(vector_area[2]);
+    p.cxx.push_back(cov(0, 0));
+    p.cxy.push_back(cov(0, 1));
+    p.cxz.push_back(cov(0, 2));
+    p.cyy.push_back(cov(1, 1));
+    p.cyz.push_back(cov(1, 2));
+    p.czz.push_back(cov(2, 2));
+    p.trace.push_back(cov.trace());
+    p.diameter.push_back(diameter);
+  };
   std::vector<int32_t> stack{0};
   while (!stack.empty()) {
     const int32_t i = stack.back();
     stack.pop_back();
     const Node& n = s.nodes[i];
-    const int32_t cluster = cut.cluster_of_node[i];
-    if (cluster >= 0 && 2.0 * n.radius * kappa <= kFarFieldPhase) {
-      points.push_back({n.centroid, n.vector_area, data.Q[i], cluster});
+    const int32_t col = cut.cluster_of_node[i];
+    if (n.leaf()) {
+      // A single triangle's size is its longest edge (as integrateTriangle judges it); one too
+      // large for one point is four quarters (each with its own moments) while they are small
+      // enough, else integrated by integrateTriangle's rules.
+      const Triangle& t = s.tris[s.order[n.begin]];
+      if (k * t.diameter <= kPointPhase || k * t.diameter > 2.0 * kPointPhase) {
+        add(i, col, k * t.diameter <= kPointPhase, 0, n.centroid, n.vector_area, n.cov, t.diameter);
+        continue;
+      }
+      const V3 ab = 0.5 * (t.v[0] + t.v[1]), bc = 0.5 * (t.v[1] + t.v[2]), ca = 0.5 * (t.v[2] + t.v[0]);
+      const V3 centroids[4] = {(t.v[0] + ab + ca) / 3.0, (ab + t.v[1] + bc) / 3.0, (ca + bc + t.v[2]) / 3.0,
+                               (ab + bc + ca) / 3.0};
+      for (int8_t q = 0; q < 4; ++q)
+        add(i, col, true, static_cast<int8_t>(q + 1), centroids[q], 0.25 * n.vector_area, 0.25 * n.cov,
+            0.5 * t.diameter);
       continue;
     }
-    if (!n.leaf()) {
-      stack.push_back(n.left);
-      stack.push_back(n.right);
+    const double diameter = 2.0 * n.radius;
+    if (col >= 0 && k * diameter <= kPointPhase && diameter <= s.max_piece_m) {
+      add(i, col, true, 0, n.centroid, n.vector_area, n.cov, diameter);
       continue;
     }
-    const Triangle& t = s.tris[s.order[n.begin]];
-    const double q = data.q[s.order[n.begin]] * t.area / 3.0;
-    const V3 va = t.normal * (t.area / 3.0);
-    points.push_back({(4.0 * t.v[0] + t.v[1] + t.v[2]) / 6.0, va, q, cluster});
-    points.push_back({(t.v[0] + 4.0 * t.v[1] + t.v[2]) / 6.0, va, q, cluster});
-    points.push_back({(t.v[0] + t.v[1] + 4.0 * t.v[2]) / 6.0, va, q, cluster});
+    stack.push_back(n.right);
+    stack.push_back(n.left);
+  }
+  return p;
+}
+
+/// The boundary data of several modes at one wavenumber, per piece: Q = int q dS and the first
+/// moment D = int (y - centroid) q dS (index rhs * pieces + piece).
+struct PieceData {
+  std::vector<double> Q, Dx, Dy, Dz;
+};
+
+PieceData pieceData(const Surface& s, const Pieces& p, const std::vector<NodeData>& data) {
+  PieceData out;
+  const size_t count = p.size();
+  out.Q.resize(data.size() * count);
+  out.Dx.resize(data.size() * count);
+  out.Dy.resize(data.size() * count);
+  out.Dz.resize(data.size() * count);
+  for (size_t r = 0; r < data.size(); ++r)
+    for (size_t j = 0; j < count; ++j) {
+      const int32_t node = p.node[j];
+      if (p.quarter[j] > 0) {  // q is constant on a triangle: a quarter's first moment is 0
+        const uint32_t t = s.order[s.nodes[node].begin];
+        out.Q[r * count + j] = 0.25 * data[r].q[t] * s.tris[t].area;
+        out.Dx[r * count + j] = out.Dy[r * count + j] = out.Dz[r * count + j] = 0.0;
+        continue;
+      }
+      out.Q[r * count + j] = data[r].Q[node];
+      out.Dx[r * count + j] = data[r].D[node][0];
+      out.Dy[r * count + j] = data[r].D[node][1];
+      out.Dz[r * count + j] = data[r].D[node][2];
+    }
+  return out;
+}
+
+/// Is triangle t (centroid c, longest edge d) near x: too close for one point with its moments
+/// (integrateTriangle's test), so integrated by a finer rule or subdivided. One expression for
+/// every caller, so that they agree to the bit.
+inline bool nearLeaf(const V3& x, const V3& c, double d) {
+  const double dx = c[0] - x[0], dy = c[1] - x[1], dz = c[2] - x[2];
+  return !(std::sqrt(dx * dx + dy * dy + dz * dz) > kFarRatio * d);
+}
+
+/// The quadrature of the near triangles of each collocation point, which does not depend on the
+/// wavenumber once its rules are chosen: chosen once per cut at the bank's largest wavenumber
+/// k_ref (a rule fine enough at k_ref is at every lower k), then every mode only evaluates
+/// e^{ikr} at the stored distances. Per point: int G += w_g G(r), int dG/dn += w_dn dG/dr / r.
+struct NearCache {
+  std::vector<size_t> begin;                // per row: its points are [begin[row], begin[row + 1])
+  std::vector<double> r, inv_r, w_g, w_dn;  // per point
+  std::vector<uint32_t> tri;                // per point: the triangle (its cluster and data)
+  std::vector<size_t> near_begin;           // per row: its near triangles
+  std::vector<uint32_t> near_tris;          // their points: [near_first[i], near_first[i + 1])
+  std::vector<size_t> near_first;
+};
+
+/// Records the points that integrateTriangle's rules and subdivisions use for a near triangle
+/// (depth >= 0 past its one-point test) at wavenumber k.
+void nearRule(const V3& x, const V3& a, const V3& b, const V3& c, const V3& normal, double area, double k, int depth,
+              uint32_t t, NearCache& out) {
+  const V3 m = (a + b + c) / 3.0;
+  const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  const double dist = (x - m).norm();
+  const double kd = k * d;
+  const double(*rule)[4] = nullptr;
+  int points = 0;
+  if (dist > kFarRatio * d && kd <= kCellPhase) {
+    points = 1;
+  } else if (dist > kNearRatio * d && kd <= 2.0 * kCellPhase) {
+    rule = kRule3;
+    points = 3;
+  } else if ((dist > 2.0 * d && kd <= 2.5) || depth >= kNearMaxDepth) {
+    rule = kRule7;
+    points = 7;
+  }
+  if (points == 0) {
+    const V3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
+    const double quarter = 0.25 * area;
+    nearRule(x, a, ab, ca, normal, quarter, k, depth + 1, t, out);
+    nearRule(x, ab, b, bc, normal, quarter, k, depth + 1, t, out);
+    nearRule(x, ca, bc, c, normal, quarter, k, depth + 1, t, out);
+    nearRule(x, ab, bc, ca, normal, quarter, k, depth + 1, t, out);
+    return;
+  }
+  for (int i = 0; i < points; ++i) {
+    const V3 y = rule ? V3(rule[i][0] * a + rule[i][1] * b + rule[i][2] * c) : m;
+    const double w = rule ? rule[i][3] * area : area;
+    const V3 yx = y - x;
+    const double r = yx.norm();
+    if (!(r > 0)) continue;
+    out.r.push_back(r);
+    out.w_g.push_back(w);
+    out.w_dn.push_back(w * yx.dot(normal));
+    out.tri.push_back(t);
   }
 }
 
-/// Spherical-harmonic coefficients of the far field, c_nm = (-i)^n int (p d/dn - q) f_nm dS with
-/// f_nm(y) = j_n(k |y - c|) Y_nm(y - c) (the plane wave's expansion, Colton & Kress 2013, 2.46),
-/// for two pressure vectors at once (the solution and the coarse solve's difference).
-void projectFarField(const Surface& s, const std::vector<FarPoint>& points, double k, int n_cap,
-                     const Eigen::VectorXcd& p, const Eigen::VectorXcd& dp, std::vector<cd>& coef,
-                     std::vector<cd>& dcoef) {
-  const size_t count = static_cast<size_t>((n_cap + 1) * (n_cap + 1));
-  coef.assign(count, 0.0);
-  dcoef.assign(count, 0.0);
-  std::vector<double> f0(count), fp(count), fm(count), j(n_cap + 1), jp(n_cap + 1), jm(n_cap + 1);
-  const double kappa = std::max(k, (n_cap + 1.0) / s.radius);
-  const double eps = 1e-4 / kappa;
-  auto evaluate = [&](const V3& y, double* f, double* jn) {
-    const V3 r = y - s.centre;
-    const double d[3] = {r[0], r[1], r[2]};
-    realSphericalHarmonics(static_cast<uint32_t>(n_cap), d, f);
-    sphericalBessel(n_cap, k * r.norm(), jn);
-    for (int n = 0; n <= n_cap; ++n)
-      for (int m = -n; m <= n; ++m) f[n * n + n + m] *= jn[n];
-  };
-  for (const FarPoint& pt : points) {
-    const double area = pt.vector_area.norm();
-    evaluate(pt.y, f0.data(), j.data());
-    const cd pc = p[pt.cluster], dpc = dp[pt.cluster];
-    if (area > 0) {
-      const V3 step = pt.vector_area * (eps / area);
-      evaluate(pt.y + step, fp.data(), jp.data());
-      evaluate(pt.y - step, fm.data(), jm.data());
-      const double scale = area / (2.0 * eps);
-      for (size_t i = 0; i < count; ++i) {
-        const double df = (fp[i] - fm[i]) * scale;
-        coef[i] += pc * df - pt.Q * f0[i];
-        dcoef[i] += dpc * df;
+/// The near quadrature of every row of `cut`, then of every interior candidate, at k_ref.
+NearCache buildNearCache(const Surface& s, const Cut& cut, double k_ref) {
+  NearCache out;
+  const size_t rows = cut.nodes.size() + s.chief_candidates.size();
+  std::vector<int32_t> stack;
+  for (size_t row = 0; row < rows; ++row) {
+    out.begin.push_back(out.r.size());
+    out.near_begin.push_back(out.near_tris.size());
+    const bool on_surface = row < cut.nodes.size();
+    const int64_t host = on_surface ? static_cast<int64_t>(s.nodes[cut.nodes[row]].rep) : -1;
+    const V3 x = on_surface ? s.tris[host].centroid : s.chief_candidates[row - cut.nodes.size()];
+    // Near triangles: walk down the nodes that may hold one (within 3 longest edges of x).
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+      const Node& n = s.nodes[stack.back()];
+      stack.pop_back();
+      if (!((n.centroid - x).norm() <= 1.01 * (n.radius + kFarRatio * n.max_edge))) continue;
+      if (!n.leaf()) {
+        stack.push_back(n.right);
+        stack.push_back(n.left);
+        continue;
       }
-    } else {
-      for (size_t i = 0; i < count; ++i) coef[i] -= pt.Q * f0[i];
+      const uint32_t t = s.order[n.begin];
+      const Triangle& tri = s.tris[t];
+      if (static_cast<int64_t>(t) != host && !nearLeaf(x, tri.centroid, tri.diameter)) continue;
+      out.near_tris.push_back(t);
+      out.near_first.push_back(out.r.size());
+      if (static_cast<int64_t>(t) == host) {
+        // int_T G dS for x the centroid of T (weakly singular): three Duffy-transformed pieces,
+        // sum w_iv w_iu e^{ikr} J / (4 pi rho) with r = x_iu rho, i.e. w_g = w_iv w_iu J x_iu
+        // against G = e^{ikr} / (4 pi r); int dG/dn_y over a flat triangle through x is 0.
+        for (int e = 0; e < 3; ++e) {
+          const V3 a = tri.v[e] - x, ab = tri.v[(e + 1) % 3] - tri.v[e];
+          const double jacobian = a.cross(ab).norm();
+          for (int iv = 0; iv < 8; ++iv) {
+            const double rho = (a + kGaussX[iv] * ab).norm();
+            for (int iu = 0; iu < 8; ++iu) {
+              out.r.push_back(kGaussX[iu] * rho);
+              out.w_g.push_back(kGaussW[iv] * kGaussW[iu] * jacobian * kGaussX[iu]);
+              out.w_dn.push_back(0.0);
+              out.tri.push_back(t);
+            }
+          }
+        }
+        continue;
+      }
+      nearRule(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k_ref, 0, t, out);
     }
   }
-  cd phase = 1.0;  // (-i)^n
-  for (int n = 0; n <= n_cap; ++n) {
-    for (int m = -n; m <= n; ++m) {
-      coef[n * n + n + m] *= phase;
-      dcoef[n * n + n + m] *= phase;
+  out.begin.push_back(out.r.size());
+  out.near_begin.push_back(out.near_tris.size());
+  out.near_first.push_back(out.r.size());
+  out.inv_r.resize(out.r.size());
+  for (size_t i = 0; i < out.r.size(); ++i) out.inv_r[i] = 1.0 / out.r[i];
+  return out;
+}
+
+/// Whether a node's triangles are all far from x (none of them near, nearLeaf), with a margin
+/// that rounding cannot cross.
+/// (Pieces::clear_of_near holds the same bound.)
+inline bool noNearLeaf(const Node& n, double dist) { return dist > 1.001 * (n.radius + kFarRatio * n.max_edge); }
+
+/// Scratch of assembleRow.
+struct RowScratch {
+  std::vector<double> r, phase, sin_kr, cos_kr;  // per piece, then per near point
+  std::vector<double> far, dx, dy, dz;           // per piece: 1 if summed as one point, 0 if not
+  std::vector<double> g_re, g_im, dg_re, dg_im;  // G and dG/dr / r (times the spread, the weight)
+  std::vector<double> m_re, m_im;                // the contribution to M[col]
+  std::vector<int32_t> stack;
+  std::vector<uint32_t> near_stamp;  // per triangle: the row that found it near (+1)
+  uint32_t stamp = 0;
+};
+
+/// The part of a row at x from the subtree of `start`, the triangles near x left out (the
+/// NearCache has them): M[col] += int_cluster dG/dn_y, lq[r] += int G q_r.
+void assembleNear(const Surface& s, const Cut& cut, const std::vector<NodeData>& data, double k, const V3& x,
+                  int32_t start, cd* M, cd* lq, RowScratch& w) {
+  const size_t rhs = data.size();
+  w.stack.clear();
+  w.stack.push_back(start);
+  while (!w.stack.empty()) {
+    const int32_t i = w.stack.back();
+    w.stack.pop_back();
+    const Node& n = s.nodes[i];
+    const int32_t col = cut.cluster_of_node[i];
+    const V3 yx = n.centroid - x;
+    const double dist = yx.norm();
+    const double diameter = 2.0 * n.radius;
+    if (!n.leaf()) {
+      if (col >= 0 && dist > kFarRatio * diameter && k * diameter <= kPointPhase && noNearLeaf(n, dist)) {
+        const Kernel kr = kernel(k, dist);
+        const cd spread = phaseSpread(k, n.cov, yx, dist);
+        M[col] += kr.dg_dr * yx.dot(n.vector_area) * spread;
+        for (size_t r = 0; r < rhs; ++r) lq[r] += (kr.g * data[r].Q[i] + kr.dg_dr * yx.dot(data[r].D[i])) * spread;
+        continue;
+      }
+      w.stack.push_back(n.left);
+      w.stack.push_back(n.right);
+      continue;
     }
-    phase *= cd(0.0, -1.0);
+    const uint32_t t = s.order[n.begin];
+    if (w.near_stamp[t] == w.stamp) continue;  // near: in the cache
+    const Triangle& tri = s.tris[t];
+    cd int_g = 0.0, int_dg = 0.0;
+    integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
+    M[col] += int_dg;
+    for (size_t r = 0; r < rhs; ++r) lq[r] += int_g * data[r].q[t];
   }
+}
+
+/// sum_j (a_re_j + i a_im_j) w_j + (b_re_j + i b_im_j) v_j in four fixed interleaved partial
+/// sums (vectorizable without reassociating: the same order on every machine). v may be null.
+cd sumTwo(const double* a_re, const double* a_im, const double* w, const double* b_re, const double* b_im,
+          const double* v, size_t n) {
+  double re[4] = {0, 0, 0, 0}, im[4] = {0, 0, 0, 0};
+  size_t j = 0;
+  for (; j + 4 <= n; j += 4)
+    for (int l = 0; l < 4; ++l) {
+      re[l] += a_re[j + l] * w[j + l] + (v ? b_re[j + l] * v[j + l] : 0.0);
+      im[l] += a_im[j + l] * w[j + l] + (v ? b_im[j + l] * v[j + l] : 0.0);
+    }
+  for (int l = 0; j < n; ++j, ++l) {
+    re[l] += a_re[j] * w[j] + (v ? b_re[j] * v[j] : 0.0);
+    im[l] += a_im[j] * w[j] + (v ? b_im[j] * v[j] : 0.0);
+  }
+  return {(re[0] + re[1]) + (re[2] + re[3]), (im[0] + im[1]) + (im[2] + im[3])};
+}
+
+/// One row of the system at x (row `row` of the cut, or an interior point after them):
+/// M[col] += int_cluster dG/dn_y, and lq[r] += int G q_r over the surface. The near triangles
+/// from the cache's points; pieces far from x as one point with their phase spread
+/// (phaseSpread); the rest walked down the tree (assembleNear). The sums are split into
+/// passes over arrays (distances, exponentials, kernels, then the sums) that vectorize, with
+/// complex products written out (no library complex multiplication and its NaN checks).
+void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceData& pd,
+                 const std::vector<NodeData>& data, const NearCache& near, size_t row, double k, const V3& x, cd* M,
+                 cd* lq, RowScratch& w) {
+  const size_t count = p.size(), rhs = data.size();
+  const double x0 = x[0], x1 = x[1], x2 = x[2];
+  const double inv_four_pi = 1.0 / kFourPi;
+  // The near triangles.
+  w.near_stamp.resize(s.tris.size(), 0);
+  ++w.stamp;
+  for (size_t i = near.near_begin[row]; i < near.near_begin[row + 1]; ++i) w.near_stamp[near.near_tris[i]] = w.stamp;
+  const size_t first = near.begin[row], points = near.begin[row + 1] - first;
+  const size_t size = std::max(points, count);
+  for (auto* v : {&w.r, &w.phase, &w.sin_kr, &w.cos_kr, &w.far, &w.dx, &w.dy, &w.dz, &w.g_re, &w.g_im, &w.dg_re,
+                  &w.dg_im, &w.m_re, &w.m_im})
+    v->resize(size);
+  {
+    const double* r = near.r.data() + first;
+    for (size_t i = 0; i < points; ++i) w.phase[i] = k * r[i];
+    sinCosArray(w.phase.data(), w.sin_kr.data(), w.cos_kr.data(), points);
+    const double* inv = near.inv_r.data() + first;
+    const double* w_g = near.w_g.data() + first;
+    const double* w_dn = near.w_dn.data() + first;
+    STRIKE_IVDEP
+    for (size_t i = 0; i < points; ++i) {
+      const double inv_r = inv[i];
+      const double g_re = w.cos_kr[i] * inv_r * inv_four_pi, g_im = w.sin_kr[i] * inv_r * inv_four_pi;
+      const double a = -inv_r * inv_r, b = k * inv_r;  // dG/dr / r = G (-1/r^2 + ik/r)
+      w.m_re[i] = w_dn[i] * (g_re * a - g_im * b);
+      w.m_im[i] = w_dn[i] * (g_re * b + g_im * a);
+      w.g_re[i] = w_g[i] * g_re;
+      w.g_im[i] = w_g[i] * g_im;
+    }
+    // Per near triangle (its points are consecutive): one sum, then its cluster and data.
+    for (size_t i = near.near_begin[row]; i < near.near_begin[row + 1]; ++i) {
+      const uint32_t t = near.near_tris[i];
+      double m_re = 0.0, m_im = 0.0, g_re = 0.0, g_im = 0.0;
+      for (size_t at = near.near_first[i] - first; at < near.near_first[i + 1] - first; ++at) {
+        m_re += w.m_re[at];
+        m_im += w.m_im[at];
+        g_re += w.g_re[at];
+        g_im += w.g_im[at];
+      }
+      M[cut.cluster_of_node[s.leaf_of_tri[t]]] += cd(m_re, m_im);
+      for (size_t rr = 0; rr < rhs; ++rr) lq[rr] += cd(g_re * data[rr].q[t], g_im * data[rr].q[t]);
+    }
+  }
+  // The pieces: which are one point far from x (the others are done one by one below).
+  STRIKE_IVDEP
+  for (size_t j = 0; j < count; ++j) {
+    w.dx[j] = p.x[j] - x0;
+    w.dy[j] = p.y[j] - x1;
+    w.dz[j] = p.z[j] - x2;
+    w.r[j] = std::sqrt(w.dx[j] * w.dx[j] + w.dy[j] * w.dy[j] + w.dz[j] * w.dz[j]);
+    w.phase[j] = k * w.r[j];
+  }
+  for (size_t j = 0; j < count; ++j) {
+    bool far = p.one_point[j] != 0;
+    if (p.leaf_tri[j] >= 0)
+      far = far && w.near_stamp[p.leaf_tri[j]] != w.stamp;
+    else
+      far = far && w.r[j] > kFarRatio * p.diameter[j] && w.r[j] > p.clear_of_near[j];
+    w.far[j] = far ? 1.0 : 0.0;
+  }
+  sinCosArray(w.phase.data(), w.sin_kr.data(), w.cos_kr.data(), count);
+  const double half_kk = 0.5 * k * k;
+  {
+    // Restrict-qualified views (no aliasing between the arrays), so that this loop vectorizes.
+    const double* __restrict far_j = w.far.data();
+    const double* __restrict r_j = w.r.data();
+    const double* __restrict cos_j = w.cos_kr.data();
+    const double* __restrict sin_j = w.sin_kr.data();
+    const double* __restrict dx_j = w.dx.data();
+    const double* __restrict dy_j = w.dy.data();
+    const double* __restrict dz_j = w.dz.data();
+    const double* __restrict cxx = p.cxx.data();
+    const double* __restrict cxy = p.cxy.data();
+    const double* __restrict cxz = p.cxz.data();
+    const double* __restrict cyy = p.cyy.data();
+    const double* __restrict cyz = p.cyz.data();
+    const double* __restrict czz = p.czz.data();
+    const double* __restrict trace = p.trace.data();
+    const double* __restrict ax = p.ax.data();
+    const double* __restrict ay = p.ay.data();
+    const double* __restrict az = p.az.data();
+    double* __restrict g_re_j = w.g_re.data();
+    double* __restrict g_im_j = w.g_im.data();
+    double* __restrict dg_re_j = w.dg_re.data();
+    double* __restrict dg_im_j = w.dg_im.data();
+    double* __restrict m_re_j = w.m_re.data();
+    double* __restrict m_im_j = w.m_im.data();
+    STRIKE_IVDEP
+    for (size_t j = 0; j < count; ++j) {
+      const double far = far_j[j];
+      const double r = far * r_j[j] + (1.0 - far);  // 1 for the others (no division by a near piece's 0)
+      const double inv_r = 1.0 / r, inv_r2 = inv_r * inv_r;
+      const double dx = dx_j[j], dy = dy_j[j], dz = dz_j[j];
+      // G = e^{ikr} / (4 pi r); grad_y G = (y - x) G (ik/r - 1/r^2).
+      const double g_re = far * cos_j[j] * inv_r * inv_four_pi, g_im = far * sin_j[j] * inv_r * inv_four_pi;
+      const double a = -inv_r2, b = k * inv_r;
+      const double dg_re = g_re * a - g_im * b, dg_im = g_re * b + g_im * a;
+      // phaseSpread: 1 - k^2 rhat.C.rhat / 2 + ik (tr C - rhat.C.rhat) / (2r).
+      const double along = (cxx[j] * dx * dx + cyy[j] * dy * dy + czz[j] * dz * dz +
+                            2.0 * (cxy[j] * dx * dy + cxz[j] * dx * dz + cyz[j] * dy * dz)) *
+                           inv_r2;
+      const double sp_re = 1.0 - half_kk * along, sp_im = k * (trace[j] - along) * 0.5 * inv_r;
+      g_re_j[j] = g_re * sp_re - g_im * sp_im;
+      g_im_j[j] = g_re * sp_im + g_im * sp_re;
+      const double ds_re = dg_re * sp_re - dg_im * sp_im, ds_im = dg_re * sp_im + dg_im * sp_re;
+      dg_re_j[j] = ds_re;
+      dg_im_j[j] = ds_im;
+      const double along_va = dx * ax[j] + dy * ay[j] + dz * az[j];
+      m_re_j[j] = ds_re * along_va;
+      m_im_j[j] = ds_im * along_va;
+    }
+  }
+  for (size_t j = 0; j < count; ++j) M[p.col[j]] += cd(w.m_re[j], w.m_im[j]);
+  for (size_t rr = 0; rr < rhs; ++rr) {
+    const double* Q = pd.Q.data() + rr * count;
+    const double* Dx = pd.Dx.data() + rr * count;
+    const double* Dy = pd.Dy.data() + rr * count;
+    const double* Dz = pd.Dz.data() + rr * count;
+    for (size_t j = 0; j < count; ++j) w.phase[j] = w.dx[j] * Dx[j] + w.dy[j] * Dy[j] + w.dz[j] * Dz[j];
+    lq[rr] += sumTwo(w.g_re.data(), w.g_im.data(), Q, w.dg_re.data(), w.dg_im.data(), w.phase.data(), count);
+  }
+  // The pieces not summed as one point.
+  for (size_t j = 0; j < count; ++j) {
+    if (w.far[j] > 0) continue;
+    const Node& n = s.nodes[p.node[j]];
+    if (!n.leaf()) {
+      assembleNear(s, cut, data, k, x, p.node[j], M, lq, w);
+      continue;
+    }
+    const uint32_t t = s.order[n.begin];
+    if (w.near_stamp[t] == w.stamp) continue;  // near: done above
+    if (p.quarter[j] > 1) continue;            // (a quarter's triangle is done with its first)
+    const Triangle& tri = s.tris[t];           // too large for one point at this k
+    cd int_g = 0.0, int_dg = 0.0;
+    integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
+    M[p.col[j]] += int_dg;
+    for (size_t rr = 0; rr < rhs; ++rr) lq[rr] += int_g * data[rr].q[t];
+  }
+}
+
+/// Gauss-Legendre nodes and weights on [-1, 1] (Newton on P_n; symmetric by construction).
+void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
+  x.assign(n, 0.0);
+  w.assign(n, 0.0);
+  for (int i = 0; i < (n + 1) / 2; ++i) {
+    double t = unitPhase(M_PI * (i + 0.75) / (n + 0.5)).real(), dp = 1.0;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1.0, p1 = t;  // P_0, P_1
+      for (int j = 2; j <= n; ++j) {
+        const double p2 = ((2.0 * j - 1.0) * t * p1 - (j - 1.0) * p0) / j;
+        p0 = p1;
+        p1 = p2;
+      }
+      const double pn = n == 0 ? 1.0 : p1, pn1 = n == 0 ? 0.0 : p0;
+      dp = n * (t * pn - pn1) / (t * t - 1.0);
+      const double step = pn / dp;
+      t -= step;
+      if (std::abs(step) < 1e-16) break;
+    }
+    double p0 = 1.0, p1 = t;  // the derivative at the converged node
+    for (int j = 2; j <= n; ++j) {
+      const double p2 = ((2.0 * j - 1.0) * t * p1 - (j - 1.0) * p0) / j;
+      p0 = p1;
+      p1 = p2;
+    }
+    dp = n * (t * p1 - p0) / (t * t - 1.0);
+    x[i] = t;
+    x[n - 1 - i] = -t;
+    w[i] = w[n - 1 - i] = 2.0 / ((1.0 - t * t) * dp * dp);
+  }
+  if (n % 2 == 1) x[n / 2] = 0.0;
+}
+
+/// Spherical-harmonic coefficients of the far fields of several solutions at one wavenumber.
+/// F(d) = (1/4pi) int (p dE/dn - q E) dS with E = e^{-ik d.(y - c)} (c: the centre), summed
+/// over the pieces with their moments (E over a piece ~ E(centroid) (1 - k^2 d.C.d / 2), and
+/// int q E ~ E(centroid) (Q - ik d.D)), at the nodes of a product rule (Gauss-Legendre in
+/// cos theta, uniform in phi) that integrates Y_nm Y_n'm' exactly up to n_cap + 1; then
+/// c_nm = int F Y_nm dOmega. A direction d and its opposite share their exponentials
+/// (E(-d) = conj E(d)). p[r], p_diff[r]: per cluster; coef[r], dcoef[r]: (n_cap + 1)^2 each.
+void projectFarField(const Surface& s, const Pieces& pc, const PieceData& pd, const std::vector<NodeData>& data,
+                     double k, int n_cap, const std::vector<Eigen::VectorXcd>& p,
+                     const std::vector<Eigen::VectorXcd>& p_diff, std::vector<std::vector<cd>>& coef,
+                     std::vector<std::vector<cd>>& dcoef) {
+  const size_t rhs = data.size();
+  const size_t count = static_cast<size_t>((n_cap + 1) * (n_cap + 1));
+  coef.assign(rhs, std::vector<cd>(count, 0.0));
+  dcoef.assign(rhs, std::vector<cd>(count, 0.0));
+  // Points: the one-point pieces with their moments, and a 7-point rule on each larger triangle.
+  struct Point {
+    V3 y;   // relative to the centre
+    V3 va;  // vector area
+    double cxx, cxy, cxz, cyy, cyz, czz;
+    int32_t col;
+    int32_t piece;  // moments Q, D from the piece (-1: a rule point of triangle `tri`)
+    uint32_t tri;
+    double weight;  // of a rule point: its share of the triangle's area
+  };
+  std::vector<Point> points;
+  points.reserve(pc.size());
+  for (size_t j = 0; j < pc.size(); ++j) {
+    if (pc.one_point[j] || pc.col[j] < 0) {
+      points.push_back({V3(pc.x[j], pc.y[j], pc.z[j]) - s.centre, V3(pc.ax[j], pc.ay[j], pc.az[j]), pc.cxx[j],
+                        pc.cxy[j], pc.cxz[j], pc.cyy[j], pc.cyz[j], pc.czz[j], pc.col[j], static_cast<int32_t>(j), 0,
+                        1.0});
+      continue;
+    }
+    // A triangle too large for one point: 3 points (degree 2) up to twice that, else 7 (degree 5).
+    const uint32_t t = s.order[s.nodes[pc.node[j]].begin];
+    const Triangle& tri = s.tris[t];
+    const bool three = k * tri.diameter <= 2.0 * kPointPhase;
+    const double(*rule)[4] = three ? kRule3 : kRule7;
+    for (int i = 0; i < (three ? 3 : 7); ++i) {
+      const V3 y = rule[i][0] * tri.v[0] + rule[i][1] * tri.v[1] + rule[i][2] * tri.v[2];
+      points.push_back(
+          {y - s.centre, tri.normal * (rule[i][3] * tri.area), 0, 0, 0, 0, 0, 0, pc.col[j], -1, t, rule[i][3]});
+    }
+  }
+  // With E_j = e^{-ik d.y_j} (1 - k^2 d.C_j.d / 2) at point j (real weights after it):
+  //   F(d)  = -S_Q + ik S_D - ik sum_c p_c d.U_c,   S_Q = sum_j E_j Q_j, S_D = sum_j E_j d.D_j,
+  //   F(-d) = -conj(S_Q) - ik conj(S_D) + ik sum_c p_c d.conj(U_c),   U_c = sum_{j in c} E_j va_j,
+  // and the coarse difference likewise with p_diff alone: the pressure's term is summed per
+  // cluster (the points of a cluster are consecutive), shared by every solution.
+  const size_t np = points.size();
+  std::vector<double> py(np), pyy(np), pz(np), cxx(np), cxy(np), cxz(np), cyy(np), cyz(np), czz(np);
+  std::vector<double> vx(np), vy(np), vz(np);
+  std::vector<size_t> segment_begin;  // runs of one cluster
+  std::vector<int32_t> segment_col;
+  for (size_t j = 0; j < np; ++j) {
+    const Point& pt = points[j];
+    py[j] = pt.y[0];
+    pyy[j] = pt.y[1];
+    pz[j] = pt.y[2];
+    cxx[j] = pt.cxx;
+    cxy[j] = pt.cxy;
+    cxz[j] = pt.cxz;
+    cyy[j] = pt.cyy;
+    cyz[j] = pt.cyz;
+    czz[j] = pt.czz;
+    vx[j] = pt.va[0];
+    vy[j] = pt.va[1];
+    vz[j] = pt.va[2];
+    if (j == 0 || pt.col != points[j - 1].col) {
+      segment_begin.push_back(j);
+      segment_col.push_back(pt.col);
+    }
+  }
+  segment_begin.push_back(np);
+  const size_t segments = segment_col.size();
+  std::vector<double> Q(rhs * np), Dx(rhs * np), Dy(rhs * np), Dz(rhs * np);
+  for (size_t r = 0; r < rhs; ++r)
+    for (size_t j = 0; j < np; ++j) {
+      const Point& pt = points[j];
+      const size_t at = r * np + j;
+      if (pt.piece >= 0) {
+        const size_t from = r * pc.size() + static_cast<size_t>(pt.piece);
+        Q[at] = pd.Q[from];
+        Dx[at] = pd.Dx[from];
+        Dy[at] = pd.Dy[from];
+        Dz[at] = pd.Dz[from];
+      } else {
+        Q[at] = data[r].q[pt.tri] * s.tris[pt.tri].area * pt.weight;
+        Dx[at] = Dy[at] = Dz[at] = 0.0;
+      }
+    }
+  std::vector<double> phase(np), spread(np), sin_e(np), cos_e(np), dD(np), ex(np), ey(np), ez(np);
+  std::vector<cd> U(3 * segments);  // per cluster run: U_c's three components
+  std::vector<cd> F(rhs), G(rhs), Fd(rhs), Gd(rhs);
+
+  const int rings = n_cap + 2, around = 2 * n_cap + 4;
+  std::vector<double> cos_theta, ring_weight;
+  gaussLegendre(rings, cos_theta, ring_weight);
+  std::vector<double> Y(count);
+  const double dphi = 2.0 * M_PI / around;
+  const cd ik(0.0, k);
+  for (int i = 0; i < (rings + 1) / 2; ++i) {
+    const double ct = cos_theta[i], st = std::sqrt(std::max(0.0, 1.0 - ct * ct));
+    const bool middle = 2 * i + 1 == rings;  // its opposite directions are on the ring itself
+    const int phis = middle ? around / 2 : around;
+    for (int l = 0; l < phis; ++l) {
+      const double phi = dphi * l;
+      const cd around_z = unitPhase(phi);
+      const double d0 = st * around_z.real(), d1 = st * around_z.imag(), d2 = ct;
+      const double kk = k * k;
+      for (size_t j = 0; j < np; ++j) {
+        phase[j] = -k * (d0 * py[j] + d1 * pyy[j] + d2 * pz[j]);
+        const double along = cxx[j] * d0 * d0 + cyy[j] * d1 * d1 + czz[j] * d2 * d2 +
+                             2.0 * (cxy[j] * d0 * d1 + cxz[j] * d0 * d2 + cyz[j] * d1 * d2);
+        spread[j] = 1.0 - 0.5 * kk * along;
+      }
+      sinCosArray(phase.data(), sin_e.data(), cos_e.data(), np);
+      for (size_t j = 0; j < np; ++j) {
+        cos_e[j] *= spread[j];
+        sin_e[j] *= spread[j];
+        ex[j] = d0 * vx[j] + d1 * vy[j] + d2 * vz[j];  // d.va
+      }
+      // Per cluster: d.U_c = sum E_j d.va_j (one complex number: d is known here).
+      for (size_t c = 0; c < segments; ++c) {
+        double re = 0.0, im = 0.0;
+        for (size_t j = segment_begin[c]; j < segment_begin[c + 1]; ++j) {
+          re += cos_e[j] * ex[j];
+          im += sin_e[j] * ex[j];
+        }
+        U[c] = cd(re, im);
+      }
+      for (size_t r = 0; r < rhs; ++r) {
+        const double* Qr = &Q[r * np];
+        const double* Dxr = &Dx[r * np];
+        const double* Dyr = &Dy[r * np];
+        const double* Dzr = &Dz[r * np];
+        for (size_t j = 0; j < np; ++j) dD[j] = d0 * Dxr[j] + d1 * Dyr[j] + d2 * Dzr[j];
+        double q_re = 0.0, q_im = 0.0, d_re = 0.0, d_im = 0.0;
+        dotTwo(cos_e.data(), sin_e.data(), Qr, np, q_re, q_im);
+        dotTwo(cos_e.data(), sin_e.data(), dD.data(), np, d_re, d_im);
+        const cd SQ(q_re, q_im), SD(d_re, d_im);
+        // sum_c p_c d.U_c and sum_c p_c conj(d.U_c), and the same with p_diff.
+        double t_re = 0, t_im = 0, u_re = 0, u_im = 0, td_re = 0, td_im = 0, ud_re = 0, ud_im = 0;
+        const cd* pr = p[r].data();
+        const cd* dr = p_diff[r].data();
+        for (size_t c = 0; c < segments; ++c) {
+          const double a_re = pr[segment_col[c]].real(), a_im = pr[segment_col[c]].imag();
+          const double b_re = dr[segment_col[c]].real(), b_im = dr[segment_col[c]].imag();
+          const double x_re = U[c].real(), x_im = U[c].imag();
+          t_re += a_re * x_re - a_im * x_im;
+          t_im += a_re * x_im + a_im * x_re;
+          u_re += a_re * x_re + a_im * x_im;  // a conj(x)
+          u_im += a_im * x_re - a_re * x_im;
+          td_re += b_re * x_re - b_im * x_im;
+          td_im += b_re * x_im + b_im * x_re;
+          ud_re += b_re * x_re + b_im * x_im;
+          ud_im += b_im * x_re - b_re * x_im;
+        }
+        F[r] = -SQ + ik * SD - ik * cd(t_re, t_im);
+        G[r] = -std::conj(SQ) - ik * std::conj(SD) + ik * cd(u_re, u_im);
+        Fd[r] = -ik * cd(td_re, td_im);
+        Gd[r] = ik * cd(ud_re, ud_im);
+      }
+      const double weight = ring_weight[i] * dphi / kFourPi;
+      for (int side = 0; side < 2; ++side) {
+        const double dd[3] = {side ? -d0 : d0, side ? -d1 : d1, side ? -d2 : d2};
+        realSphericalHarmonics(static_cast<uint32_t>(n_cap), dd, Y.data());
+        for (size_t r = 0; r < rhs; ++r) {
+          const cd f = (side ? G[r] : F[r]) * weight, fd = (side ? Gd[r] : Fd[r]) * weight;
+          cd* co = coef[r].data();
+          cd* dc = dcoef[r].data();
+          for (size_t m = 0; m < count; ++m) {
+            co[m] += f * Y[m];
+            dc[m] += fd * Y[m];
+          }
+        }
+      }
+    }
+  }
+}
+
+/// A x = B for a square A: LU in single precision (half the time of double), then iterative
+/// refinement with the residual in double (Wilkinson; Moler 1967, "Iterative refinement in
+/// floating point", J. ACM 14), which recovers double accuracy while cond(A) eps_float << 1 (these
+/// second-kind systems: cond ~ 10-1000). The residual is an explicit loop (fixed order).
+Eigen::MatrixXcd solveSquare(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B) {
+  using MatrixCf = Eigen::Matrix<std::complex<float>, Eigen::Dynamic, Eigen::Dynamic>;
+  const Eigen::PartialPivLU<MatrixCf> lu(A.cast<std::complex<float>>());
+  Eigen::MatrixXcd X = lu.solve(B.cast<std::complex<float>>()).cast<cd>();
+  const Eigen::Index n = A.rows();
+  Eigen::MatrixXcd R(n, B.cols());
+  for (int step = 0; step < 2; ++step) {
+    for (Eigen::Index c = 0; c < B.cols(); ++c) {
+      for (Eigen::Index i = 0; i < n; ++i) R(i, c) = B(i, c);
+      for (Eigen::Index j = 0; j < n; ++j) {
+        const cd x = X(j, c);
+        for (Eigen::Index i = 0; i < n; ++i) R(i, c) -= A(i, j) * x;
+      }
+    }
+    X += lu.solve(R.cast<std::complex<float>>()).cast<cd>();
+  }
+  return X;
 }
 
 struct ModeSolve {
-  Eigen::VectorXcd p;       // per cluster
-  Eigen::VectorXcd p_diff;  // p minus the coarse solve's, per cluster
+  std::vector<Eigen::VectorXcd> p;       // per right-hand side, per cluster
+  std::vector<Eigen::VectorXcd> p_diff;  // p minus the coarse solve's, per cluster
   size_t elements = 0, chief = 0;
   Cut cut;
+  Pieces pieces;
+  PieceData piece_data;
+  double assembly_seconds = 0.0, factor_seconds = 0.0;
 };
 
-/// Solves the exterior Neumann problem for boundary data `data` at wavenumber k with `elements`
-/// unknowns (about) and `chief` interior points; several right-hand sides are not needed here.
-ModeSolve solveSystem(const Surface& s, const NodeData& data, double k, size_t elements, size_t chief) {
+/// Solves the exterior Neumann problem for the boundary data `data` (one right-hand side each:
+/// modes of one frequency share the matrix and its factorization) at wavenumber k with
+/// `elements` unknowns (about) and `chief` interior points.
+ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, double k, size_t elements, size_t chief,
+                      double k_ref, std::map<size_t, NearCache>& near_caches) {
   ModeSolve out;
+  const auto assembly_start = std::chrono::steady_clock::now();
   out.cut = cutWithCount(s, elements);
   const Cut& cut = out.cut;
-  const size_t n = cut.nodes.size();
+  auto cached = near_caches.find(elements);
+  if (cached == near_caches.end()) cached = near_caches.emplace(elements, buildNearCache(s, cut, k_ref)).first;
+  const NearCache& near = cached->second;
+  out.pieces = makePieces(s, cut, k);
+  out.piece_data = pieceData(s, out.pieces, data);
+  const size_t n = cut.nodes.size(), rhs = data.size();
   chief = std::min(chief, s.chief_candidates.size());
   const size_t rows = n + chief;
+  const auto R = static_cast<Eigen::Index>(rhs);
   Eigen::MatrixXcd A = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(n));
-  Eigen::VectorXcd b(static_cast<Eigen::Index>(rows));
-  std::vector<cd> M(n);
-  std::vector<int32_t> stack;
+  Eigen::MatrixXcd b(static_cast<Eigen::Index>(rows), R);
+  std::vector<cd> M(n), lq(rhs);
+  RowScratch stack;
   for (size_t r = 0; r < rows; ++r) {
     std::fill(M.begin(), M.end(), cd(0.0));
-    cd lq = 0.0;
+    std::fill(lq.begin(), lq.end(), cd(0.0));
     if (r < n) {
       const uint32_t host = s.nodes[cut.nodes[r]].rep;
-      assembleRow(s, cut, data, k, s.tris[host].centroid, host, M.data(), lq, stack);
+      assembleRow(s, cut, out.pieces, out.piece_data, data, near, r, k, s.tris[host].centroid, M.data(), lq.data(),
+                  stack);
     } else {
-      assembleRow(s, cut, data, k, s.chief_candidates[r - n], -1, M.data(), lq, stack);
+      assembleRow(s, cut, out.pieces, out.piece_data, data, near, r, k, s.chief_candidates[r - n], M.data(), lq.data(),
+                  stack);
     }
     // 1/2 p(x) - int p dG/dn = - int G q (x on S); 0 - int p dG/dn = - int G q (x inside).
     for (size_t c = 0; c < n; ++c) A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = -M[c];
     if (r < n) A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r)) += 0.5;
-    b[static_cast<Eigen::Index>(r)] = -lq;
+    for (size_t q = 0; q < rhs; ++q) b(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(q)) = -lq[q];
   }
-  auto solve = [](const Eigen::MatrixXcd& matrix, const Eigen::VectorXcd& rhs) -> Eigen::VectorXcd {
-    if (matrix.rows() == matrix.cols()) return matrix.partialPivLu().solve(rhs);
-    return matrix.householderQr().solve(rhs);
+  auto solve = [](const Eigen::MatrixXcd& matrix, const Eigen::MatrixXcd& rhs_m) -> Eigen::MatrixXcd {
+    if (matrix.rows() == matrix.cols()) return solveSquare(matrix, rhs_m);
+    return matrix.householderQr().solve(rhs_m);
   };
-  out.p = solve(A, b);
+  out.assembly_seconds = secondsSince(assembly_start);
+  const auto factor_start = std::chrono::steady_clock::now();
+  const Eigen::MatrixXcd P = solve(A, b);
   out.elements = n;
   out.chief = chief;
+  out.p.resize(rhs);
+  out.p_diff.resize(rhs);
+  for (size_t q = 0; q < rhs; ++q) out.p[q] = P.col(static_cast<Eigen::Index>(q));
 
   // The coarse solve: clusters merged with their siblings, rows a subset, columns summed.
   const Coarse coarse = coarsen(s, cut);
   const size_t nc = coarse.count;
   if (nc < n && nc > 0) {
     Eigen::MatrixXcd Ac = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(nc + chief), static_cast<Eigen::Index>(nc));
-    Eigen::VectorXcd bc(static_cast<Eigen::Index>(nc + chief));
+    Eigen::MatrixXcd bc(static_cast<Eigen::Index>(nc + chief), R);
     for (size_t j = 0; j < nc + chief; ++j) {
       const size_t fine_row = j < nc ? static_cast<size_t>(coarse.row_cluster[j]) : n + (j - nc);
       for (size_t c = 0; c < n; ++c) {
@@ -679,18 +1300,21 @@ ModeSolve solveSystem(const Surface& s, const NodeData& data, double k, size_t e
         Ac(static_cast<Eigen::Index>(j), coarse.of_cluster[c]) += m;
       }
       if (j < nc) Ac(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j)) += 0.5;
-      bc[static_cast<Eigen::Index>(j)] = b[static_cast<Eigen::Index>(fine_row)];
+      bc.row(static_cast<Eigen::Index>(j)) = b.row(static_cast<Eigen::Index>(fine_row));
     }
-    const Eigen::VectorXcd pc = solve(Ac, bc);
-    out.p_diff.resize(static_cast<Eigen::Index>(n));
-    for (size_t c = 0; c < n; ++c)
-      out.p_diff[static_cast<Eigen::Index>(c)] = out.p[static_cast<Eigen::Index>(c)] - pc[coarse.of_cluster[c]];
+    const Eigen::MatrixXcd pc = solve(Ac, bc);
+    for (size_t q = 0; q < rhs; ++q) {
+      out.p_diff[q].resize(static_cast<Eigen::Index>(n));
+      for (size_t c = 0; c < n; ++c)
+        out.p_diff[q][static_cast<Eigen::Index>(c)] =
+            out.p[q][static_cast<Eigen::Index>(c)] - pc(coarse.of_cluster[c], static_cast<Eigen::Index>(q));
+    }
   } else {
-    out.p_diff = Eigen::VectorXcd::Zero(static_cast<Eigen::Index>(n));
+    for (size_t q = 0; q < rhs; ++q) out.p_diff[q] = Eigen::VectorXcd::Zero(static_cast<Eigen::Index>(n));
   }
+  out.factor_seconds = secondsSince(factor_start);
   return out;
 }
-
 /// Unknowns the target error asks for at wavenumber k, within the budget.
 size_t elementsFor(const Surface& s, const TransferSettings& settings, double k) {
   if (settings.fixed_elements > 0) return std::min<size_t>(settings.fixed_elements, s.tris.size());
@@ -749,79 +1373,142 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     if ((p1 - p0).cross(p2 - p0).norm() > 0) corners.push_back({v[0], v[1], v[2]});
   }
 
-  NodeData data;
-  std::vector<FarPoint> points;
-  std::vector<cd> coef, dcoef;
+  // Modes of (nearly) one frequency, as degenerate pairs of symmetric bodies are, share the
+  // system and its factorization: solved at the first one's wavenumber, which changes the
+  // others' far fields by about (relative frequency gap) x (1 + ka), added to their estimates.
+  constexpr double kSameFrequency = 1e-4;
+  std::vector<size_t> group_start;
   for (size_t mode = 0; mode < modes; ++mode) {
-    const auto mode_start = std::chrono::steady_clock::now();
     const double omega = std::sqrt(std::max(bank.eigenvalues[mode], 0.0));
+    const double first = group_start.empty() ? -1.0 : std::sqrt(std::max(bank.eigenvalues[group_start.back()], 0.0));
+    if (group_start.empty() || !(std::abs(omega - first) <= kSameFrequency * first)) group_start.push_back(mode);
+  }
+  group_start.push_back(modes);
+
+  // The near quadrature per cut, its rules chosen at the largest wavenumber.
+  double k_ref = 0.0;
+  for (size_t mode = 0; mode < modes; ++mode)
+    k_ref = std::max(k_ref, std::sqrt(std::max(bank.eigenvalues[mode], 0.0)) / c_air);
+  std::map<size_t, NearCache> near_caches;
+
+  std::vector<NodeData> data;
+  std::vector<std::vector<cd>> coef;
+  std::vector<double> energy, diff;
+  for (size_t g = 0; g + 1 < group_start.size(); ++g) {
+    const auto group_begin = std::chrono::steady_clock::now();
+    const size_t first = group_start[g], last = group_start[g + 1], rhs = last - first;
+    const double omega = std::sqrt(std::max(bank.eigenvalues[first], 0.0));
     const double k = omega / c_air;
     // q = dp/dn = -rho a_n, a_n the normal component of the shape (per unit modal acceleration).
-    data.q.resize(s.tris.size());
-    for (size_t t = 0; t < s.tris.size(); ++t) {
-      V3 shape = V3::Zero();
-      for (uint32_t v : corners[t]) {
-        const float* u = bank.shapeAt(mode, v);
-        shape += V3(u[0], u[1], u[2]);
+    data.assign(rhs, {});
+    for (size_t r = 0; r < rhs; ++r) {
+      data[r].q.resize(s.tris.size());
+      for (size_t t = 0; t < s.tris.size(); ++t) {
+        V3 shape = V3::Zero();
+        for (uint32_t v : corners[t]) {
+          const float* u = bank.shapeAt(first + r, v);
+          shape += V3(u[0], u[1], u[2]);
+        }
+        data[r].q[t] = -rho * s.tris[t].normal.dot(shape / 3.0);
       }
-      data.q[t] = -rho * s.tris[t].normal.dot(shape / 3.0);
+      nodeData(s, data[r]);
     }
-    nodeData(s, data);
     const double kr = k * s.radius;
     const int n_cap = std::min(120, static_cast<int>(std::ceil(kr + 4.0 * std::cbrt(kr))) + 6);
-    const double kappa = std::max(k, (n_cap + 1.0) / s.radius);
-    // Refine while the estimate exceeds the target and the budget allows: the mode's pattern
+    // Refine while an estimate exceeds the target and the budget allows: the mode's pattern
     // (not only the wavelength) sets the resolution, and the estimate sees it.
     size_t elements = elementsFor(s, settings, k);
     const size_t cap = settings.fixed_elements > 0 ? elements : std::min<size_t>(settings.max_elements, s.tris.size());
-    ModeSolve solved;
-    std::vector<double> energy;
-    double total = 0.0, diff = 0.0;
+    // Per mode: the far field of the first resolution that met the target (or the last).
+    std::vector<double> total(rhs, 0.0);
+    std::vector<char> done(rhs, 0);
+    std::vector<uint32_t> mode_elements(rhs, 0), mode_chief(rhs, 0);
+    diff.assign(rhs, 0.0);
+    energy.assign(rhs * (n_cap + 1), 0.0);
+    coef.assign(rhs, {});
+    double assembly_seconds = 0.0, factor_seconds = 0.0, far_field_seconds = 0.0;
+    uint32_t solves = 0;
+    std::vector<std::vector<cd>> step_coef, step_dcoef;
     while (true) {
       const size_t chief = chiefPointsFor(s, settings, k, elements);
-      solved = solveSystem(s, data, k, elements, chief);
-      farFieldPoints(s, solved.cut, data, kappa, points);
-      projectFarField(s, points, k, n_cap, solved.p, solved.p_diff, coef, dcoef);
-      energy.assign(n_cap + 1, 0.0);
-      total = 0.0;
-      diff = 0.0;
-      for (int n = 0; n <= n_cap; ++n)
-        for (int m = -n; m <= n; ++m) {
-          energy[n] += std::norm(coef[n * n + n + m]);
-          diff += std::norm(dcoef[n * n + n + m]);
-        }
-      for (double e : energy) total += e;
-      if (!(diff > std::pow(settings.target_relative_error, 2) * total) || elements >= cap) break;
-      elements = std::min(cap, elements * 5 / 2);
+      const ModeSolve solved = solveSystem(s, data, k, elements, chief, k_ref, near_caches);
+      ++solves;
+      assembly_seconds += solved.assembly_seconds;
+      factor_seconds += solved.factor_seconds;
+      const auto far_start = std::chrono::steady_clock::now();
+      projectFarField(s, solved.pieces, solved.piece_data, data, k, n_cap, solved.p, solved.p_diff, step_coef,
+                      step_dcoef);
+      far_field_seconds += secondsSince(far_start);
+      const bool last_step = elements >= cap;
+      for (size_t r = 0; r < rhs; ++r) {
+        if (done[r]) continue;
+        double* e = &energy[r * (n_cap + 1)];
+        std::fill(e, e + n_cap + 1, 0.0);
+        total[r] = 0.0;
+        diff[r] = 0.0;
+        for (int n = 0; n <= n_cap; ++n)
+          for (int m = -n; m <= n; ++m) {
+            e[n] += std::norm(step_coef[r][n * n + n + m]);
+            diff[r] += std::norm(step_dcoef[r][n * n + n + m]);
+          }
+        for (int n = 0; n <= n_cap; ++n) total[r] += e[n];
+        coef[r] = step_coef[r];
+        mode_elements[r] = static_cast<uint32_t>(solved.elements);
+        mode_chief[r] = static_cast<uint32_t>(solved.chief);
+        done[r] = last_step || !(diff[r] > std::pow(settings.target_relative_error, 2) * total[r]);
+      }
+      if (std::all_of(done.begin(), done.end(), [](char d) { return d != 0; })) break;
+      // Next: 2.5x the unknowns, or straight to the budget when even that is predicted to fall
+      // short of the target (the error of constant elements falls as h^2, i.e. as 1 / unknowns):
+      // the steps between would be solved only to be dropped.
+      // (Of a shared solve: when every mode still refining is predicted to fall short.)
+      double best = 1e300;
+      for (size_t r = 0; r < rhs; ++r)
+        if (!done[r]) best = std::min(best, total[r] > 0 ? std::sqrt(diff[r] / total[r]) : 0.0);
+      const double asked = static_cast<double>(elements) * best / settings.target_relative_error;
+      elements = asked >= static_cast<double>(cap) ? cap : std::min(cap, elements * 5 / 2);
     }
+    const double group_seconds = secondsSince(group_begin);
 
-    // Order: the smallest whose tail holds at most 1e-8 of the energy (-80 dB), far below the
-    // target, so that the modes of a degenerate pair, truncated apart, still sum basis-free.
-    const double tail_allowed = 1e-8 * total;
-    int order = n_cap;
-    double tail = 0.0;
-    while (order > 0 && tail + energy[order] <= tail_allowed) tail += energy[order--];
-    // Error: the coarse solve's difference, the dropped tail, and what the last computed orders
-    // still hold (a series not yet converged at n_cap).
-    const double unresolved = energy[n_cap] + (n_cap > 0 ? energy[n_cap - 1] : 0.0);
-    const double relative = total > 0 ? std::sqrt((diff + tail + (order == n_cap ? unresolved : 0.0)) / total) : 0.0;
+    for (size_t r = 0; r < rhs; ++r) {
+      const size_t mode = first + r;
+      const double* e = &energy[r * (n_cap + 1)];
+      // Order: the smallest whose tail holds at most 1e-8 of the energy (-80 dB), far below the
+      // target, so that the modes of a degenerate pair, truncated apart, still sum basis-free.
+      const double tail_allowed = 1e-8 * total[r];
+      int order = n_cap;
+      double tail = 0.0;
+      while (order > 0 && tail + e[order] <= tail_allowed) tail += e[order--];
+      // Error: the coarse solve's difference, the dropped tail, what the last computed orders
+      // still hold (a series not yet converged at n_cap), and a shared solve's frequency gap.
+      const double unresolved = e[n_cap] + (n_cap > 0 ? e[n_cap - 1] : 0.0);
+      const double omega_mode = std::sqrt(std::max(bank.eigenvalues[mode], 0.0));
+      const double gap = omega > 0 ? std::abs(omega_mode - omega) / omega * (1.0 + kr) : 0.0;
+      const double relative =
+          total[r] > 0 ? std::sqrt((diff[r] + tail + (order == n_cap ? unresolved : 0.0)) / total[r] + gap * gap) : 0.0;
 
-    out.order.push_back(static_cast<uint32_t>(order));
-    for (int i = 0; i < (order + 1) * (order + 1); ++i)
-      out.coefficients.push_back(
-          std::complex<float>(static_cast<float>(coef[i].real()), static_cast<float>(coef[i].imag())));
-    out.offset.push_back(out.coefficients.size());
-    out.relative_error.push_back(static_cast<float>(relative));
-    if (stats) {
-      TransferModeStats& st = (*stats)[mode];
-      st.ka = kr;
-      st.elements = static_cast<uint32_t>(solved.elements);
-      st.chief_points = static_cast<uint32_t>(solved.chief);
-      st.order = static_cast<uint32_t>(order);
-      st.relative_error = relative;
-      st.seconds = secondsSince(mode_start);
+      out.order.push_back(static_cast<uint32_t>(order));
+      for (int i = 0; i < (order + 1) * (order + 1); ++i)
+        out.coefficients.push_back(
+            std::complex<float>(static_cast<float>(coef[r][i].real()), static_cast<float>(coef[r][i].imag())));
+      out.offset.push_back(out.coefficients.size());
+      out.relative_error.push_back(static_cast<float>(relative));
+      if (stats) {
+        TransferModeStats& st = (*stats)[mode];
+        st.ka = omega_mode / c_air * s.radius;
+        st.elements = mode_elements[r];
+        st.chief_points = mode_chief[r];
+        st.order = static_cast<uint32_t>(order);
+        st.relative_error = relative;
+        // A shared solve's time is split evenly between its modes.
+        st.seconds = group_seconds / static_cast<double>(rhs);
+        st.assembly_seconds = assembly_seconds / static_cast<double>(rhs);
+        st.factor_seconds = factor_seconds / static_cast<double>(rhs);
+        st.far_field_seconds = far_field_seconds / static_cast<double>(rhs);
+        st.solves = solves;
+      }
     }
-    if (progress) progress("transfer", static_cast<double>(mode + 1) / static_cast<double>(modes + 1));
+    if (progress) progress("transfer", static_cast<double>(last) / static_cast<double>(modes + 1));
   }
 
   // Rigid translation in the compact limit: the Laplace problem (k = 0) with dp/dn = -n_j
@@ -830,16 +1517,19 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
   {
     Eigen::Matrix3d dipole = Eigen::Matrix3d::Identity() * s.volume;
     const size_t elements = std::min<size_t>(settings.max_elements, s.tris.size());
+    data.assign(3, {});
     for (int j = 0; j < 3; ++j) {
-      data.q.resize(s.tris.size());
-      for (size_t t = 0; t < s.tris.size(); ++t) data.q[t] = -s.tris[t].normal[j];
-      nodeData(s, data);
-      const ModeSolve solved = solveSystem(s, data, 0.0, elements, 0);
+      data[j].q.resize(s.tris.size());
+      for (size_t t = 0; t < s.tris.size(); ++t) data[j].q[t] = -s.tris[t].normal[j];
+      nodeData(s, data[j]);
+    }
+    const ModeSolve solved =
+        solveSystem(s, data, 0.0, elements, 0, k_ref, near_caches);  // the three right-hand sides at once
+    for (int j = 0; j < 3; ++j)
       for (size_t c = 0; c < solved.cut.nodes.size(); ++c) {
         const V3 va = s.nodes[solved.cut.nodes[c]].vector_area;
-        for (int i = 0; i < 3; ++i) dipole(i, j) += va[i] * solved.p[static_cast<Eigen::Index>(c)].real();
+        for (int i = 0; i < 3; ++i) dipole(i, j) += va[i] * solved.p[j][static_cast<Eigen::Index>(c)].real();
       }
-    }
     const Eigen::Matrix3d symmetric = 0.5 * (dipole + dipole.transpose());
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) out.translation_dipole_m3[i * 3 + j] = symmetric(i, j);

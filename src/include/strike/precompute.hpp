@@ -31,8 +31,9 @@ struct PrecomputeSettings {
   /// does not change the modes, so it is not part of the cache key.
   bool error_estimate = false;
   /// Solve each mode's acoustic transfer (bank.transfer, its own phase "transfer"; issue 17;
-  /// `strike modes --transfer`, `strike render --transfer`). Opt-in: it costs 1x to 16x the
-  /// eigen-solve on the examples (docs/acoustic-transfer.md), so it is not yet the default. Off
+  /// `strike modes --transfer`, `strike render --transfer`). Opt-in: it costs 0.4x to 1.3x
+  /// the eigen-solve on the examples (docs/acoustic-transfer.md), not yet within the issue's
+  /// budget for the bowl (1x), so it is not yet the default. Off
   /// for solves whose frequencies are not the object's (the normalized problem, the --tolerance
   /// trials, which solve it once on the bank they choose). Part of the cache key.
   bool acoustic_transfer = false;

@@ -19,6 +19,11 @@
 // integral with the plane wave's expansion; the order is cut where the tail's energy is small.
 // Error estimate per mode: the far field of the same system with clusters merged pairwise
 // (about half the unknowns), against the full one, plus the truncated tail.
+// Cost (docs/acoustic-transfer.md): a row is summed over the cut's pieces in vectorized passes;
+// the near triangles' quadrature is built once per cut (rules at the bank's largest k) and
+// only its exponentials are evaluated per mode; modes of one frequency share the system and
+// its LU (single precision, refined in double); the far field is summed at the directions of
+// a Gauss-Legendre x uniform rule and projected on the harmonics.
 #pragma once
 
 #include <cstdint>
@@ -58,6 +63,10 @@ struct TransferModeStats {
   uint32_t order = 0;           ///< spherical-harmonic order kept
   double relative_error = 0.0;  ///< the estimate stored in the transfer
   double seconds = 0.0;
+  double assembly_seconds = 0.0;   ///< of `seconds`: the system's matrix and right-hand side
+  double factor_seconds = 0.0;     ///< of `seconds`: LU / QR and the coarse solve
+  double far_field_seconds = 0.0;  ///< of `seconds`: the spherical-harmonic projection
+  uint32_t solves = 0;             ///< systems solved (refinement steps)
 };
 
 /// Solves the transfer of every mode of `bank` (its eigenvalues, shapes on surface vertices,

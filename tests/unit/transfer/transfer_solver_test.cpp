@@ -265,9 +265,12 @@ TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
               bank->surface_triangles.size() / 3, bank->factorize_seconds + bank->lanczos_seconds,
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   for (size_t i = 0; i < stats.size(); ++i)
-    std::printf("%3zu %8.1f Hz ka %6.2f elements %4u chief %3u order %3u estimate %7.4f %6.3f s\n", i,
-                bank->frequencyHz(i), stats[i].ka, stats[i].elements, stats[i].chief_points, stats[i].order,
-                stats[i].relative_error, stats[i].seconds);
+    std::printf(
+        "%3zu %8.1f Hz ka %6.2f elements %4u chief %3u order %3u estimate %7.4f %6.3f s (solves %u, assembly %.3f, "
+        "factor %.3f, far field %.3f)\n",
+        i, bank->frequencyHz(i), stats[i].ka, stats[i].elements, stats[i].chief_points, stats[i].order,
+        stats[i].relative_error, stats[i].seconds, stats[i].solves, stats[i].assembly_seconds, stats[i].factor_seconds,
+        stats[i].far_field_seconds);
 }
 }  // namespace
 }  // namespace strike

@@ -2,10 +2,12 @@
 // The acoustic transfer solver (src/precompute/acoustic_transfer.cpp) against closed forms:
 // a sphere's surface acceleration Y_nm radiates A h_n(kr) Y_nm exactly, a rigid sphere's
 // translation has the dipole tensor 2 pi a^3 I, and the transfer is linear in the mode shape.
+#include <Eigen/Core>
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <complex>
 #include <cstdio>
 #include <cstdlib>
@@ -144,6 +146,31 @@ TEST(TransferSolver, SphereWithYnmAccelerationGivesTheExactExteriorSolution) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
       EXPECT_NEAR(t->translation_dipole_m3[i * 3 + j], i == j ? sphere : 0.0, 0.01 * sphere) << i << "," << j;
+}
+
+// Eigen sizes the blocks of the products inside its LU and QR from the cache sizes it reads off
+// the CPU; were a sum split by them, an Intel and an AMD machine would solve other last bits. The
+// transfer must not depend on them (docs/determinism.md): here L1 256 B against 256 kB (also
+// checked at 1000 unknowns: the same bits; the LU's panels are narrower than any split).
+TEST(TransferSolver, SameBitsWhateverCacheSizesEigenReads) {
+  const double a = 0.05, c_air = 343.0;
+  ModeBank bank = sphereBank(a, 0.01);
+  addYnmMode(bank, 1, 0, 3.0 / a, c_air);
+  addYnmMode(bank, 2, 1, 6.0 / a, c_air);  // ka 6: CHIEF points, a least-squares (QR) solve
+  TransferSettings settings;
+  settings.fixed_elements = 400;
+  std::ptrdiff_t l1 = 0, l2 = 0, l3 = 0;
+  Eigen::internal::manage_caching_sizes(Eigen::GetAction, &l1, &l2, &l3);
+  std::vector<std::vector<std::complex<float>>> runs;
+  for (const std::ptrdiff_t scale : {std::ptrdiff_t(1), std::ptrdiff_t(32)}) {
+    Eigen::setCpuCacheSizes(256 * scale * scale, 1024 * scale * scale, 4096 * scale * scale);
+    Result<AcousticTransfer> t = solveAcousticTransfer(bank, settings);
+    ASSERT_TRUE(t) << t.error().message;
+    runs.push_back(t->coefficients);
+  }
+  Eigen::setCpuCacheSizes(l1, l2, l3);
+  ASSERT_EQ(runs[0].size(), runs[1].size());
+  EXPECT_EQ(std::memcmp(runs[0].data(), runs[1].data(), runs[0].size() * sizeof(runs[0][0])), 0);
 }
 
 TEST(TransferSolver, IsLinearInTheShapeSoSignsAndDegenerateBasesCancel) {

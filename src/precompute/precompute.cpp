@@ -136,7 +136,8 @@ uint64_t bankCacheKey(uint64_t mesh_hash, const PrecomputeSettings& settings) {
                                static_cast<double>(t.max_elements),
                                static_cast<double>(t.min_elements),
                                static_cast<double>(t.fixed_elements),
-                               t.chief ? 1.0 : 0.0};
+                               t.chief ? 1.0 : 0.0,
+                               static_cast<double>(kTransferSolverRevision)};
     key = fnv1a64(transfer, sizeof transfer, key);
   }
   return fnv1a64(STRIKE_VERSION_STRING, sizeof STRIKE_VERSION_STRING - 1, key);

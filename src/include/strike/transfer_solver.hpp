@@ -55,6 +55,11 @@ struct TransferSettings {
   bool chief = true;
 };
 
+/// The solver's revision, in the bank cache's key of banks with a transfer: raised whenever the
+/// same inputs give other numbers (2: the faster assembly, far field and single-precision LU of
+/// 2026-11), so cached transfers are solved again rather than mixed with the new solver's.
+constexpr uint32_t kTransferSolverRevision = 2;
+
 /// What one mode's solve cost and found (for studies and reports).
 struct TransferModeStats {
   double ka = 0.0;              ///< k times the surface's radius about the centre

@@ -296,17 +296,22 @@ void ContactProjector::projectImpulseInto(const double point[3], const double im
       slot = next_;
       next_ = (next_ + 1) % max_points_;
     }
+    // Interleaved per mode: [m][vertex k][x y z]. Every point of a rolling or sliding contact is
+    // new, so this fill runs once per contact point and step: one plain loop per source, with no
+    // test inside (a test of a member inside would be reloaded after every store).
     float* row = shapes_.data() + slot * nm * 9;
     for (int k = 0; k < 3; ++k) {
       const float* read = use_rows_ ? rows_.row(v[k]) : nullptr;
-      for (size_t m = 0; m < nm; ++m) {
-        float* to = row + m * 9 + 3 * k;
-        if (!use_rows_)
-          std::copy_n(bank.shapeAt(m, v[k]), 3, to);
-        else if (read != nullptr)
-          std::copy_n(read + m * 3, 3, to);
-        else
-          std::fill_n(to, 3, 0.0f);
+      if (use_rows_ && read == nullptr) {
+        for (size_t m = 0; m < nm; ++m) row[m * 9 + 3 * k] = row[m * 9 + 3 * k + 1] = row[m * 9 + 3 * k + 2] = 0.0f;
+      } else if (use_rows_) {
+        for (size_t m = 0; m < nm; ++m)
+          for (int c = 0; c < 3; ++c) row[m * 9 + 3 * k + c] = read[m * 3 + c];
+      } else {
+        for (size_t m = 0; m < nm; ++m) {
+          const float* phi = bank.shapeAt(m, v[k]);
+          for (int c = 0; c < 3; ++c) row[m * 9 + 3 * k + c] = phi[c];
+        }
       }
     }
     for (int c = 0; c < 3; ++c) points_[3 * slot + c] = point[c], weights_[3 * slot + c] = w[c];

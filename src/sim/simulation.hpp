@@ -196,6 +196,7 @@ class Simulation {
   uint64_t step_ = 0;
   std::vector<ContactEvent> events_;
   std::vector<ContactEvent> step_events_;
+  std::vector<size_t> step_order_;  // the substep's events in their deterministic order (postTick)
   std::vector<RecentContact> step_recent_;
   std::vector<int> step_lifetimes_;
   std::vector<ImpactPoint> step_impacts_;

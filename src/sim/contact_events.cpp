@@ -154,7 +154,8 @@ void Simulation::postTick() {
   }
 
   // Deterministic order within the substep, independent of Bullet's manifold order.
-  std::vector<size_t> order(step_events_.size());
+  std::vector<size_t>& order = step_order_;
+  order.resize(step_events_.size());
   for (size_t k = 0; k < order.size(); ++k) order[k] = k;
   std::sort(order.begin(), order.end(), [&](size_t x, size_t y) {
     const ContactEvent& ex = step_events_[x];
@@ -197,12 +198,15 @@ void Simulation::postTick() {
   }
   // Impacts are stamped up to a step either side of their substep: keep the events in time order
   // (a stable merge, so events of one time keep the order above).
+  // Most substeps have no stamped impact: their events are already in order, and both sorts would
+  // leave them as they are (and allocate a buffer each), so they are skipped then.
   if (events_.size() > first_new) {
     const auto earlier = [](const ContactEvent& x, const ContactEvent& y) { return x.time_s < y.time_s; };
     const auto new_begin = events_.begin() + std::ptrdiff_t(first_new);
-    std::stable_sort(new_begin, events_.end(), earlier);
-    std::inplace_merge(std::upper_bound(events_.begin(), new_begin, *new_begin, earlier), new_begin, events_.end(),
-                       earlier);
+    if (!std::is_sorted(new_begin, events_.end(), earlier)) std::stable_sort(new_begin, events_.end(), earlier);
+    if (first_new > 0 && earlier(*new_begin, *(new_begin - 1)))
+      std::inplace_merge(std::upper_bound(events_.begin(), new_begin, *new_begin, earlier), new_begin, events_.end(),
+                         earlier);
   }
   for (auto it = recent_.begin(); it != recent_.end();) {
     auto& list = it->second;

@@ -21,6 +21,9 @@
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <LinearMath/btConvexHullComputer.h>
+#include <BulletCollision/CollisionDispatch/btConvexConvexAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btConvexPlaneCollisionAlgorithm.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
 #include <btBulletDynamicsCommon.h>
 
 namespace strike::detail {
@@ -119,6 +122,31 @@ class StrikeWorld : public btDiscreteDynamicsWorld {
   }
 };
 
+/// Convex-convex contacts without Bullet's multipoint perturbation when the shape it would turn
+/// is a sphere (see Simulation::build); otherwise as Bullet's default.
+class SphereAwareConvexConvex : public btConvexConvexAlgorithm::CreateFunc {
+ public:
+  SphereAwareConvexConvex(btConvexPenetrationDepthSolver* solver, int iterations, int min_points)
+      : btConvexConvexAlgorithm::CreateFunc(solver) {
+    m_numPerturbationIterations = iterations;
+    m_minimumPointsPerturbationThreshold = min_points;
+  }
+  btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& info,
+                                                 const btCollisionObjectWrapper* a,
+                                                 const btCollisionObjectWrapper* b) override {
+    // btConvexConvexAlgorithm::processCollision turns A if its angular motion disc is the smaller,
+    // else B.
+    const btCollisionShape* shape_a = a->getCollisionShape();
+    const btCollisionShape* shape_b = b->getCollisionShape();
+    const btCollisionShape* turned =
+        shape_a->getAngularMotionDisc() < shape_b->getAngularMotionDisc() ? shape_a : shape_b;
+    const int iterations = turned->getShapeType() == SPHERE_SHAPE_PROXYTYPE ? 0 : m_numPerturbationIterations;
+    void* memory = info.m_dispatcher1->allocateCollisionAlgorithm(sizeof(btConvexConvexAlgorithm));
+    return new (memory) btConvexConvexAlgorithm(info.m_manifold, info, a, b, m_pdSolver, iterations,
+                                                m_minimumPointsPerturbationThreshold);
+  }
+};
+
 /// A contact point that strikes within the current substep (see Simulation::timeImpacts).
 struct ImpactPoint {
   const btManifoldPoint* point = nullptr;
@@ -185,6 +213,10 @@ class Simulation {
   std::vector<std::unique_ptr<BodyState>> bodies_;
   std::unique_ptr<btDefaultCollisionConfiguration> config_;
   std::unique_ptr<btCollisionDispatcher> dispatcher_;
+  // Sphere contacts without multipoint perturbation (build).
+  std::unique_ptr<btGjkEpaPenetrationDepthSolver> sphere_depth_solver_;
+  std::unique_ptr<SphereAwareConvexConvex> sphere_hull_;
+  std::unique_ptr<btConvexPlaneCollisionAlgorithm::CreateFunc> sphere_plane_, plane_sphere_;
   std::unique_ptr<btBroadphaseInterface> broadphase_;
   std::unique_ptr<btSequentialImpulseConstraintSolver> solver_;
   std::unique_ptr<StrikeWorld> world_;
@@ -196,6 +228,7 @@ class Simulation {
   uint64_t step_ = 0;
   std::vector<ContactEvent> events_;
   std::vector<ContactEvent> step_events_;
+  std::vector<size_t> step_order_;  // the substep's events in their deterministic order (postTick)
   std::vector<RecentContact> step_recent_;
   std::vector<int> step_lifetimes_;
   std::vector<ImpactPoint> step_impacts_;

@@ -88,6 +88,20 @@ def render_job(job, out_dir: str, cache_dir: str, manifest: str = "", similar: b
     return started if isinstance(started, dict) else _finish(job, *started, out_dir, cache_dir, manifest, similar)
 
 
+def _session():
+    """This process's strike.Session: a worker renders thousands of scenes of the same few shapes,
+    and keeps their hulls and bank surfaces between renders (the bytes do not depend on it)."""
+    import strike
+
+    global _SESSION
+    if _SESSION is None:
+        _SESSION = strike.Session()
+    return _SESSION
+
+
+_SESSION = None
+
+
 def _render(job, out_dir: str, cache_dir: str, similar: bool):
     """A job's render: (result, start time, render seconds), or its summary when skipped or failed."""
     import strike  # on the worker
@@ -97,7 +111,7 @@ def _render(job, out_dir: str, cache_dir: str, similar: bool):
         return {"id": job.id, "status": "skipped", "seconds": 0.0}
     try:
         result = strike.render(job.scene, rate=job.rate, duration=job.duration, gain=job.gain, cache=cache_dir,
-                               base_dir=job.base_dir, similar=similar)
+                               base_dir=job.base_dir, similar=similar, session=_session())
     except strike.InputError as e:
         return {"id": job.id, "status": "failed", "error": f"line {job.line} (id {job.id}): {e}",
                 "seconds": time.perf_counter() - start}

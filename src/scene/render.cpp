@@ -499,6 +499,11 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   std::vector<uint64_t> surface_hashes(bodies.size(), 0);
   for (size_t i = 0; i < bodies.size(); ++i) {
     if (settings.cache_dir.empty() || bodies[i].object->is_static) continue;
+    // A primitive (box, sphere, cylinder) is convex: its surface fills its hull, so "auto" makes
+    // it a hull and it never needs pieces; hashing its surface (~0.2 ms) would buy nothing.
+    const std::string& shape = bodies[i].object->shape;
+    if (bodies[i].object->bank.empty() && isPrimitiveSpec(bodies[i].object->mesh) && (shape == "auto" || shape == "convex"))
+      continue;
     surface_hashes[i] = surfaceHash(sim_bodies[i].surface_positions, sim_bodies[i].surface_triangles);
     Result<ConvexPiecePoints> cached = readPieces(piecesPath(settings.cache_dir, surface_hashes[i]), surface_hashes[i]);
     if (cached) sim_bodies[i].convex_pieces_m = std::move(*cached);

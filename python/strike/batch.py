@@ -16,6 +16,8 @@ parameter, the scene as rendered, the bank cache keys, the Strike version, the s
 - One bank cache (--cache, default $STRIKE_CACHE_DIR or ~/.cache/strike), shared by every worker:
   content-addressed, and a bank is solved once (a file lock per entry, src/scene/cache_lock.hpp).
   On a cluster give a folder every worker sees.
+- Each worker process keeps one strike.Session for its life: the hulls and bank surfaces of the
+  dataset's shapes are built once per worker, not once per render (the same bytes).
 - Renders run with one BLAS/OpenMP thread (PINNED_ENVIRONMENT): one single-threaded worker per
   core. The bytes do not depend on it: they equal `strike render`'s (docs/determinism.md).
 - --workers N (default: this machine's cores) starts a local Dask cluster, one single-threaded

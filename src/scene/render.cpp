@@ -502,7 +502,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     // A primitive (box, sphere, cylinder) is convex: its surface fills its hull, so "auto" makes
     // it a hull and it never needs pieces; hashing its surface (~0.2 ms) would buy nothing.
     const std::string& shape = bodies[i].object->shape;
-    if (bodies[i].object->bank.empty() && isPrimitiveSpec(bodies[i].object->mesh) && (shape == "auto" || shape == "convex"))
+    if (bodies[i].object->bank.empty() && isPrimitiveSpec(bodies[i].object->mesh) &&
+        (shape == "auto" || shape == "convex"))
       continue;
     surface_hashes[i] = surfaceHash(sim_bodies[i].surface_positions, sim_bodies[i].surface_triangles);
     Result<ConvexPiecePoints> cached = readPieces(piecesPath(settings.cache_dir, surface_hashes[i]), surface_hashes[i]);
@@ -595,7 +596,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       continue;
     }
     if (body.file) {
-      Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), settings.session, report);
+      Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output),
+                                     settings.session, report);
       if (read) continue;
       if (!body.object->bank.empty()) return read.error();  // the user's bank file is damaged
       // A cache entry whose shapes are damaged is recomputed, not trusted.
@@ -623,7 +625,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       lock = CacheEntryLock(cachePath(settings.cache_dir, body.cache_key, ".lock"));
       if (lock.held() && !body.from_cache && openCached(settings.cache_dir, body, report)) {
         // Solved by whoever held the lock while this render simulated or waited.
-        if (readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), settings.session, report)) {
+        if (readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), settings.session,
+                             report)) {
           body.mesh.reset();
           continue;
         }

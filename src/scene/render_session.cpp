@@ -51,8 +51,10 @@ uint64_t locatorBytes(const ModeBank& bank) {
   if (nv == 0 || nt == 0) return 64;
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (size_t v = 0; v < nv; ++v)
-    for (int k = 0; k < 3; ++k)
-      lo[k] = std::min(lo[k], bank.surface_positions[3 * v + k]), hi[k] = std::max(hi[k], bank.surface_positions[3 * v + k]);
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], bank.surface_positions[3 * v + k]);
+      hi[k] = std::max(hi[k], bank.surface_positions[3 * v + k]);
+    }
   const double ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
   const double area = 2.0 * (ext[0] * ext[1] + ext[1] * ext[2] + ext[0] * ext[2]);
   const double cell = std::max(std::sqrt(area / double(nt)), 1e-12);

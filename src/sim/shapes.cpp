@@ -59,7 +59,8 @@ std::shared_ptr<const SimHull> convexHull(const std::vector<double>& xyz, double
   auto compute = [&] {
     btConvexHullComputer computer;
     SimHull hull;
-    hull.shrink_m = computer.compute(xyz.data(), int(3 * sizeof(btScalar)), int(xyz.size() / 3), shrink_m, shrink_clamp);
+    hull.shrink_m =
+        computer.compute(xyz.data(), int(3 * sizeof(btScalar)), int(xyz.size() / 3), shrink_m, shrink_clamp);
     hull.volume_m3 = hull.shrink_m < 0 ? 0.0 : hullVolume(computer);
     hull.vertices_xyz.reserve(3 * size_t(computer.vertices.size()));
     for (int v = 0; v < computer.vertices.size(); ++v)

@@ -74,8 +74,9 @@ struct SimHull {
 /// the hull of `points_xyz` shrunk by `shrink_m` (clamped to `shrink_clamp` of the inner radius),
 /// calling `compute` only for points it has not seen, byte for byte. The same points give the same
 /// hull, so a memory changes no result: it saves the hull's computation (~1 ms a body).
-using SimHullMemo = std::function<std::shared_ptr<const SimHull>(
-    const std::vector<double>& points_xyz, double shrink_m, double shrink_clamp, const std::function<SimHull()>& compute)>;
+using SimHullMemo =
+    std::function<std::shared_ptr<const SimHull>(const std::vector<double>& points_xyz, double shrink_m,
+                                                 double shrink_clamp, const std::function<SimHull()>& compute)>;
 
 struct SimSettings {
   double duration_s = 3.0;

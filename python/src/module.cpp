@@ -19,6 +19,7 @@
 #include "strike/materials.hpp"
 #include "strike/precompute.hpp"
 #include "strike/render.hpp"
+#include "strike/render_session.hpp"
 #include "strike/scene.hpp"
 #include "strike/similar_bank.hpp"
 
@@ -232,7 +233,8 @@ py::object eventsArray(const RenderResult& r) {
 }
 
 PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration, double gain,
-                            const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar) {
+                            const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
+                            std::shared_ptr<RenderSession> session) {
   Scene scene = take(std::move(parsed));
   RenderSettings settings;
   settings.sample_rate_hz = rate;
@@ -242,6 +244,7 @@ PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration
   settings.max_tets = max_tets;
   settings.max_events = static_cast<size_t>(max_events);
   settings.similar_reuse = similar;
+  settings.session = session.get();  // `session` holds it through the render
   std::optional<Result<RenderResult>> result;
   {
     py::gil_scoped_release released;
@@ -409,13 +412,32 @@ PYBIND11_MODULE(_strike, m) {
           [](const PyRenderResult& r, const std::string& path) { check(writeEventsCsv(path, r.result)); },
           py::arg("path"));
 
+  py::class_<RenderSession, std::shared_ptr<RenderSession>>(m, "Session")
+      .def(py::init<uint64_t>(), py::arg("max_bytes") = RenderSession::kDefaultMaxBytes)
+      .def_property_readonly("stats",
+                             [](const RenderSession& s) {
+                               const RenderSession::Stats st = s.stats();
+                               py::dict d;
+                               d["entries"] = st.entries;
+                               d["bytes"] = st.bytes;
+                               d["max_bytes"] = st.max_bytes;
+                               d["hits"] = st.hits;
+                               d["misses"] = st.misses;
+                               d["evicted"] = st.evicted;
+                               return d;
+                             })
+      .def("clear", &RenderSession::clear);
   m.def("render_file", [](const std::string& path, double rate, double duration, double gain,
-                          const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar) {
-    return renderParsed(loadScene(path), rate, duration, gain, cache_dir, max_tets, max_events, similar);
+                          const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
+                          std::shared_ptr<RenderSession> session) {
+    return renderParsed(loadScene(path), rate, duration, gain, cache_dir, max_tets, max_events, similar,
+                        std::move(session));
   });
   m.def("render_text", [](const std::string& text, const std::string& path, double rate, double duration, double gain,
-                          const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar) {
-    return renderParsed(parseScene(text, path), rate, duration, gain, cache_dir, max_tets, max_events, similar);
+                          const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
+                          std::shared_ptr<RenderSession> session) {
+    return renderParsed(parseScene(text, path), rate, duration, gain, cache_dir, max_tets, max_events, similar,
+                        std::move(session));
   });
   m.def("default_cache_dir", &defaultCacheDir);
   m.def("default_max_tets", []() { return static_cast<int64_t>(kDefaultMaxTets); });

@@ -16,6 +16,8 @@ parameter, the scene as rendered, the bank cache keys, the Strike version, the s
 - One bank cache (--cache, default $STRIKE_CACHE_DIR or ~/.cache/strike), shared by every worker:
   content-addressed, and a bank is solved once (a file lock per entry, src/scene/cache_lock.hpp).
   On a cluster give a folder every worker sees.
+- Each worker process keeps one strike.Session for its life: the hulls and bank surfaces of the
+  dataset's shapes are built once per worker, not once per render (the same bytes).
 - Renders run with one BLAS/OpenMP thread (PINNED_ENVIRONMENT): one single-threaded worker per
   core. The bytes do not depend on it: they equal `strike render`'s (docs/determinism.md).
 - --workers N (default: this machine's cores) starts a local Dask cluster, one single-threaded
@@ -88,6 +90,20 @@ def render_job(job, out_dir: str, cache_dir: str, manifest: str = "", similar: b
     return started if isinstance(started, dict) else _finish(job, *started, out_dir, cache_dir, manifest, similar)
 
 
+def _session():
+    """This process's strike.Session: a worker renders thousands of scenes of the same few shapes,
+    and keeps their hulls and bank surfaces between renders (the bytes do not depend on it)."""
+    import strike
+
+    global _SESSION
+    if _SESSION is None:
+        _SESSION = strike.Session()
+    return _SESSION
+
+
+_SESSION = None
+
+
 def _render(job, out_dir: str, cache_dir: str, similar: bool):
     """A job's render: (result, start time, render seconds), or its summary when skipped or failed."""
     import strike  # on the worker
@@ -97,7 +113,7 @@ def _render(job, out_dir: str, cache_dir: str, similar: bool):
         return {"id": job.id, "status": "skipped", "seconds": 0.0}
     try:
         result = strike.render(job.scene, rate=job.rate, duration=job.duration, gain=job.gain, cache=cache_dir,
-                               base_dir=job.base_dir, similar=similar)
+                               base_dir=job.base_dir, similar=similar, session=_session())
     except strike.InputError as e:
         return {"id": job.id, "status": "failed", "error": f"line {job.line} (id {job.id}): {e}",
                 "seconds": time.perf_counter() - start}

@@ -153,3 +153,25 @@ def test_the_gil_is_released_while_rendering():
         thread.join()
     # Holding the GIL, the spinning thread would get at most a switch interval (5 ms) or two.
     assert during > 100000, during
+
+
+def test_a_session_changes_no_byte_and_stays_under_its_cap(repo, cli, cache_dir, tmp_path):
+    # The CLI's bytes (no session), then the same scene through a cold and a warm strike.Session.
+    scene = repo / "examples" / "scenes" / "bar-drop.json"
+    wav = tmp_path / "cli.wav"
+    r = run([cli, "render", scene, "-o", wav, "--duration", "0.5", "--cache", cache_dir, "--quiet"])
+    assert r.returncode == 0, r.stderr
+    session = strike.Session()
+    for _ in range(2):
+        result = strike.render(scene, duration=0.5, cache=cache_dir, session=session)
+        result.save(tmp_path / "py.wav")
+        assert (tmp_path / "py.wav").read_bytes() == wav.read_bytes()
+    stats = session.stats
+    assert stats["hits"] >= 2 and stats["misses"] >= 1, stats  # the bar's hull and bank surface, reused
+    assert 0 < stats["bytes"] <= stats["max_bytes"] == 64 << 20
+    tiny = strike.Session(max_bytes=1)
+    for _ in range(2):
+        strike.render(scene, duration=0.5, cache=cache_dir, session=tiny).save(tmp_path / "tiny.wav")
+        assert (tmp_path / "tiny.wav").read_bytes() == wav.read_bytes()
+        assert tiny.stats["entries"] == 1
+    assert tiny.stats["evicted"] >= 2

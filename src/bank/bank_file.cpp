@@ -462,6 +462,8 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
   const uint8_t* payload_start = data + header_size;
   if (bankPayloadChecksum(bank.format_version, payload_start, head_size) != checksum)
     return corrupt(source, "checksum mismatch (the file is damaged)");
+  const uint64_t key_parts[4] = {bank.format_version, payload_size, head_size, checksum};
+  file.content_key_ = fnv1a64(key_parts, sizeof key_parts);
 
   // Chunks are read from what is in memory: all of a format 1-2 file, the head of a format 3 file
   // (whose last chunk, MODV, runs on into the shapes after it).

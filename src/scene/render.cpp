@@ -26,6 +26,7 @@
 #include "strike/materials.hpp"
 #include "strike/normalized_problem.hpp"
 #include "strike/precompute.hpp"
+#include "strike/render_session.hpp"
 #include "strike/scene_checks.hpp"
 #include "strike/synth.hpp"
 
@@ -59,6 +60,9 @@ struct Body {
   bool silent = false;            ///< ...but no mode in the synthesized band
   std::optional<ShapeRows> rows;  ///< shapes read at the struck vertices only (readStruckShapes)
   std::shared_ptr<const SurfaceLocator> locator;  ///< built for `bank` by readStruckShapes, for its voice
+  /// With a RenderSession: the session's copy of `bank` (the same header) that `locator` points
+  /// into, for the voice (a locator projects only for the bank object it was built for).
+  std::shared_ptr<const ModeBank> located_bank;
   double contact_radius_m = 0.0;  ///< radius of the sphere of equal volume, for Hertz
   // With RenderSettings::similar_reuse: cache_key, file, from_cache and mesh are the normalized
   // solve's, and bank its scaled copy (geometry only until phase 2).
@@ -291,11 +295,17 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
 /// projector's locator finds the same vertices again when it projects). A render of 20 plates
 /// reads ~2% of their 340 MB of shapes this way.
 Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEvent>& events, bool whole,
-                        RenderReport& report) {
+                        RenderSession* session, RenderReport& report) {
   body.rows.reset();
   body.locator.reset();
+  body.located_bank.reset();
   const bool has_radiation = body.bank.radiation_m2.size() == body.bank.modeCount();
-  auto shared_locator = std::make_shared<const SurfaceLocator>(body.bank);
+  // With a session, the locator of this file's content built by an earlier render (and the copy
+  // of the header it points into): the same grid, so the same vertices and bytes.
+  RenderSession::BankSurface surface;
+  if (session) surface = session->bankSurface(*body.file);
+  std::shared_ptr<const SurfaceLocator> shared_locator =
+      session ? surface.locator : std::make_shared<const SurfaceLocator>(body.bank);
   const SurfaceLocator& locator = *shared_locator;
   if (!has_radiation || !locator.hasTriangles() || whole) {
     // Radiation strengths computed from every shape (banks written before the RADI chunk), no
@@ -330,6 +340,7 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   report.shape_vertices_total += body.bank.surfaceVertexCount();
   body.rows = std::move(*rows);
   body.locator = std::move(shared_locator);  // the voice projects with it (the same bank object)
+  body.located_bank = std::move(surface.bank);
   return {};
 }
 
@@ -488,6 +499,12 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   std::vector<uint64_t> surface_hashes(bodies.size(), 0);
   for (size_t i = 0; i < bodies.size(); ++i) {
     if (settings.cache_dir.empty() || bodies[i].object->is_static) continue;
+    // A primitive (box, sphere, cylinder) is convex: its surface fills its hull, so "auto" makes
+    // it a hull and it never needs pieces; hashing its surface (~0.2 ms) would buy nothing.
+    const std::string& shape = bodies[i].object->shape;
+    if (bodies[i].object->bank.empty() && isPrimitiveSpec(bodies[i].object->mesh) &&
+        (shape == "auto" || shape == "convex"))
+      continue;
     surface_hashes[i] = surfaceHash(sim_bodies[i].surface_positions, sim_bodies[i].surface_triangles);
     Result<ConvexPiecePoints> cached = readPieces(piecesPath(settings.cache_dir, surface_hashes[i]), surface_hashes[i]);
     if (cached) sim_bodies[i].convex_pieces_m = std::move(*cached);
@@ -518,6 +535,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
         {indexOf(pair.object_a), indexOf(pair.object_b), pair.restitution, pair.friction, pair.rolling_resistance});
   }
   sim.progress = settings.progress;
+  if (settings.session) sim.hull_memo = settings.session->hullMemo();
   Result<SimResult> simulated = simulate(sim_bodies, sim);
   if (!simulated) return simulated.error();
   report.simulate_seconds = secondsSince(simulate_start);
@@ -578,7 +596,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       continue;
     }
     if (body.file) {
-      Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), report);
+      Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output),
+                                     settings.session, report);
       if (read) continue;
       if (!body.object->bank.empty()) return read.error();  // the user's bank file is damaged
       // A cache entry whose shapes are damaged is recomputed, not trusted.
@@ -606,7 +625,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       lock = CacheEntryLock(cachePath(settings.cache_dir, body.cache_key, ".lock"));
       if (lock.held() && !body.from_cache && openCached(settings.cache_dir, body, report)) {
         // Solved by whoever held the lock while this render simulated or waited.
-        if (readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), report)) {
+        if (readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), settings.session,
+                             report)) {
           body.mesh.reset();
           continue;
         }
@@ -666,7 +686,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     }
     ++report.objects_sounded;
     VoiceDesc voice;
-    voice.bank = std::shared_ptr<const ModeBank>(std::shared_ptr<const ModeBank>(), &body.bank);  // not owned
+    voice.bank = body.located_bank ? body.located_bank  // the session's, equal to body.bank
+                                   : std::shared_ptr<const ModeBank>(std::shared_ptr<const ModeBank>(), &body.bank);
     if (body.rows) voice.rows = std::move(*body.rows), voice.use_rows = true;
     voice.locator = body.locator;
     voice.weights = radiationWeights(body.bank, engine_settings.reference_distance_m);

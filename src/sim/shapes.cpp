@@ -52,6 +52,28 @@ double hullVolume(const btConvexHullComputer& hull) {
   return std::abs(six_v) / 6.0;
 }
 
+/// The hull of a body's points shrunk by shrink_m (0: not shrunk), through the memory of hulls
+/// when the settings give one.
+std::shared_ptr<const SimHull> convexHull(const std::vector<double>& xyz, double shrink_m, double shrink_clamp,
+                                          const SimHullMemo& memo) {
+  auto compute = [&] {
+    btConvexHullComputer computer;
+    SimHull hull;
+    hull.shrink_m =
+        computer.compute(xyz.data(), int(3 * sizeof(btScalar)), int(xyz.size() / 3), shrink_m, shrink_clamp);
+    hull.volume_m3 = hull.shrink_m < 0 ? 0.0 : hullVolume(computer);
+    hull.vertices_xyz.reserve(3 * size_t(computer.vertices.size()));
+    for (int v = 0; v < computer.vertices.size(); ++v)
+      for (int k = 0; k < 3; ++k) hull.vertices_xyz.push_back(computer.vertices[v][k]);
+    return hull;
+  };
+  return memo ? memo(xyz, shrink_m, shrink_clamp, compute) : std::make_shared<const SimHull>(compute());
+}
+
+btVector3 hullVertex(const SimHull& hull, size_t v) {
+  return btVector3(hull.vertices_xyz[3 * v], hull.vertices_xyz[3 * v + 1], hull.vertices_xyz[3 * v + 2]);
+}
+
 }  // namespace
 
 Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
@@ -123,11 +145,9 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   if (state->min_extent_m <= 0.0) state->margin_m = std::clamp(0.002 * state->size_m, 1e-5, 0.01);
 
   // Shape choice.
-  btConvexHullComputer hull;
-  const double hull_volume =
-      hull.compute(state->body_xyz.data(), int(3 * sizeof(btScalar)), int(vertex_count), 0.0, 0.0) < 0
-          ? 0.0
-          : hullVolume(hull);
+  const std::shared_ptr<const SimHull> hull = convexHull(state->body_xyz, 0.0, 0.0, settings_.hull_memo);
+  const size_t hull_vertices = hull->vertices_xyz.size() / 3;
+  const double hull_volume = hull->volume_m3;
   SimBodyDesc::Shape shape = desc.shape;
   if (shape == SimBodyDesc::Shape::Auto) {
     const double volume = std::abs(meshVolume(state->body_xyz, desc.surface_triangles));
@@ -141,7 +161,7 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   state->shape_used = shape;
 
   if (shape == SimBodyDesc::Shape::ConvexHull) {
-    if (hull.vertices.size() == 0) {
+    if (hull_vertices == 0) {
       return badInput(bodyLabel(desc, index) + ": cannot build a convex hull of " + std::to_string(vertex_count) +
                       " vertices");
     }
@@ -149,17 +169,17 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
     // sphere shape is exact and costs O(1) per support query instead of O(points), which is what
     // makes marbles rolling in a GImpact bowl affordable.
     double radius_sum = 0.0, radius_min = INFINITY, radius_max = 0.0;
-    for (int v = 0; v < hull.vertices.size(); ++v) {
-      const double r = hull.vertices[v].length();
+    for (size_t v = 0; v < hull_vertices; ++v) {
+      const double r = hullVertex(*hull, v).length();
       radius_sum += r;
       radius_min = std::min(radius_min, r);
       radius_max = std::max(radius_max, r);
     }
-    const double radius_mean = hull.vertices.size() > 0 ? radius_sum / hull.vertices.size() : 0.0;
+    const double radius_mean = hull_vertices > 0 ? radius_sum / double(hull_vertices) : 0.0;
     // All points on one sphere is not enough (a box's corners are too): the hull must also fill
     // the sphere.
     const double sphere_volume = 4.0 / 3.0 * M_PI * radius_mean * radius_mean * radius_mean;
-    if (hull.vertices.size() >= 12 && radius_max - radius_min <= 0.02 * radius_mean &&
+    if (hull_vertices >= 12 && radius_max - radius_min <= 0.02 * radius_mean &&
         hull_volume >= 0.9 * sphere_volume) {
       // Volume-equivalent radius, so the sphere neither floats above nor sinks into the ground.
       const double radius =
@@ -169,7 +189,7 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
       state->margin_m = state->shape->getMargin();
     } else {
       auto convex = std::make_unique<btConvexHullShape>();
-      if (hull.vertices.size() <= kMaxPolyhedralVertices) {
+      if (hull_vertices <= kMaxPolyhedralVertices) {
         // Polyhedral features make hull-hull contacts use face clipping, which yields the whole
         // contact patch (up to 4 points) in the first substep; plain GJK/EPA adds one point per
         // substep, so a box landing flat on another first touches at one corner, tips and slides
@@ -178,7 +198,7 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
         // and the margin is tiny: 0.1% of the thinnest extent, the most a body can float.
         // Edge-edge clipping costs O(edges^2) per pair, hence only for modest hulls.
         state->margin_m = std::clamp(0.001 * state->min_extent_m, 1e-6, 1e-3);
-        for (int v = 0; v < hull.vertices.size(); ++v) convex->addPoint(hull.vertices[v], false);
+        for (size_t v = 0; v < hull_vertices; ++v) convex->addPoint(hullVertex(*hull, v), false);
         convex->recalcLocalAabb();
         convex->setMargin(state->margin_m);
         convex->initializePolyhedralFeatures();
@@ -188,11 +208,11 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
         // (btConvexHullComputer moves each face inwards) so the collision surface is the mesh's
         // hull with edges rounded by the margin; the shrink is clamped to a quarter of the inner
         // radius for thin bodies.
-        btConvexHullComputer shrunk;
-        const double shrink =
-            shrunk.compute(state->body_xyz.data(), int(3 * sizeof(btScalar)), int(vertex_count), state->margin_m, 0.25);
-        const btConvexHullComputer& used = shrink > 0.0 && shrunk.vertices.size() > 0 ? shrunk : hull;
-        for (int v = 0; v < used.vertices.size(); ++v) convex->addPoint(used.vertices[v], false);
+        const std::shared_ptr<const SimHull> shrunk =
+            convexHull(state->body_xyz, state->margin_m, 0.25, settings_.hull_memo);
+        const double shrink = shrunk->shrink_m;
+        const SimHull& used = shrink > 0.0 && !shrunk->vertices_xyz.empty() ? *shrunk : *hull;
+        for (size_t v = 0; v < used.vertices_xyz.size() / 3; ++v) convex->addPoint(hullVertex(used, v), false);
         convex->recalcLocalAabb();
         if (shrink > 0.0) state->margin_m = shrink;  // the clamp may have made it smaller
         convex->setMargin(state->margin_m);

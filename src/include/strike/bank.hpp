@@ -123,6 +123,9 @@ class BankFile {
 
   /// Everything but the shapes (`shapes` is empty).
   const ModeBank& bank() const { return bank_; }
+  /// A key of the file's content: its format version, sizes and the checksum of its head (which,
+  /// from format 3, holds the checksums of the shape blocks). Equal keys: the same bank.
+  uint64_t contentKey() const { return content_key_; }
   /// The shapes at `vertices` (any order, repeats allowed). Fails, naming the file, on a damaged
   /// block, a non-finite value, a vertex out of range or a file that has become shorter.
   Result<ShapeRows> readShapeRows(std::vector<uint32_t> vertices) const;
@@ -143,6 +146,7 @@ class BankFile {
   uint32_t vertices_per_block_ = 0;
   std::vector<uint64_t> block_checksums_;  ///< format 3: one per block of vertices
   uint64_t shapes_offset_ = 0;             ///< where the f32 shapes start in the file
+  uint64_t content_key_ = 0;
   static Result<BankFile> parse(std::shared_ptr<const Source> source);
   /// Reads the shape bytes of vertices [first, first + count) into `to`.
   Status readShapeBytes(size_t first, size_t count, std::vector<uint8_t>& to) const;

@@ -31,6 +31,8 @@ namespace strike {
 /// tools/cli/via_library.cpp). Calls come in this order: addVoice for every sounding body and
 /// setListener; then per physics step beginStep, setPose for every body, contact for each side
 /// of each contact point, endStep; and render() whenever the audio may advance.
+class RenderSession;
+
 class SoundOutput {
  public:
   virtual ~SoundOutput() = default;
@@ -100,6 +102,10 @@ struct RenderSettings {
   /// Called with each warning as soon as it is found (before the simulation for the scene's
   /// placement, so a long render does not hide it until the end); also kept in report.warnings.
   std::function<void(const std::string&)> on_warning;
+  /// What renders rebuild from identical inputs (hulls, bank surfaces and their locators), kept
+  /// between the renders that share it (strike/render_session.hpp); the same bytes with or
+  /// without it. Owned by the caller, who keeps it alive through the render. Null: none.
+  RenderSession* session = nullptr;
 };
 
 struct RenderReport {

@@ -7,6 +7,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -61,6 +63,21 @@ struct SimBodyDesc {
   std::vector<PathKey> path;
 };
 
+/// A convex hull as the simulator computes it (Bullet's btConvexHullComputer) from a body's
+/// surface points in its body frame, shrunk by a margin or not.
+struct SimHull {
+  std::vector<double> vertices_xyz;  ///< #hull vertices * 3, m
+  double volume_m3 = 0.0;            ///< 0 when the hull could not be built
+  double shrink_m = 0.0;             ///< what btConvexHullComputer::compute returned (< 0: failed)
+};
+/// Hulls remembered between simulations (a RenderSession's, strike/render_session.hpp): returns
+/// the hull of `points_xyz` shrunk by `shrink_m` (clamped to `shrink_clamp` of the inner radius),
+/// calling `compute` only for points it has not seen, byte for byte. The same points give the same
+/// hull, so a memory changes no result: it saves the hull's computation (~1 ms a body).
+using SimHullMemo =
+    std::function<std::shared_ptr<const SimHull>(const std::vector<double>& points_xyz, double shrink_m,
+                                                 double shrink_clamp, const std::function<SimHull()>& compute)>;
+
 struct SimSettings {
   double duration_s = 3.0;
   std::array<double, 3> gravity_m_s2{0, 0, -9.81};
@@ -111,6 +128,7 @@ struct SimSettings {
   /// the sound engine each frame. ~80 bytes per body and substep.
   bool record_states = false;
   ProgressFn progress;  ///< phase "simulate", fraction of simulated time; every ~100 ms of wall time
+  SimHullMemo hull_memo;  ///< empty: every body's hull is computed
 };
 
 constexpr uint32_t kGroundBody = 0xffffffffu;

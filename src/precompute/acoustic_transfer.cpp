@@ -363,8 +363,35 @@ inline cd phaseSpread(double k, const Eigen::Matrix3d& cov, const V3& yx, double
   return cd(1.0 - 0.5 * k * k * along, k * (cov.trace() - along) / (2.0 * r));
 }
 
+/// The rule for triangle (a, b, c) with centroid m seen from x at wavenumber k, `depth`
+/// subdivisions down: 1 point (far and small in wavelengths), the 3- or 7-point rule, or none
+/// (points == 0: split into four quarters, at most kNearMaxDepth times). integrateTriangle and
+/// the near cache (nearRule) both choose here, so the cached points are the ones it would use.
+struct RuleChoice {
+  const double (*rule)[4] = nullptr;  // null with one point: the centroid
+  int points = 0;
+};
+
+inline RuleChoice chooseRule(const V3& x, const V3& a, const V3& b, const V3& c, const V3& m, double k, int depth) {
+  const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  const double dist = (x - m).norm();
+  const double kd = k * d;
+  if (dist > kFarRatio * d && kd <= kCellPhase) return {nullptr, 1};
+  if (dist > kNearRatio * d && kd <= 2.0 * kCellPhase) return {kRule3, 3};
+  if ((dist > 2.0 * d && kd <= 2.5) || depth >= kNearMaxDepth) return {kRule7, 7};
+  return {nullptr, 0};
+}
+
+/// The four quarters of triangle (a, b, c) (split at its edges' midpoints), in the order that
+/// integrateTriangle and nearRule both visit them (the cache's points are summed in its order).
+using Corners = std::array<V3, 3>;
+inline std::array<Corners, 4> quarters(const V3& a, const V3& b, const V3& c) {
+  const V3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
+  return {Corners{a, ab, ca}, Corners{ab, b, bc}, Corners{ca, bc, c}, Corners{ab, bc, ca}};
+}
+
 /// int_T G dS and int_T dG/dn_y dS for x not on T: a rule of the degree that T's size in
-/// wavelengths and its distance from x ask for, or four halves when x is too near.
+/// wavelengths and its distance from x ask for (chooseRule), or its four quarters when x is too near.
 void integrateTriangle(const V3& x, const V3& a, const V3& b, const V3& c, const V3& normal, double area, double k,
                        int depth, cd& int_g, cd& int_dg) {
   if (depth == 0) {  // a far whole triangle: one point with its phase spread
@@ -381,27 +408,13 @@ void integrateTriangle(const V3& x, const V3& a, const V3& b, const V3& c, const
     }
   }
   const V3 m = (a + b + c) / 3.0;
-  const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-  const double dist = (x - m).norm();
-  const double kd = k * d;
-  const double(*rule)[4] = nullptr;
-  int points = 0;
-  if (dist > kFarRatio * d && kd <= kCellPhase) {
-    points = 1;
-  } else if (dist > kNearRatio * d && kd <= 2.0 * kCellPhase) {
-    rule = kRule3;
-    points = 3;
-  } else if ((dist > 2.0 * d && kd <= 2.5) || depth >= kNearMaxDepth) {
-    rule = kRule7;
-    points = 7;
-  }
+  const RuleChoice choice = chooseRule(x, a, b, c, m, k, depth);
+  const double(*rule)[4] = choice.rule;
+  const int points = choice.points;
   if (points == 0) {
-    const V3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
     const double quarter = 0.25 * area;
-    integrateTriangle(x, a, ab, ca, normal, quarter, k, depth + 1, int_g, int_dg);
-    integrateTriangle(x, ab, b, bc, normal, quarter, k, depth + 1, int_g, int_dg);
-    integrateTriangle(x, ca, bc, c, normal, quarter, k, depth + 1, int_g, int_dg);
-    integrateTriangle(x, ab, bc, ca, normal, quarter, k, depth + 1, int_g, int_dg);
+    for (const Corners& q : quarters(a, b, c))
+      integrateTriangle(x, q[0], q[1], q[2], normal, quarter, k, depth + 1, int_g, int_dg);
     return;
   }
   for (int i = 0; i < points; ++i) {
@@ -674,27 +687,12 @@ struct NearCache {
 void nearRule(const V3& x, const V3& a, const V3& b, const V3& c, const V3& normal, double area, double k, int depth,
               uint32_t t, NearCache& out) {
   const V3 m = (a + b + c) / 3.0;
-  const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-  const double dist = (x - m).norm();
-  const double kd = k * d;
-  const double(*rule)[4] = nullptr;
-  int points = 0;
-  if (dist > kFarRatio * d && kd <= kCellPhase) {
-    points = 1;
-  } else if (dist > kNearRatio * d && kd <= 2.0 * kCellPhase) {
-    rule = kRule3;
-    points = 3;
-  } else if ((dist > 2.0 * d && kd <= 2.5) || depth >= kNearMaxDepth) {
-    rule = kRule7;
-    points = 7;
-  }
+  const RuleChoice choice = chooseRule(x, a, b, c, m, k, depth);
+  const double(*rule)[4] = choice.rule;
+  const int points = choice.points;
   if (points == 0) {
-    const V3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
     const double quarter = 0.25 * area;
-    nearRule(x, a, ab, ca, normal, quarter, k, depth + 1, t, out);
-    nearRule(x, ab, b, bc, normal, quarter, k, depth + 1, t, out);
-    nearRule(x, ca, bc, c, normal, quarter, k, depth + 1, t, out);
-    nearRule(x, ab, bc, ca, normal, quarter, k, depth + 1, t, out);
+    for (const Corners& q : quarters(a, b, c)) nearRule(x, q[0], q[1], q[2], normal, quarter, k, depth + 1, t, out);
     return;
   }
   for (int i = 0; i < points; ++i) {

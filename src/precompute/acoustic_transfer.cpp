@@ -363,8 +363,35 @@ inline cd phaseSpread(double k, const Eigen::Matrix3d& cov, const V3& yx, double
   return cd(1.0 - 0.5 * k * k * along, k * (cov.trace() - along) / (2.0 * r));
 }
 
+/// The rule for triangle (a, b, c) with centroid m seen from x at wavenumber k, `depth`
+/// subdivisions down: 1 point (far and small in wavelengths), the 3- or 7-point rule, or none
+/// (points == 0: split into four quarters, at most kNearMaxDepth times). integrateTriangle and
+/// the near cache (nearRule) both choose here, so the cached points are the ones it would use.
+struct RuleChoice {
+  const double (*rule)[4] = nullptr;  // null with one point: the centroid
+  int points = 0;
+};
+
+inline RuleChoice chooseRule(const V3& x, const V3& a, const V3& b, const V3& c, const V3& m, double k, int depth) {
+  const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  const double dist = (x - m).norm();
+  const double kd = k * d;
+  if (dist > kFarRatio * d && kd <= kCellPhase) return {nullptr, 1};
+  if (dist > kNearRatio * d && kd <= 2.0 * kCellPhase) return {kRule3, 3};
+  if ((dist > 2.0 * d && kd <= 2.5) || depth >= kNearMaxDepth) return {kRule7, 7};
+  return {nullptr, 0};
+}
+
+/// The four quarters of triangle (a, b, c) (split at its edges' midpoints), in the order that
+/// integrateTriangle and nearRule both visit them (the cache's points are summed in its order).
+using Corners = std::array<V3, 3>;
+inline std::array<Corners, 4> quarters(const V3& a, const V3& b, const V3& c) {
+  const V3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
+  return {Corners{a, ab, ca}, Corners{ab, b, bc}, Corners{ca, bc, c}, Corners{ab, bc, ca}};
+}
+
 /// int_T G dS and int_T dG/dn_y dS for x not on T: a rule of the degree that T's size in
-/// wavelengths and its distance from x ask for, or four halves when x is too near.
+/// wavelengths and its distance from x ask for (chooseRule), or its four quarters when x is too near.
 void integrateTriangle(const V3& x, const V3& a, const V3& b, const V3& c, const V3& normal, double area, double k,
                        int depth, cd& int_g, cd& int_dg) {
   if (depth == 0) {  // a far whole triangle: one point with its phase spread
@@ -381,27 +408,13 @@ void integrateTriangle(const V3& x, const V3& a, const V3& b, const V3& c, const
     }
   }
   const V3 m = (a + b + c) / 3.0;
-  const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-  const double dist = (x - m).norm();
-  const double kd = k * d;
-  const double(*rule)[4] = nullptr;
-  int points = 0;
-  if (dist > kFarRatio * d && kd <= kCellPhase) {
-    points = 1;
-  } else if (dist > kNearRatio * d && kd <= 2.0 * kCellPhase) {
-    rule = kRule3;
-    points = 3;
-  } else if ((dist > 2.0 * d && kd <= 2.5) || depth >= kNearMaxDepth) {
-    rule = kRule7;
-    points = 7;
-  }
+  const RuleChoice choice = chooseRule(x, a, b, c, m, k, depth);
+  const double(*rule)[4] = choice.rule;
+  const int points = choice.points;
   if (points == 0) {
-    const V3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
     const double quarter = 0.25 * area;
-    integrateTriangle(x, a, ab, ca, normal, quarter, k, depth + 1, int_g, int_dg);
-    integrateTriangle(x, ab, b, bc, normal, quarter, k, depth + 1, int_g, int_dg);
-    integrateTriangle(x, ca, bc, c, normal, quarter, k, depth + 1, int_g, int_dg);
-    integrateTriangle(x, ab, bc, ca, normal, quarter, k, depth + 1, int_g, int_dg);
+    for (const Corners& q : quarters(a, b, c))
+      integrateTriangle(x, q[0], q[1], q[2], normal, quarter, k, depth + 1, int_g, int_dg);
     return;
   }
   for (int i = 0; i < points; ++i) {
@@ -674,27 +687,12 @@ struct NearCache {
 void nearRule(const V3& x, const V3& a, const V3& b, const V3& c, const V3& normal, double area, double k, int depth,
               uint32_t t, NearCache& out) {
   const V3 m = (a + b + c) / 3.0;
-  const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-  const double dist = (x - m).norm();
-  const double kd = k * d;
-  const double(*rule)[4] = nullptr;
-  int points = 0;
-  if (dist > kFarRatio * d && kd <= kCellPhase) {
-    points = 1;
-  } else if (dist > kNearRatio * d && kd <= 2.0 * kCellPhase) {
-    rule = kRule3;
-    points = 3;
-  } else if ((dist > 2.0 * d && kd <= 2.5) || depth >= kNearMaxDepth) {
-    rule = kRule7;
-    points = 7;
-  }
+  const RuleChoice choice = chooseRule(x, a, b, c, m, k, depth);
+  const double(*rule)[4] = choice.rule;
+  const int points = choice.points;
   if (points == 0) {
-    const V3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
     const double quarter = 0.25 * area;
-    nearRule(x, a, ab, ca, normal, quarter, k, depth + 1, t, out);
-    nearRule(x, ab, b, bc, normal, quarter, k, depth + 1, t, out);
-    nearRule(x, ca, bc, c, normal, quarter, k, depth + 1, t, out);
-    nearRule(x, ab, bc, ca, normal, quarter, k, depth + 1, t, out);
+    for (const Corners& q : quarters(a, b, c)) nearRule(x, q[0], q[1], q[2], normal, quarter, k, depth + 1, t, out);
     return;
   }
   for (int i = 0; i < points; ++i) {
@@ -1202,6 +1200,29 @@ void projectFarField(const Surface& s, const Pieces& pc, const PieceData& pd, co
   }
 }
 
+/// The energy a mode's far field may leave beyond its kept order, relative to its total: 1e-8
+/// (-80 dB), far below the target, so that the modes of a degenerate pair, truncated apart,
+/// still sum basis-free.
+constexpr double kTailEnergy = 1e-8;
+
+/// Whether the far fields `coef` (up to order n_top) of the modes not yet done have converged
+/// there: their two top orders hold at most kTailEnergy of their energy, so that the order kept
+/// is below n_top - 1 and the orders beyond n_top (falling faster still past kR) hold less.
+bool seriesConverged(const std::vector<std::vector<cd>>& coef, const std::vector<char>& done, int n_top) {
+  for (size_t r = 0; r < coef.size(); ++r) {
+    if (done[r]) continue;
+    double total = 0.0, top = 0.0;
+    for (int n = 0; n <= n_top; ++n)
+      for (int m = -n; m <= n; ++m) {
+        const double e = std::norm(coef[r][static_cast<size_t>(n * n + n + m)]);
+        total += e;
+        if (n >= n_top - 1) top += e;
+      }
+    if (!(top <= kTailEnergy * total)) return false;
+  }
+  return true;
+}
+
 /// A x = B for a square A: LU in single precision (half the time of double), then iterative
 /// refinement with the residual in double (Wilkinson; Moler 1967, "Iterative refinement in
 /// floating point", J. ACM 14), which recovers double accuracy while cond(A) eps_float << 1 (these
@@ -1373,15 +1394,18 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     if ((p1 - p0).cross(p2 - p0).norm() > 0) corners.push_back({v[0], v[1], v[2]});
   }
 
-  // Modes of (nearly) one frequency, as degenerate pairs of symmetric bodies are, share the
-  // system and its factorization: solved at the first one's wavenumber, which changes the
-  // others' far fields by about (relative frequency gap) x (1 + ka), added to their estimates.
-  constexpr double kSameFrequency = 1e-4;
+  // Modes of (nearly) one frequency, as degenerate pairs of symmetric bodies are (split by the
+  // mesh's asymmetry), share the system and its factorization: solved at the first one's
+  // wavenumber, which changes the others' far fields by about (relative frequency gap) x (1 + ka),
+  // added to their estimates. Shared while that is at most a tenth of the target (in quadrature,
+  // +0.5% of an estimate at the target).
+  constexpr double kSharedGapShare = 0.1;
   std::vector<size_t> group_start;
   for (size_t mode = 0; mode < modes; ++mode) {
     const double omega = std::sqrt(std::max(bank.eigenvalues[mode], 0.0));
     const double first = group_start.empty() ? -1.0 : std::sqrt(std::max(bank.eigenvalues[group_start.back()], 0.0));
-    if (group_start.empty() || !(std::abs(omega - first) <= kSameFrequency * first)) group_start.push_back(mode);
+    const double allowed = kSharedGapShare * settings.target_relative_error / (1.0 + first / c_air * s.radius);
+    if (group_start.empty() || !(std::abs(omega - first) <= allowed * first)) group_start.push_back(mode);
   }
   group_start.push_back(modes);
 
@@ -1394,6 +1418,9 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
   std::vector<NodeData> data;
   std::vector<std::vector<cd>> coef;
   std::vector<double> energy, diff;
+  // The last group solved at the budget whose modes all missed the target there: its wavenumber
+  // and its best mode's estimate (0: none yet).
+  double missed_k = 0.0, missed_best = 0.0;
   for (size_t g = 0; g + 1 < group_start.size(); ++g) {
     const auto group_begin = std::chrono::steady_clock::now();
     const size_t first = group_start[g], last = group_start[g + 1], rhs = last - first;
@@ -1415,14 +1442,24 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     }
     const double kr = k * s.radius;
     const int n_cap = std::min(120, static_cast<int>(std::ceil(kr + 4.0 * std::cbrt(kr))) + 6);
+    // The far field is first projected to a lower order (the directions cost ~ order^2): enough
+    // for every mode seen so far (the orders kept are ~kR + 3 (kR)^{1/3}); a mode whose top two
+    // orders there still hold more than the tail allowed is projected again up to n_cap.
+    const int n_try = std::min(n_cap, static_cast<int>(std::ceil(kr + 3.0 * std::cbrt(kr))) + 3);
     // Refine while an estimate exceeds the target and the budget allows: the mode's pattern
     // (not only the wavelength) sets the resolution, and the estimate sees it.
     size_t elements = elementsFor(s, settings, k);
     const size_t cap = settings.fixed_elements > 0 ? elements : std::min<size_t>(settings.max_elements, s.tris.size());
+    // Straight to the budget when a lower frequency's modes all missed the target there: the error
+    // of constant elements grows as (k h)^2, so these modes are predicted to miss it at the budget
+    // too, and every step below it would be solved only to be dropped (the result is the
+    // budget's solve either way).
+    if (missed_k > 0 && missed_best * (k / missed_k) * (k / missed_k) > settings.target_relative_error) elements = cap;
     // Per mode: the far field of the first resolution that met the target (or the last).
     std::vector<double> total(rhs, 0.0);
     std::vector<char> done(rhs, 0);
     std::vector<uint32_t> mode_elements(rhs, 0), mode_chief(rhs, 0);
+    std::vector<int> mode_cap(rhs, n_cap);  // the order up to which the mode's far field was projected
     diff.assign(rhs, 0.0);
     energy.assign(rhs * (n_cap + 1), 0.0);
     coef.assign(rhs, {});
@@ -1436,8 +1473,14 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
       assembly_seconds += solved.assembly_seconds;
       factor_seconds += solved.factor_seconds;
       const auto far_start = std::chrono::steady_clock::now();
-      projectFarField(s, solved.pieces, solved.piece_data, data, k, n_cap, solved.p, solved.p_diff, step_coef,
+      int projected = n_try;
+      projectFarField(s, solved.pieces, solved.piece_data, data, k, projected, solved.p, solved.p_diff, step_coef,
                       step_dcoef);
+      if (n_try < n_cap && !seriesConverged(step_coef, done, n_try)) {
+        projected = n_cap;
+        projectFarField(s, solved.pieces, solved.piece_data, data, k, projected, solved.p, solved.p_diff, step_coef,
+                        step_dcoef);
+      }
       far_field_seconds += secondsSince(far_start);
       const bool last_step = elements >= cap;
       for (size_t r = 0; r < rhs; ++r) {
@@ -1446,13 +1489,14 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
         std::fill(e, e + n_cap + 1, 0.0);
         total[r] = 0.0;
         diff[r] = 0.0;
-        for (int n = 0; n <= n_cap; ++n)
+        for (int n = 0; n <= projected; ++n)
           for (int m = -n; m <= n; ++m) {
             e[n] += std::norm(step_coef[r][n * n + n + m]);
             diff[r] += std::norm(step_dcoef[r][n * n + n + m]);
           }
-        for (int n = 0; n <= n_cap; ++n) total[r] += e[n];
+        for (int n = 0; n <= projected; ++n) total[r] += e[n];
         coef[r] = step_coef[r];
+        mode_cap[r] = projected;
         mode_elements[r] = static_cast<uint32_t>(solved.elements);
         mode_chief[r] = static_cast<uint32_t>(solved.chief);
         done[r] = last_step || !(diff[r] > std::pow(settings.target_relative_error, 2) * total[r]);
@@ -1469,23 +1513,31 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
       elements = asked >= static_cast<double>(cap) ? cap : std::min(cap, elements * 5 / 2);
     }
     const double group_seconds = secondsSince(group_begin);
+    if (elements >= cap && settings.fixed_elements == 0) {
+      double best = 1e300;
+      for (size_t r = 0; r < rhs; ++r) best = std::min(best, total[r] > 0 ? std::sqrt(diff[r] / total[r]) : 0.0);
+      if (best > settings.target_relative_error) {
+        missed_k = k;
+        missed_best = best;
+      }
+    }
 
     for (size_t r = 0; r < rhs; ++r) {
       const size_t mode = first + r;
       const double* e = &energy[r * (n_cap + 1)];
-      // Order: the smallest whose tail holds at most 1e-8 of the energy (-80 dB), far below the
-      // target, so that the modes of a degenerate pair, truncated apart, still sum basis-free.
-      const double tail_allowed = 1e-8 * total[r];
-      int order = n_cap;
+      // Order: the smallest whose tail holds at most kTailEnergy of the energy.
+      const double tail_allowed = kTailEnergy * total[r];
+      const int top = mode_cap[r];
+      int order = top;
       double tail = 0.0;
       while (order > 0 && tail + e[order] <= tail_allowed) tail += e[order--];
       // Error: the coarse solve's difference, the dropped tail, what the last computed orders
       // still hold (a series not yet converged at n_cap), and a shared solve's frequency gap.
-      const double unresolved = e[n_cap] + (n_cap > 0 ? e[n_cap - 1] : 0.0);
+      const double unresolved = e[top] + (top > 0 ? e[top - 1] : 0.0);
       const double omega_mode = std::sqrt(std::max(bank.eigenvalues[mode], 0.0));
       const double gap = omega > 0 ? std::abs(omega_mode - omega) / omega * (1.0 + kr) : 0.0;
       const double relative =
-          total[r] > 0 ? std::sqrt((diff[r] + tail + (order == n_cap ? unresolved : 0.0)) / total[r] + gap * gap) : 0.0;
+          total[r] > 0 ? std::sqrt((diff[r] + tail + (order == top ? unresolved : 0.0)) / total[r] + gap * gap) : 0.0;
 
       out.order.push_back(static_cast<uint32_t>(order));
       for (int i = 0; i < (order + 1) * (order + 1); ++i)

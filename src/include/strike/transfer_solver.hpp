@@ -57,8 +57,11 @@ struct TransferSettings {
 
 /// The solver's revision, in the bank cache's key of banks with a transfer: raised whenever the
 /// same inputs give other numbers (2: the faster assembly, far field and single-precision LU of
-/// 2026-11), so cached transfers are solved again rather than mixed with the new solver's.
-constexpr uint32_t kTransferSolverRevision = 2;
+/// 2026-11; 3: modes share a solve while the gap costs a tenth of the target, the far field is
+/// first projected to a lower order, a group goes straight to the budget when a lower frequency
+/// missed the target there), so cached transfers are solved again rather than mixed with the
+/// new solver's.
+constexpr uint32_t kTransferSolverRevision = 3;
 
 /// What one mode's solve cost and found (for studies and reports).
 struct TransferModeStats {

@@ -46,6 +46,9 @@
 // OpenBLAS thread control, weak so that another BLAS (no such functions) still links.
 extern "C" __attribute__((weak)) void openblas_set_num_threads(int num_threads);
 extern "C" __attribute__((weak)) int openblas_get_num_threads(void);
+// Ends OpenBLAS's worker threads (its pthread_atfork handler); the next set_num_threads or
+// multi-threaded call starts them again.
+extern "C" __attribute__((weak)) int blas_thread_shutdown_(void);
 
 namespace strike {
 
@@ -62,12 +65,16 @@ using detail::SpMat;
 using detail::symmetricTimesBlock;
 
 /// Sets OpenBLAS's thread count for a scope and restores it (no-op for 0 or another BLAS).
+/// Already that count: no call at all (a call would start again the threads that
+/// useOneBlasThread ended).
 class BlasThreadsScope {
  public:
   explicit BlasThreadsScope(int threads) {
     if (threads <= 0 || openblas_set_num_threads == nullptr || openblas_get_num_threads == nullptr) return;
-    previous_ = openblas_get_num_threads();
-    if (previous_ != threads) openblas_set_num_threads(threads);
+    const int previous = openblas_get_num_threads();
+    if (previous == threads) return;
+    previous_ = previous;
+    openblas_set_num_threads(threads);
   }
   ~BlasThreadsScope() {
     if (previous_ > 0) openblas_set_num_threads(previous_);
@@ -374,6 +381,12 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
 }
 
 }  // namespace
+
+void useOneBlasThread() {
+  if (openblas_set_num_threads == nullptr || blas_thread_shutdown_ == nullptr) return;
+  openblas_set_num_threads(1);  // before the shutdown: with the pool down, a set would restart it
+  blas_thread_shutdown_();
+}
 
 Result<ModalResult> solveModes(const SpMat& K, const SpMat& M, const ModalSettings& settings) {
   // No exception escapes the core: allocation failures (Eigen, std::vector) and anything a

@@ -318,13 +318,14 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
     report.shape_vertices_total += body.bank.surfaceVertexCount();
     return {};
   }
-  // A bank with no mode in the band (a marble) needs no shape anywhere.
+  // The points where the body was struck; a bank with no mode in the band (a marble) needs no
+  // shape anywhere, so none.
   std::vector<std::array<double, 3>> points;
-  for (const ContactEvent& event : events) {
-    if (body.bank.modeCount() == 0) break;
-    if (event.body_a == index) points.push_back(event.point_a_mesh);
-    if (event.body_b == index) points.push_back(event.point_b_mesh);
-  }
+  if (body.bank.modeCount() > 0)
+    for (const ContactEvent& event : events) {
+      if (event.body_a == index) points.push_back(event.point_a_mesh);
+      if (event.body_b == index) points.push_back(event.point_b_mesh);
+    }
   std::sort(points.begin(), points.end());
   points.erase(std::unique(points.begin(), points.end()), points.end());
   std::vector<uint32_t> vertices;

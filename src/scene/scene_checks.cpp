@@ -111,15 +111,21 @@ std::string format(const char* fmt, double a = 0, double b = 0, double c = 0, do
   return text;
 }
 
+/// The three corners of the triangle whose indices start at triangles[t].
+std::array<Vec, 3> cornersOf(const std::vector<double>& positions, const std::vector<uint32_t>& triangles, size_t t) {
+  std::array<Vec, 3> corner;
+  for (int k = 0; k < 3; ++k) {
+    const size_t v = triangles[t + k] * size_t(3);
+    corner[k] = {positions[v], positions[v + 1], positions[v + 2]};
+  }
+  return corner;
+}
+
 /// Squared distance from p to the nearest of the triangles.
 double nearestSquared(const Vec& point, const std::vector<double>& positions, const std::vector<uint32_t>& triangles) {
   double nearest2 = std::numeric_limits<double>::infinity();
   for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
-    Vec corner[3];
-    for (int k = 0; k < 3; ++k) {
-      const size_t v = triangles[t + k] * size_t(3);
-      corner[k] = {positions[v], positions[v + 1], positions[v + 2]};
-    }
+    const std::array<Vec, 3> corner = cornersOf(positions, triangles, t);
     nearest2 = std::min(nearest2, distanceSquaredToTriangle(point, corner[0], corner[1], corner[2]));
   }
   return nearest2;
@@ -245,14 +251,9 @@ int InsideTest::classify(const double p[3]) const {
 
 double depthInside(const double p[3], const std::vector<double>& positions, const std::vector<uint32_t>& triangles) {
   const Vec point{p[0], p[1], p[2]};
-  double solid_angle = 0.0, nearest2 = std::numeric_limits<double>::infinity();
+  double solid_angle = 0.0;
   for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
-    Vec corner[3];
-    for (int k = 0; k < 3; ++k) {
-      const size_t v = triangles[t + k] * size_t(3);
-      corner[k] = {positions[v], positions[v + 1], positions[v + 2]};
-    }
-    nearest2 = std::min(nearest2, distanceSquaredToTriangle(point, corner[0], corner[1], corner[2]));
+    const std::array<Vec, 3> corner = cornersOf(positions, triangles, t);
     // Solid angle of the triangle seen from p: tan(Omega/2) = a.(b x c) / (|a||b||c| + (a.b)|c| + (a.c)|b| + (b.c)|a|).
     const Vec a = sub(corner[0], point), b = sub(corner[1], point), c = sub(corner[2], point);
     const double la = length(a), lb = length(b), lc = length(c);
@@ -261,7 +262,8 @@ double depthInside(const double p[3], const std::vector<double>& positions, cons
     solid_angle += 2.0 * std::atan2(numerator, denominator);
   }
   const double winding = solid_angle / (4.0 * M_PI);  // 1 inside a closed CCW surface, 0 outside
-  return winding > 0.5 ? std::sqrt(nearest2) : 0.0;
+  // Inside: the depth is the distance to the nearest triangle (a second pass, skipped outside).
+  return winding > 0.5 ? std::sqrt(nearestSquared(point, positions, triangles)) : 0.0;
 }
 
 std::vector<std::string> checkStartingPlacement(const Scene& scene, const std::vector<SimBodyDesc>& bodies,

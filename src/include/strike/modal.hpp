@@ -72,4 +72,12 @@ struct ModalResult {
 Result<ModalResult> solveModes(const Eigen::SparseMatrix<double>& K, const Eigen::SparseMatrix<double>& M,
                                const ModalSettings& settings);
 
+/// OpenBLAS on one thread for the rest of the process, and its idle worker threads ended. A
+/// threaded OpenBLAS starts a worker per extra core when it loads, before main, and each spins
+/// (sched_yield) ~0.1 s before it sleeps: CPU burnt at every start of a program that links it,
+/// although solveModes uses one BLAS thread anyway (bit-identical banks whatever the core count,
+/// docs/determinism.md). For programs that own their process (the strike CLI), never for a
+/// library loaded into someone else's (numpy may share this OpenBLAS). No-op for another BLAS.
+void useOneBlasThread();
+
 }  // namespace strike

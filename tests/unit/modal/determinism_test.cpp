@@ -12,12 +12,14 @@
 //  - a helper that starts around the give-up time, so that some parts are split and some not;
 //  - two busy threads beside the solve (a shared CI machine);
 //  - OpenBLAS set to two threads by the process (what OPENBLAS_NUM_THREADS does);
-//  - other CPU cache sizes for Eigen's product blocking (another CPU kind).
+//  - other CPU cache sizes for Eigen's product blocking (another CPU kind);
+//  - OpenBLAS's worker threads ended by useOneBlasThread (what the strike command does).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
 #include <atomic>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
@@ -142,6 +144,34 @@ TEST(Determinism, OpenBlasThreadCountDoesNotChangeTheBits) {
   const ModalResult two = solve(hundredModes());
   openblas_set_num_threads(before);
   expectSameBits(one, two, "OpenBLAS 1 vs 2 threads");
+}
+
+/// The threads of this process now.
+size_t threadsInProcess() {
+  size_t count = 0;
+  for ([[maybe_unused]] const auto& task : std::filesystem::directory_iterator("/proc/self/task")) ++count;
+  return count;
+}
+
+TEST(Determinism, OneBlasThreadEndsOpenBlasWorkersAndSolvesTheSameBits) {
+  if (openblas_set_num_threads == nullptr || openblas_get_num_threads == nullptr) {
+    GTEST_SKIP() << "the BLAS is not OpenBLAS";
+  }
+  const ModalResult reference = solve(hundredModes());
+  // A threaded OpenBLAS started a worker per extra core when it loaded (none on one core), idle
+  // now; the process has other threads too (CHOLMOD's OpenMP pool). useOneBlasThread ends
+  // exactly OpenBLAS's workers.
+  const int blas_threads = openblas_get_num_threads();
+  const size_t before = threadsInProcess();
+  useOneBlasThread();
+  EXPECT_EQ(openblas_get_num_threads(), 1);
+  const size_t after = threadsInProcess();
+  EXPECT_EQ(before - after, size_t(blas_threads - 1)) << before << " threads before, " << after << " after";
+  // A solve afterwards starts none again (its one-thread scope has nothing to set) and gives
+  // the same bits.
+  const ModalResult again = solve(hundredModes());
+  EXPECT_EQ(threadsInProcess(), after);
+  expectSameBits(reference, again, "after useOneBlasThread");
 }
 
 TEST(Determinism, CpuCacheSizesDoNotChangeTheBits) {

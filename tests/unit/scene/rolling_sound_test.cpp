@@ -8,11 +8,15 @@
 #include <cstdio>
 #include <string>
 
+#include "render_helpers.hpp"
 #include "strike/render.hpp"
 #include "strike/scene.hpp"
 
 namespace strike {
 namespace {
+
+using render_helpers::renderCached;
+using render_helpers::rms;
 
 std::string cacheDir() { return testing::TempDir() + "/rolling-sound-" + std::to_string(static_cast<long>(getpid())); }
 
@@ -35,19 +39,7 @@ std::string ballOnPlate(bool rough) {
 RenderResult render(const std::string& text) {
   Result<Scene> scene = parseScene(text, "/tmp/rolling.json");
   EXPECT_TRUE(scene) << (scene ? "" : scene.error().message);
-  RenderSettings settings;
-  settings.cache_dir = cacheDir();
-  Result<RenderResult> out = renderScene(*scene, settings);
-  EXPECT_TRUE(out) << (out ? "" : out.error().message);
-  return out ? *out : RenderResult{};
-}
-
-double rms(const std::vector<float>& x, double t0, double t1, double rate) {
-  double s = 0;
-  size_t n = 0;
-  for (size_t i = static_cast<size_t>(t0 * rate); i < static_cast<size_t>(t1 * rate) && i < x.size(); ++i, ++n)
-    s += double(x[i]) * x[i];
-  return n ? std::sqrt(s / n) : 0.0;
+  return scene ? renderCached(*scene, cacheDir()) : RenderResult{};
 }
 
 TEST(RollingSound, SphereRollingOnAPlateSoundsStopsAndRadiatesLessThanItLoses) {

@@ -14,31 +14,21 @@
 #include <string>
 #include <vector>
 
+#include "render_helpers.hpp"
 #include "strike/render.hpp"
 #include "strike/scene.hpp"
 
 namespace strike {
 namespace {
 
+using render_helpers::renderCached;
+using render_helpers::rms;
+
 const std::string kExample = std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/spoon-scrapes-plate.json";
 
 std::string tempDir() { return testing::TempDir() + "/spoon-scrape-" + std::to_string(static_cast<long>(getpid())); }
 
-RenderResult render(const Scene& scene) {
-  RenderSettings settings;
-  settings.cache_dir = tempDir() + "/cache";
-  Result<RenderResult> out = renderScene(scene, settings);
-  EXPECT_TRUE(out) << (out ? "" : out.error().message);
-  return out ? *out : RenderResult{};
-}
-
-double rms(const std::vector<float>& x, double t0, double t1, double rate) {
-  double s = 0;
-  size_t n = 0;
-  for (size_t i = static_cast<size_t>(t0 * rate); i < static_cast<size_t>(t1 * rate) && i < x.size(); ++i, ++n)
-    s += double(x[i]) * x[i];
-  return n ? std::sqrt(s / n) : 0.0;
-}
+RenderResult render(const Scene& scene) { return renderCached(scene, tempDir() + "/cache"); }
 
 double db(double ratio) { return 20.0 * std::log10(ratio); }
 

@@ -10,8 +10,10 @@
 #include <cstdio>
 #include <map>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "../modal/two_parts.hpp"
 #include "strike/transfer_solver.hpp"
 
 namespace strike {
@@ -1260,7 +1262,7 @@ struct ModeSolve {
 /// modes of one frequency share the matrix and its factorization) at wavenumber k with
 /// `elements` unknowns (about) and `chief` interior points.
 ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, double k, size_t elements, size_t chief,
-                      double k_ref, std::map<size_t, NearCache>& near_caches) {
+                      double k_ref, std::map<size_t, NearCache>& near_caches, TwoParts& parts) {
   ModeSolve out;
   const auto assembly_start = std::chrono::steady_clock::now();
   out.cut = cutWithCount(s, elements);
@@ -1276,24 +1278,30 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
   const auto R = static_cast<Eigen::Index>(rhs);
   Eigen::MatrixXcd A = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(n));
   Eigen::MatrixXcd b(static_cast<Eigen::Index>(rows), R);
-  std::vector<cd> M(n), lq(rhs);
-  RowScratch stack;
-  for (size_t r = 0; r < rows; ++r) {
-    std::fill(M.begin(), M.end(), cd(0.0));
-    std::fill(lq.begin(), lq.end(), cd(0.0));
-    if (r < n) {
-      const uint32_t host = s.nodes[cut.nodes[r]].rep;
-      assembleRow(s, cut, out.pieces, out.piece_data, data, near, r, k, s.tris[host].centroid, M.data(), lq.data(),
-                  stack);
-    } else {
-      assembleRow(s, cut, out.pieces, out.piece_data, data, near, r, k, s.chief_candidates[r - n], M.data(), lq.data(),
-                  stack);
+  // Each row depends on its collocation point alone, so the two halves (always the same halves)
+  // may be assembled at once, each with its own scratch, into rows of A and b the other never
+  // touches: the same bits with or without the helper thread.
+  std::array<RowScratch, 2> scratch;
+  parts.run(rows, rows / 2, [&](size_t begin, size_t end, int part) {
+    RowScratch& stack = scratch[static_cast<size_t>(part)];
+    std::vector<cd> M(n), lq(rhs);
+    for (size_t r = begin; r < end; ++r) {
+      std::fill(M.begin(), M.end(), cd(0.0));
+      std::fill(lq.begin(), lq.end(), cd(0.0));
+      if (r < n) {
+        const uint32_t host = s.nodes[cut.nodes[r]].rep;
+        assembleRow(s, cut, out.pieces, out.piece_data, data, near, r, k, s.tris[host].centroid, M.data(), lq.data(),
+                    stack);
+      } else {
+        assembleRow(s, cut, out.pieces, out.piece_data, data, near, r, k, s.chief_candidates[r - n], M.data(),
+                    lq.data(), stack);
+      }
+      // 1/2 p(x) - int p dG/dn = - int G q (x on S); 0 - int p dG/dn = - int G q (x inside).
+      for (size_t c = 0; c < n; ++c) A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = -M[c];
+      if (r < n) A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r)) += 0.5;
+      for (size_t q = 0; q < rhs; ++q) b(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(q)) = -lq[q];
     }
-    // 1/2 p(x) - int p dG/dn = - int G q (x on S); 0 - int p dG/dn = - int G q (x inside).
-    for (size_t c = 0; c < n; ++c) A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = -M[c];
-    if (r < n) A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r)) += 0.5;
-    for (size_t q = 0; q < rhs; ++q) b(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(q)) = -lq[q];
-  }
+  });
   auto solve = [](const Eigen::MatrixXcd& matrix, const Eigen::MatrixXcd& rhs_m) -> Eigen::MatrixXcd {
     if (matrix.rows() == matrix.cols()) return solveSquare(matrix, rhs_m);
     return matrix.householderQr().solve(rhs_m);
@@ -1383,6 +1391,8 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
   out.speed_of_sound_m_s = c_air;
   out.offset.push_back(0);
   if (stats) stats->assign(modes, {});
+  // The assembly's helper thread, as the eigen-solve's block stage has (src/modal/two_parts.hpp).
+  TwoParts parts(settings.threads >= 2 && std::thread::hardware_concurrency() >= 2);
 
   // Triangle -> its three vertex indices (degenerate ones were dropped: match them up again).
   std::vector<std::array<uint32_t, 3>> corners;
@@ -1468,7 +1478,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     std::vector<std::vector<cd>> step_coef, step_dcoef;
     while (true) {
       const size_t chief = chiefPointsFor(s, settings, k, elements);
-      const ModeSolve solved = solveSystem(s, data, k, elements, chief, k_ref, near_caches);
+      const ModeSolve solved = solveSystem(s, data, k, elements, chief, k_ref, near_caches, parts);
       ++solves;
       assembly_seconds += solved.assembly_seconds;
       factor_seconds += solved.factor_seconds;
@@ -1576,7 +1586,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
       nodeData(s, data[j]);
     }
     const ModeSolve solved =
-        solveSystem(s, data, 0.0, elements, 0, k_ref, near_caches);  // the three right-hand sides at once
+        solveSystem(s, data, 0.0, elements, 0, k_ref, near_caches, parts);  // the three right-hand sides at once
     for (int j = 0; j < 3; ++j)
       for (size_t c = 0; c < solved.cut.nodes.size(); ++c) {
         const V3 va = s.nodes[solved.cut.nodes[c]].vector_area;

@@ -45,7 +45,7 @@ CommandSpec renderSpec() {
       {"--transfer", "",
        "solve the acoustic transfer of every bank computed (as `strike modes --transfer`): each\n"
        "impact is heard in the listener's direction, and the sound no longer depends on the\n"
-       "eigen-solver's choice of signs; costs 0.4x to 1.3x the eigen-solve per bank (cached)"},
+       "eigen-solver's choice of signs; costs 0.4x-1x the eigen-solve per bank (3x: a chunky bar; cached)"},
       {"--similar", "",
        "exact similarity reuse: solve each shape once at unit size and scale it to every size and\n"
        "material (same Poisson ratio) of the scene and the cache (docs/datasets.md); changes the\n"

@@ -53,6 +53,9 @@ struct TransferSettings {
   uint32_t fixed_elements = 0;
   /// Interior (CHIEF) points once k reaches the interior resonances (false: never; a study).
   bool chief = true;
+  /// 2: the system's rows are assembled in two fixed halves, the second on a helper thread when
+  /// the machine has two cores (as the eigen-solve's block stage). The bits do not depend on it.
+  int threads = 2;
 };
 
 /// The solver's revision, in the bank cache's key of banks with a transfer: raised whenever the

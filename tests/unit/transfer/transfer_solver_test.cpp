@@ -216,6 +216,29 @@ TEST(TransferSolver, SameBitsWhateverCacheSizesEigenReads) {
   EXPECT_EQ(std::memcmp(runs[0].data(), runs[1].data(), runs[0].size() * sizeof(runs[0][0])), 0);
 }
 
+// The system's rows are assembled in two fixed halves, the second on a helper thread when the
+// machine has two cores: the same bits as on one thread (docs/determinism.md), with a square
+// (LU) and a least-squares (CHIEF, QR) system.
+TEST(TransferSolver, SameBitsOnOneThreadAndOnTwo) {
+  const double a = 0.05, c_air = 343.0;
+  ModeBank bank = sphereBank(a, 0.01);
+  addYnmMode(bank, 1, 0, 3.0 / a, c_air);
+  addYnmMode(bank, 2, 1, 6.0 / a, c_air);
+  TransferSettings settings;
+  settings.fixed_elements = 400;
+  std::vector<std::vector<std::complex<float>>> runs;
+  for (const int threads : {1, 2, 2}) {
+    settings.threads = threads;
+    Result<AcousticTransfer> t = solveAcousticTransfer(bank, settings);
+    ASSERT_TRUE(t) << t.error().message;
+    runs.push_back(t->coefficients);
+  }
+  for (size_t i = 1; i < runs.size(); ++i) {
+    ASSERT_EQ(runs[0].size(), runs[i].size());
+    EXPECT_EQ(std::memcmp(runs[0].data(), runs[i].data(), runs[0].size() * sizeof(runs[0][0])), 0) << "run " << i;
+  }
+}
+
 TEST(TransferSolver, IsLinearInTheShapeSoSignsAndDegenerateBasesCancel) {
   const double a = 0.05, c_air = 343.0, k = 3.0 / a;
   ModeBank bank = sphereBank(a, 0.01);

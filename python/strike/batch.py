@@ -350,6 +350,12 @@ def main(argv: Optional[list] = None) -> int:
             import dask
 
             dask.config.set({"distributed.worker.profile.enabled": False})
+            # The workers' environment: the pinned threads, and not Dask's MALLOC_TRIM_THRESHOLD_=65536.
+            # Setting it turns off glibc's adaptive mmap threshold, so every large block is mapped
+            # and unmapped afresh (page faults per render): it cost a worker's simulation 10-20%,
+            # and its renders/s 12% (docs/datasets.md, Throughput). A worker's memory still goes
+            # back to the system when it is free for long, as in `strike render`.
+            dask.config.set({"distributed.nanny.pre-spawn-environ": dict(PINNED_ENVIRONMENT)})
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
             client = Client(cluster)
         try:

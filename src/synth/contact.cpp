@@ -296,34 +296,37 @@ void ContactProjector::projectImpulseInto(const double point[3], const double im
       slot = next_;
       next_ = (next_ + 1) % max_points_;
     }
-    // Interleaved per mode: [m][vertex k][x y z]. Every point of a rolling or sliding contact is
+    // Nine planes of #modes floats, [vertex k][x y z][m], so that the sum below runs over the
+    // modes in contiguous loads and vectorizes. Every point of a rolling or sliding contact is
     // new, so this fill runs once per contact point and step: one plain loop per source, with no
     // test inside (a test of a member inside would be reloaded after every store).
-    float* row = shapes_.data() + slot * nm * 9;
+    float* planes = shapes_.data() + slot * nm * 9;
     for (int k = 0; k < 3; ++k) {
+      float* px = planes + (3 * k) * nm;
+      float* py = px + nm;
+      float* pz = py + nm;
       const float* read = use_rows_ ? rows_.row(v[k]) : nullptr;
       if (use_rows_ && read == nullptr) {
-        for (size_t m = 0; m < nm; ++m) row[m * 9 + 3 * k] = row[m * 9 + 3 * k + 1] = row[m * 9 + 3 * k + 2] = 0.0f;
+        std::fill(px, px + 3 * nm, 0.0f);
       } else if (use_rows_) {
-        for (size_t m = 0; m < nm; ++m)
-          for (int c = 0; c < 3; ++c) row[m * 9 + 3 * k + c] = read[m * 3 + c];
+        for (size_t m = 0; m < nm; ++m) px[m] = read[m * 3], py[m] = read[m * 3 + 1], pz[m] = read[m * 3 + 2];
       } else {
         for (size_t m = 0; m < nm; ++m) {
           const float* phi = bank.shapeAt(m, v[k]);
-          for (int c = 0; c < 3; ++c) row[m * 9 + 3 * k + c] = phi[c];
+          px[m] = phi[0], py[m] = phi[1], pz[m] = phi[2];
         }
       }
     }
     for (int c = 0; c < 3; ++c) points_[3 * slot + c] = point[c], weights_[3 * slot + c] = w[c];
   }
   const double* w = &weights_[3 * slot];
-  const float* row = shapes_.data() + slot * nm * 9;
-  // The same sums in the same order as SurfaceLocator::projectImpulseInto.
+  const float* planes = shapes_.data() + slot * nm * 9;
+  // The same sums in the same order as SurfaceLocator::projectImpulseInto, mode by mode.
   for (size_t m = 0; m < nm; ++m) {
     double s = 0.0;
     for (int k = 0; k < 3; ++k) {
-      const float* phi = row + m * 9 + 3 * k;
-      s += w[k] * (phi[0] * impulse[0] + phi[1] * impulse[1] + phi[2] * impulse[2]);
+      const float* p = planes + (3 * k) * nm + m;
+      s += w[k] * (p[0] * impulse[0] + p[nm] * impulse[1] + p[2 * nm] * impulse[2]);
     }
     out[m] = s;
   }

@@ -280,7 +280,7 @@ class ContactProjector {
   size_t next_ = 0;              ///< slot to overwrite when full (round robin)
   std::vector<double> points_;   ///< 3 per remembered point
   std::vector<double> weights_;  ///< 3 barycentric weights per point
-  std::vector<float> shapes_;    ///< per point: #modes x [vertex 0..2][xyz]
+  std::vector<float> shapes_;    ///< per point: [vertex 0..2][xyz] planes of #modes
 };
 /// Same, at surface vertex v.
 std::vector<double> projectImpulseAtVertex(const ModeBank& bank, size_t vertex, const double impulse[3]);

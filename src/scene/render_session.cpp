@@ -82,6 +82,42 @@ struct RenderSession::Impl {
   std::vector<Entry> entries;  // few (a dataset's shapes): a linear scan costs nothing next to a hull
   uint64_t bytes = 0, clock = 0, hits = 0, misses = 0, evicted = 0;
 
+  /// The entry of this hash that `same` accepts, marked as just used; nullptr if none. The caller
+  /// holds the mutex; the pointer lasts until the entries change.
+  template <class Same>
+  Entry* find(uint64_t hash, const Same& same) {
+    for (Entry& e : entries)
+      if (e.hash == hash && same(e)) {
+        e.last_used = ++clock;
+        return &e;
+      }
+    return nullptr;
+  }
+
+  /// `get` of the kept entry that `same` accepts, or of the entry `build` makes now (outside the
+  /// lock: a hull or a locator takes milliseconds, and other threads' lookups need not wait).
+  /// Two threads that miss the same key together both build; the second to finish finds the
+  /// first's entry on its second look, returns that one and drops its own, so the session holds
+  /// one entry per key and every caller shares it. Both lookups count as misses: each built.
+  template <class Same, class Build, class Get>
+  auto findOrBuild(uint64_t hash, const Same& same, const Build& build, const Get& get) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (Entry* kept = find(hash, same)) {
+        ++hits;
+        return get(*kept);
+      }
+      ++misses;
+    }
+    Entry entry = build();
+    entry.hash = hash;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (Entry* kept = find(hash, same)) return get(*kept);
+    auto made = get(entry);
+    add(std::move(entry));
+    return made;
+  }
+
   /// Keeps `entry`, then drops the least recently used entries until the rest fit (the new one
   /// stays even alone over the cap: the render holds it anyway).
   void add(Entry entry) {
@@ -103,64 +139,42 @@ RenderSession::~RenderSession() = default;
 
 RenderSession::BankSurface RenderSession::bankSurface(const BankFile& file) {
   const ModeBank& header = file.bank();
-  const uint64_t key = file.contentKey();
-  auto sameBank = [&](const ModeBank& kept) {
+  auto same = [&](const Impl::Entry& e) {
     // The content key decides; the arrays the locator and the voice read most are compared too.
-    return kept.surface_positions == header.surface_positions && kept.surface_triangles == header.surface_triangles &&
-           kept.eigenvalues == header.eigenvalues;
+    return e.surface.bank && e.surface.bank->surface_positions == header.surface_positions &&
+           e.surface.bank->surface_triangles == header.surface_triangles &&
+           e.surface.bank->eigenvalues == header.eigenvalues;
   };
-  {
-    std::lock_guard<std::mutex> lock(impl_->mutex);
-    for (Impl::Entry& e : impl_->entries)
-      if (e.surface.bank && e.hash == key && sameBank(*e.surface.bank)) {
-        e.last_used = ++impl_->clock;
-        ++impl_->hits;
-        return e.surface;
-      }
-    ++impl_->misses;
-  }
-  Impl::Entry entry;
-  entry.hash = key;
-  auto bank = std::make_shared<const ModeBank>(header);
-  entry.surface.locator = std::make_shared<const SurfaceLocator>(*bank);
-  entry.surface.bank = std::move(bank);
-  entry.bytes = headerBytes(*entry.surface.bank) + locatorBytes(*entry.surface.bank);
-  BankSurface made = entry.surface;
-  std::lock_guard<std::mutex> lock(impl_->mutex);
-  impl_->add(std::move(entry));
-  return made;
+  auto build = [&] {
+    Impl::Entry entry;
+    auto bank = std::make_shared<const ModeBank>(header);
+    entry.surface.locator = std::make_shared<const SurfaceLocator>(*bank);
+    entry.surface.bank = std::move(bank);
+    entry.bytes = headerBytes(*entry.surface.bank) + locatorBytes(*entry.surface.bank);
+    return entry;
+  };
+  return impl_->findOrBuild(file.contentKey(), same, build, [](const Impl::Entry& e) { return e.surface; });
 }
 
 std::shared_ptr<const SimHull> RenderSession::hull(const std::vector<double>& points_xyz, double shrink_m,
                                                    double shrink_clamp, const std::function<SimHull()>& compute) {
   const uint64_t shrink_bits = bitsOf(shrink_m), clamp_bits = bitsOf(shrink_clamp);
-  const uint64_t key = hashWords(points_xyz, shrink_bits * 31 + clamp_bits);
   auto same = [&](const Impl::Entry& e) {
-    return e.hull && e.hash == key && e.shrink_bits == shrink_bits && e.clamp_bits == clamp_bits &&
+    return e.hull && e.shrink_bits == shrink_bits && e.clamp_bits == clamp_bits &&
            e.points.size() == points_xyz.size() &&
            std::memcmp(e.points.data(), points_xyz.data(), points_xyz.size() * sizeof(double)) == 0;
   };
-  {
-    std::lock_guard<std::mutex> lock(impl_->mutex);
-    for (Impl::Entry& e : impl_->entries)
-      if (same(e)) {
-        e.last_used = ++impl_->clock;
-        ++impl_->hits;
-        return e.hull;
-      }
-    ++impl_->misses;
-  }
-  Impl::Entry entry;
-  entry.hash = key;
-  entry.points = points_xyz;
-  entry.shrink_bits = shrink_bits;
-  entry.clamp_bits = clamp_bits;
-  entry.hull = std::make_shared<const SimHull>(compute());
-  entry.bytes = sizeof(Impl::Entry) + bytesOf(entry.points) + sizeof(SimHull) + bytesOf(entry.hull->vertices_xyz);
-  std::shared_ptr<const SimHull> made = entry.hull;
-  std::lock_guard<std::mutex> lock(impl_->mutex);
-  impl_->add(std::move(entry));
-  return made;
+  auto build = [&] {
+    Impl::Entry entry;
+    entry.points = points_xyz;
+    entry.shrink_bits = shrink_bits;
+    entry.clamp_bits = clamp_bits;
+    entry.hull = std::make_shared<const SimHull>(compute());
+    entry.bytes = sizeof(Impl::Entry) + bytesOf(entry.points) + sizeof(SimHull) + bytesOf(entry.hull->vertices_xyz);
+    return entry;
+  };
+  return impl_->findOrBuild(hashWords(points_xyz, shrink_bits * 31 + clamp_bits), same, build,
+                            [](const Impl::Entry& e) { return e.hull; });
 }
 
 SimHullMemo RenderSession::hullMemo() {

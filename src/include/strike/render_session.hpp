@@ -50,6 +50,9 @@ class RenderSession {
     size_t entries = 0;
     uint64_t bytes = 0;  ///< estimated memory of the entries
     uint64_t max_bytes = 0;
+    /// hits: lookups that found their entry; misses: lookups that built it (threads that miss the
+    /// same key together each build and count a miss, and all get the entry of the first to
+    /// finish: one entry per key); evicted: entries dropped to stay under max_bytes.
     uint64_t hits = 0, misses = 0, evicted = 0;
   };
   Stats stats() const;

@@ -69,8 +69,9 @@ CommandSpec modesSpec() {
       {"--transfer", "",
        "also solve each mode's acoustic transfer (its far field in every direction, with the body\n"
        "as an obstacle: boundary elements; docs/listener.md): renders then hear each impact in the\n"
-       "listener's direction, and the same object solved twice sounds the same. Costs 0.4x to 1x\n"
-       "the eigen-solve on thin-walled bodies, 2-3x on a chunky bar (docs/acoustic-transfer.md)"},
+       "listener's direction, and the same object solved twice sounds the same. Costs 0.8x-1.8x\n"
+       "the eigen-solve on the order-2 examples (bowl, coin, glass, bar), 5x-20x on plates and\n"
+       "planks of linear tets, whose eigen-solve is cheap (docs/acoustic-transfer.md)"},
       {"--similar", "",
        "solve the shape at unit size with a reference material and scale the bank to the object,\n"
        "as `strike render --similar` does: the bank that render uses (frequencies equal to a\n"

@@ -45,7 +45,8 @@ CommandSpec renderSpec() {
       {"--transfer", "",
        "solve the acoustic transfer of every bank computed (as `strike modes --transfer`): each\n"
        "impact is heard in the listener's direction, and the sound no longer depends on the\n"
-       "eigen-solver's choice of signs; costs 0.4x-1x the eigen-solve per bank (3x: a chunky bar; cached)"},
+       "eigen-solver's choice of signs. Costs 0.8x-1.8x the eigen-solve per bank on the order-2\n"
+       "examples, 5x-20x on plates and planks of linear tets, whose eigen-solve is cheap (cached)"},
       {"--similar", "",
        "exact similarity reuse: solve each shape once at unit size and scale it to every size and\n"
        "material (same Poisson ratio) of the scene and the cache (docs/datasets.md); changes the\n"

@@ -1020,6 +1020,105 @@ void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
   if (n % 2 == 1) x[n / 2] = 0.0;
 }
 
+/// The far field's points, structure of arrays (projectFarField).
+struct FarPoints {
+  size_t count = 0;
+  std::vector<double> y0, y1, y2;                    // position relative to the centre
+  std::vector<double> cxx, cxy, cxz, cyy, cyz, czz;  // second moment C
+  std::vector<double> vx, vy, vz;                    // vector area
+  std::vector<double> Q, Dx, Dy, Dz;                 // per solution r and point j: [r * count + j]
+  std::vector<size_t> segment_begin;                 // runs of one cluster: their begins, then count
+  std::vector<int32_t> segment_col;                  // each run's cluster
+};
+
+/// One direction's far fields of one solution: F(d), F(-d), and the coarse difference's.
+struct FarFields {
+  cd F, G, Fd, Gd;
+};
+
+/// A thread's work arrays for farFieldsAt.
+struct FarScratch {
+  std::vector<double> phase, spread, sin_e, cos_e, dD, ex;
+  std::vector<cd> U;  // per cluster run: d.U_c
+  void resize(size_t points, size_t segments) {
+    for (auto* v : {&phase, &spread, &sin_e, &cos_e, &dD, &ex}) v->resize(points);
+    U.resize(segments);
+  }
+};
+
+/// The far fields of every solution at the direction d (unit) and its opposite -d, into
+/// out[r] (formulas in projectFarField). Reads only its arguments and writes only `w` and `out`.
+void farFieldsAt(const FarPoints& pts, double k, const double* d, const std::vector<Eigen::VectorXcd>& p,
+                 const std::vector<Eigen::VectorXcd>& p_diff, FarScratch& w, FarFields* out) {
+  const size_t np = pts.count, segments = pts.segment_col.size(), rhs = p.size();
+  const double d0 = d[0], d1 = d[1], d2 = d[2];
+  const double kk = k * k;
+  const cd ik(0.0, k);
+  double* phase = w.phase.data();
+  double* spread = w.spread.data();
+  double* sin_e = w.sin_e.data();
+  double* cos_e = w.cos_e.data();
+  double* ex = w.ex.data();
+  // The scratch's arrays and the points' never overlap (STRIKE_IVDEP: vectorized without the
+  // run-time overlap tests, too many for the compiler to make).
+  STRIKE_IVDEP
+  for (size_t j = 0; j < np; ++j) {
+    phase[j] = -k * (d0 * pts.y0[j] + d1 * pts.y1[j] + d2 * pts.y2[j]);
+    const double along = pts.cxx[j] * d0 * d0 + pts.cyy[j] * d1 * d1 + pts.czz[j] * d2 * d2 +
+                         2.0 * (pts.cxy[j] * d0 * d1 + pts.cxz[j] * d0 * d2 + pts.cyz[j] * d1 * d2);
+    spread[j] = 1.0 - 0.5 * kk * along;
+  }
+  sinCosArray(phase, sin_e, cos_e, np);
+  STRIKE_IVDEP
+  for (size_t j = 0; j < np; ++j) {
+    cos_e[j] *= spread[j];
+    sin_e[j] *= spread[j];
+    ex[j] = d0 * pts.vx[j] + d1 * pts.vy[j] + d2 * pts.vz[j];  // d.va
+  }
+  // Per cluster: d.U_c = sum E_j d.va_j (one complex number: d is known here).
+  for (size_t c = 0; c < segments; ++c) {
+    double re = 0.0, im = 0.0;
+    for (size_t j = pts.segment_begin[c]; j < pts.segment_begin[c + 1]; ++j) {
+      re += cos_e[j] * ex[j];
+      im += sin_e[j] * ex[j];
+    }
+    w.U[c] = cd(re, im);
+  }
+  for (size_t r = 0; r < rhs; ++r) {
+    const double* Dxr = &pts.Dx[r * np];
+    const double* Dyr = &pts.Dy[r * np];
+    const double* Dzr = &pts.Dz[r * np];
+    double* dD = w.dD.data();
+    STRIKE_IVDEP
+    for (size_t j = 0; j < np; ++j) dD[j] = d0 * Dxr[j] + d1 * Dyr[j] + d2 * Dzr[j];
+    double q_re = 0.0, q_im = 0.0, d_re = 0.0, d_im = 0.0;
+    dotTwo(cos_e, sin_e, &pts.Q[r * np], np, q_re, q_im);
+    dotTwo(cos_e, sin_e, dD, np, d_re, d_im);
+    const cd SQ(q_re, q_im), SD(d_re, d_im);
+    // sum_c p_c d.U_c and sum_c p_c conj(d.U_c), and the same with p_diff.
+    double t_re = 0, t_im = 0, u_re = 0, u_im = 0, td_re = 0, td_im = 0, ud_re = 0, ud_im = 0;
+    const cd* pr = p[r].data();
+    const cd* dr = p_diff[r].data();
+    for (size_t c = 0; c < segments; ++c) {
+      const double a_re = pr[pts.segment_col[c]].real(), a_im = pr[pts.segment_col[c]].imag();
+      const double b_re = dr[pts.segment_col[c]].real(), b_im = dr[pts.segment_col[c]].imag();
+      const double x_re = w.U[c].real(), x_im = w.U[c].imag();
+      t_re += a_re * x_re - a_im * x_im;
+      t_im += a_re * x_im + a_im * x_re;
+      u_re += a_re * x_re + a_im * x_im;  // a conj(x)
+      u_im += a_im * x_re - a_re * x_im;
+      td_re += b_re * x_re - b_im * x_im;
+      td_im += b_re * x_im + b_im * x_re;
+      ud_re += b_re * x_re + b_im * x_im;
+      ud_im += b_im * x_re - b_re * x_im;
+    }
+    out[r].F = -SQ + ik * SD - ik * cd(t_re, t_im);
+    out[r].G = -std::conj(SQ) - ik * std::conj(SD) + ik * cd(u_re, u_im);
+    out[r].Fd = -ik * cd(td_re, td_im);
+    out[r].Gd = ik * cd(ud_re, ud_im);
+  }
+}
+
 /// Spherical-harmonic coefficients of the far fields of several solutions at one wavenumber.
 /// F(d) = (1/4pi) int (p dE/dn - q E) dS with E = e^{-ik d.(y - c)} (c: the centre), summed
 /// over the pieces with their moments (E over a piece ~ E(centroid) (1 - k^2 d.C.d / 2), and
@@ -1027,10 +1126,11 @@ void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
 /// cos theta, uniform in phi) that integrates Y_nm Y_n'm' exactly up to n_cap + 1; then
 /// c_nm = int F Y_nm dOmega. A direction d and its opposite share their exponentials
 /// (E(-d) = conj E(d)). p[r], p_diff[r]: per cluster; coef[r], dcoef[r]: (n_cap + 1)^2 each.
+/// The sums at the directions are done in two fixed halves of them (`parts`).
 void projectFarField(const Surface& s, const Pieces& pc, const PieceData& pd, const std::vector<NodeData>& data,
                      double k, int n_cap, const std::vector<Eigen::VectorXcd>& p,
                      const std::vector<Eigen::VectorXcd>& p_diff, std::vector<std::vector<cd>>& coef,
-                     std::vector<std::vector<cd>>& dcoef) {
+                     std::vector<std::vector<cd>>& dcoef, TwoParts& parts) {
   const size_t rhs = data.size();
   const size_t count = static_cast<size_t>((n_cap + 1) * (n_cap + 1));
   coef.assign(rhs, std::vector<cd>(count, 0.0));
@@ -1071,57 +1171,54 @@ void projectFarField(const Surface& s, const Pieces& pc, const PieceData& pd, co
   // and the coarse difference likewise with p_diff alone: the pressure's term is summed per
   // cluster (the points of a cluster are consecutive), shared by every solution.
   const size_t np = points.size();
-  std::vector<double> py(np), pyy(np), pz(np), cxx(np), cxy(np), cxz(np), cyy(np), cyz(np), czz(np);
-  std::vector<double> vx(np), vy(np), vz(np);
-  std::vector<size_t> segment_begin;  // runs of one cluster
-  std::vector<int32_t> segment_col;
+  FarPoints fp;
+  fp.count = np;
+  for (auto* v : {&fp.y0, &fp.y1, &fp.y2, &fp.cxx, &fp.cxy, &fp.cxz, &fp.cyy, &fp.cyz, &fp.czz, &fp.vx, &fp.vy, &fp.vz})
+    v->resize(np);
   for (size_t j = 0; j < np; ++j) {
     const Point& pt = points[j];
-    py[j] = pt.y[0];
-    pyy[j] = pt.y[1];
-    pz[j] = pt.y[2];
-    cxx[j] = pt.cxx;
-    cxy[j] = pt.cxy;
-    cxz[j] = pt.cxz;
-    cyy[j] = pt.cyy;
-    cyz[j] = pt.cyz;
-    czz[j] = pt.czz;
-    vx[j] = pt.va[0];
-    vy[j] = pt.va[1];
-    vz[j] = pt.va[2];
+    fp.y0[j] = pt.y[0];
+    fp.y1[j] = pt.y[1];
+    fp.y2[j] = pt.y[2];
+    fp.cxx[j] = pt.cxx;
+    fp.cxy[j] = pt.cxy;
+    fp.cxz[j] = pt.cxz;
+    fp.cyy[j] = pt.cyy;
+    fp.cyz[j] = pt.cyz;
+    fp.czz[j] = pt.czz;
+    fp.vx[j] = pt.va[0];
+    fp.vy[j] = pt.va[1];
+    fp.vz[j] = pt.va[2];
     if (j == 0 || pt.col != points[j - 1].col) {
-      segment_begin.push_back(j);
-      segment_col.push_back(pt.col);
+      fp.segment_begin.push_back(j);
+      fp.segment_col.push_back(pt.col);
     }
   }
-  segment_begin.push_back(np);
-  const size_t segments = segment_col.size();
-  std::vector<double> Q(rhs * np), Dx(rhs * np), Dy(rhs * np), Dz(rhs * np);
+  fp.segment_begin.push_back(np);
+  for (auto* v : {&fp.Q, &fp.Dx, &fp.Dy, &fp.Dz}) v->resize(rhs * np);
   for (size_t r = 0; r < rhs; ++r)
     for (size_t j = 0; j < np; ++j) {
       const Point& pt = points[j];
       const size_t at = r * np + j;
       if (pt.piece >= 0) {
         const size_t from = r * pc.size() + static_cast<size_t>(pt.piece);
-        Q[at] = pd.Q[from];
-        Dx[at] = pd.Dx[from];
-        Dy[at] = pd.Dy[from];
-        Dz[at] = pd.Dz[from];
+        fp.Q[at] = pd.Q[from];
+        fp.Dx[at] = pd.Dx[from];
+        fp.Dy[at] = pd.Dy[from];
+        fp.Dz[at] = pd.Dz[from];
       } else {
-        Q[at] = data[r].q[pt.tri] * s.tris[pt.tri].area * pt.weight;
-        Dx[at] = Dy[at] = Dz[at] = 0.0;
+        fp.Q[at] = data[r].q[pt.tri] * s.tris[pt.tri].area * pt.weight;
+        fp.Dx[at] = fp.Dy[at] = fp.Dz[at] = 0.0;
       }
     }
-  std::vector<double> phase(np), spread(np), sin_e(np), cos_e(np), dD(np), ex(np), ey(np), ez(np);
-  std::vector<cd> U(3 * segments);  // per cluster run: U_c's three components
-  std::vector<cd> F(rhs), G(rhs), Fd(rhs), Gd(rhs);
-
   const int rings = n_cap + 2, around = 2 * n_cap + 4;
   std::vector<double> cos_theta, ring_weight;
   gaussLegendre(rings, cos_theta, ring_weight);
-  std::vector<double> Y(count);
   const double dphi = 2.0 * M_PI / around;
-  const cd ik(0.0, k);
+  // The directions d of the rule's upper half (each with its opposite -d), in the order their
+  // contributions are summed below.
+  std::vector<int> direction_ring;
+  std::vector<double> direction;  // d0, d1, d2 of each
   for (int i = 0; i < (rings + 1) / 2; ++i) {
     const double ct = cos_theta[i], st = std::sqrt(std::max(0.0, 1.0 - ct * ct));
     const bool middle = 2 * i + 1 == rings;  // its opposite directions are on the ring itself
@@ -1129,73 +1226,40 @@ void projectFarField(const Surface& s, const Pieces& pc, const PieceData& pd, co
     for (int l = 0; l < phis; ++l) {
       const double phi = dphi * l;
       const cd around_z = unitPhase(phi);
-      const double d0 = st * around_z.real(), d1 = st * around_z.imag(), d2 = ct;
-      const double kk = k * k;
-      for (size_t j = 0; j < np; ++j) {
-        phase[j] = -k * (d0 * py[j] + d1 * pyy[j] + d2 * pz[j]);
-        const double along = cxx[j] * d0 * d0 + cyy[j] * d1 * d1 + czz[j] * d2 * d2 +
-                             2.0 * (cxy[j] * d0 * d1 + cxz[j] * d0 * d2 + cyz[j] * d1 * d2);
-        spread[j] = 1.0 - 0.5 * kk * along;
-      }
-      sinCosArray(phase.data(), sin_e.data(), cos_e.data(), np);
-      for (size_t j = 0; j < np; ++j) {
-        cos_e[j] *= spread[j];
-        sin_e[j] *= spread[j];
-        ex[j] = d0 * vx[j] + d1 * vy[j] + d2 * vz[j];  // d.va
-      }
-      // Per cluster: d.U_c = sum E_j d.va_j (one complex number: d is known here).
-      for (size_t c = 0; c < segments; ++c) {
-        double re = 0.0, im = 0.0;
-        for (size_t j = segment_begin[c]; j < segment_begin[c + 1]; ++j) {
-          re += cos_e[j] * ex[j];
-          im += sin_e[j] * ex[j];
-        }
-        U[c] = cd(re, im);
-      }
+      direction_ring.push_back(i);
+      direction.insert(direction.end(), {st * around_z.real(), st * around_z.imag(), ct});
+    }
+  }
+  const size_t directions = direction_ring.size();
+  // Per direction and solution: F(d), F(-d), and the coarse difference's two (`FarFields`).
+  // Each direction's values are sums over the points for that direction alone, so the two
+  // halves of the directions (always the same halves) are computed at once, each with its own
+  // scratch, into entries the other never touches; the projection on the harmonics then adds
+  // them up in the directions' order, on this thread. The same bits with or without the helper
+  // thread, and the same as revision 3's single loop (every operation and its order unchanged).
+  std::vector<FarFields> fields(directions * rhs);
+  std::array<FarScratch, 2> scratch;
+  for (FarScratch& w : scratch) w.resize(np, fp.segment_col.size());
+  parts.run(directions, directions / 2, [&](size_t begin, size_t end, int part) {
+    FarScratch& w = scratch[static_cast<size_t>(part)];
+    for (size_t t = begin; t < end; ++t) farFieldsAt(fp, k, &direction[3 * t], p, p_diff, w, &fields[t * rhs]);
+  });
+
+  std::vector<double> Y(count);
+  for (size_t t = 0; t < directions; ++t) {
+    const double d0 = direction[3 * t], d1 = direction[3 * t + 1], d2 = direction[3 * t + 2];
+    const double weight = ring_weight[static_cast<size_t>(direction_ring[t])] * dphi / kFourPi;
+    for (int side = 0; side < 2; ++side) {
+      const double dd[3] = {side ? -d0 : d0, side ? -d1 : d1, side ? -d2 : d2};
+      realSphericalHarmonics(static_cast<uint32_t>(n_cap), dd, Y.data());
       for (size_t r = 0; r < rhs; ++r) {
-        const double* Qr = &Q[r * np];
-        const double* Dxr = &Dx[r * np];
-        const double* Dyr = &Dy[r * np];
-        const double* Dzr = &Dz[r * np];
-        for (size_t j = 0; j < np; ++j) dD[j] = d0 * Dxr[j] + d1 * Dyr[j] + d2 * Dzr[j];
-        double q_re = 0.0, q_im = 0.0, d_re = 0.0, d_im = 0.0;
-        dotTwo(cos_e.data(), sin_e.data(), Qr, np, q_re, q_im);
-        dotTwo(cos_e.data(), sin_e.data(), dD.data(), np, d_re, d_im);
-        const cd SQ(q_re, q_im), SD(d_re, d_im);
-        // sum_c p_c d.U_c and sum_c p_c conj(d.U_c), and the same with p_diff.
-        double t_re = 0, t_im = 0, u_re = 0, u_im = 0, td_re = 0, td_im = 0, ud_re = 0, ud_im = 0;
-        const cd* pr = p[r].data();
-        const cd* dr = p_diff[r].data();
-        for (size_t c = 0; c < segments; ++c) {
-          const double a_re = pr[segment_col[c]].real(), a_im = pr[segment_col[c]].imag();
-          const double b_re = dr[segment_col[c]].real(), b_im = dr[segment_col[c]].imag();
-          const double x_re = U[c].real(), x_im = U[c].imag();
-          t_re += a_re * x_re - a_im * x_im;
-          t_im += a_re * x_im + a_im * x_re;
-          u_re += a_re * x_re + a_im * x_im;  // a conj(x)
-          u_im += a_im * x_re - a_re * x_im;
-          td_re += b_re * x_re - b_im * x_im;
-          td_im += b_re * x_im + b_im * x_re;
-          ud_re += b_re * x_re + b_im * x_im;
-          ud_im += b_im * x_re - b_re * x_im;
-        }
-        F[r] = -SQ + ik * SD - ik * cd(t_re, t_im);
-        G[r] = -std::conj(SQ) - ik * std::conj(SD) + ik * cd(u_re, u_im);
-        Fd[r] = -ik * cd(td_re, td_im);
-        Gd[r] = ik * cd(ud_re, ud_im);
-      }
-      const double weight = ring_weight[i] * dphi / kFourPi;
-      for (int side = 0; side < 2; ++side) {
-        const double dd[3] = {side ? -d0 : d0, side ? -d1 : d1, side ? -d2 : d2};
-        realSphericalHarmonics(static_cast<uint32_t>(n_cap), dd, Y.data());
-        for (size_t r = 0; r < rhs; ++r) {
-          const cd f = (side ? G[r] : F[r]) * weight, fd = (side ? Gd[r] : Fd[r]) * weight;
-          cd* co = coef[r].data();
-          cd* dc = dcoef[r].data();
-          for (size_t m = 0; m < count; ++m) {
-            co[m] += f * Y[m];
-            dc[m] += fd * Y[m];
-          }
+        const FarFields& v = fields[t * rhs + r];
+        const cd f = (side ? v.G : v.F) * weight, fd = (side ? v.Gd : v.Fd) * weight;
+        cd* co = coef[r].data();
+        cd* dc = dcoef[r].data();
+        for (size_t m = 0; m < count; ++m) {
+          co[m] += f * Y[m];
+          dc[m] += fd * Y[m];
         }
       }
     }
@@ -1485,11 +1549,11 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
       const auto far_start = std::chrono::steady_clock::now();
       int projected = n_try;
       projectFarField(s, solved.pieces, solved.piece_data, data, k, projected, solved.p, solved.p_diff, step_coef,
-                      step_dcoef);
+                      step_dcoef, parts);
       if (n_try < n_cap && !seriesConverged(step_coef, done, n_try)) {
         projected = n_cap;
         projectFarField(s, solved.pieces, solved.piece_data, data, k, projected, solved.p, solved.p_diff, step_coef,
-                        step_dcoef);
+                        step_dcoef, parts);
       }
       far_field_seconds += secondsSince(far_start);
       const bool last_step = elements >= cap;

@@ -23,7 +23,8 @@
 // the near triangles' quadrature is built once per cut (rules at the bank's largest k) and
 // only its exponentials are evaluated per mode; modes of one frequency share the system and
 // its LU (single precision, refined in double); the far field is summed at the directions of
-// a Gauss-Legendre x uniform rule and projected on the harmonics.
+// a Gauss-Legendre x uniform rule and projected on the harmonics. The rows and the directions
+// are each done in two fixed halves, the second on a helper thread (same bits on one thread).
 #pragma once
 
 #include <cstdint>
@@ -53,8 +54,9 @@ struct TransferSettings {
   uint32_t fixed_elements = 0;
   /// Interior (CHIEF) points once k reaches the interior resonances (false: never; a study).
   bool chief = true;
-  /// 2: the system's rows are assembled in two fixed halves, the second on a helper thread when
-  /// the machine has two cores (as the eigen-solve's block stage). The bits do not depend on it.
+  /// 2: the system's rows are assembled, and the far field summed at its directions, in two
+  /// fixed halves, the second on a helper thread when the machine has two cores (as the
+  /// eigen-solve's block stage). The bits do not depend on it.
   int threads = 2;
 };
 

@@ -216,26 +216,43 @@ TEST(TransferSolver, SameBitsWhateverCacheSizesEigenReads) {
   EXPECT_EQ(std::memcmp(runs[0].data(), runs[1].data(), runs[0].size() * sizeof(runs[0][0])), 0);
 }
 
-// The system's rows are assembled in two fixed halves, the second on a helper thread when the
-// machine has two cores: the same bits as on one thread (docs/determinism.md), with a square
-// (LU) and a least-squares (CHIEF, QR) system.
+// The system's rows, and the far field's directions, are computed in two fixed halves, the
+// second on a helper thread when the machine has two cores: the same bits as on one thread
+// (docs/determinism.md), with a square (LU) and a least-squares (CHIEF, QR) system. The far
+// field's coefficients, its error estimate (the coarse solve's far field) and the kept orders
+// all come from the split sums over directions.
 TEST(TransferSolver, SameBitsOnOneThreadAndOnTwo) {
   const double a = 0.05, c_air = 343.0;
   ModeBank bank = sphereBank(a, 0.01);
   addYnmMode(bank, 1, 0, 3.0 / a, c_air);
   addYnmMode(bank, 2, 1, 6.0 / a, c_air);
+  addYnmMode(bank, 3, -2, 9.0 / a, c_air);  // projected to order 19: 441 directions (and their opposites)
   TransferSettings settings;
   settings.fixed_elements = 400;
-  std::vector<std::vector<std::complex<float>>> runs;
+  std::vector<AcousticTransfer> runs;
   for (const int threads : {1, 2, 2}) {
     settings.threads = threads;
     Result<AcousticTransfer> t = solveAcousticTransfer(bank, settings);
     ASSERT_TRUE(t) << t.error().message;
-    runs.push_back(t->coefficients);
+    runs.push_back(*t);
   }
   for (size_t i = 1; i < runs.size(); ++i) {
-    ASSERT_EQ(runs[0].size(), runs[i].size());
-    EXPECT_EQ(std::memcmp(runs[0].data(), runs[i].data(), runs[0].size() * sizeof(runs[0][0])), 0) << "run " << i;
+    const AcousticTransfer &one = runs[0], &two = runs[i];
+    ASSERT_EQ(one.coefficients.size(), two.coefficients.size());
+    EXPECT_EQ(std::memcmp(one.coefficients.data(), two.coefficients.data(),
+                          one.coefficients.size() * sizeof(one.coefficients[0])),
+              0)
+        << "run " << i;
+    EXPECT_EQ(one.order, two.order) << "run " << i;
+    ASSERT_EQ(one.relative_error.size(), two.relative_error.size());
+    EXPECT_EQ(std::memcmp(one.relative_error.data(), two.relative_error.data(),
+                          one.relative_error.size() * sizeof(one.relative_error[0])),
+              0)
+        << "run " << i;
+    EXPECT_EQ(std::memcmp(one.translation_dipole_m3.data(), two.translation_dipole_m3.data(),
+                          sizeof(one.translation_dipole_m3)),
+              0)
+        << "run " << i;
   }
 }
 

@@ -342,6 +342,8 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   info.m_angularSleepingThreshold = 0.05;
   state->rigid = std::make_unique<btRigidBody>(info);
   state->rigid->setUserIndex(int(index));
+  state->rigid->setUserPointer(state.get());
+  state->breaking_threshold_m = state->shape->getContactBreakingThreshold(gContactBreakingThreshold);
   if (!desc.is_static) {
     // Bullet's integrator (symplectic Euler: v += g dt, then x += v dt) moves a body exactly along
     // the parabola of free fall when the stored velocity is the one half a step earlier; started

@@ -86,27 +86,27 @@ bool StrikeDispatcher::apartWithoutPoints(const btBroadphasePair& pair) {
   // query is skipped. A pair that holds a point is always left to Bullet.
   const auto* a = static_cast<const btCollisionObject*>(pair.m_pProxy0->m_clientObject);
   const auto* b = static_cast<const btCollisionObject*>(pair.m_pProxy1->m_clientObject);
-  if (pair.m_algorithm) {
-    manifolds_.resize(0);
-    pair.m_algorithm->getAllContactManifolds(manifolds_);
-    for (int m = 0; m < manifolds_.size(); ++m)
-      if (manifolds_[m]->getNumContacts() > 0) return false;
-  }
-  const btCollisionShape* shape_a = a->getCollisionShape();
-  const btCollisionShape* shape_b = b->getCollisionShape();
-  // As btCollisionDispatcher::getNewManifold.
-  const double threshold_m = (getDispatcherFlags() & CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD)
-                                 ? std::min(shape_a->getContactBreakingThreshold(gContactBreakingThreshold),
-                                            shape_b->getContactBreakingThreshold(gContactBreakingThreshold))
-                                 : gContactBreakingThreshold;
+  // The pair's threshold as btCollisionDispatcher::getNewManifold takes it: the smaller of the
+  // shapes' (kept in BodyState; the ground plane's is huge, so the other body's).
+  const auto* state_a = static_cast<const BodyState*>(a->getUserPointer());
+  const auto* state_b = static_cast<const BodyState*>(b->getUserPointer());
+  if (!state_a && !state_b) return false;
+  const double threshold_m = (getDispatcherFlags() & CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD) == 0
+                                 ? gContactBreakingThreshold
+                             : !state_a ? state_b->breaking_threshold_m
+                             : !state_b ? state_a->breaking_threshold_m
+                                        : std::min(state_a->breaking_threshold_m, state_b->breaking_threshold_m);
   btVector3 min_a, max_a, min_b, max_b;
-  shape_a->getAabb(a->getWorldTransform(), min_a, max_a);
-  shape_b->getAabb(b->getWorldTransform(), min_b, max_b);
-  for (int k = 0; k < 3; ++k) {
-    const double gap_m = std::max(min_b[k] - max_a[k], min_a[k] - max_b[k]);
-    if (gap_m > 2.0 * threshold_m) return true;
-  }
-  return false;
+  a->getCollisionShape()->getAabb(a->getWorldTransform(), min_a, max_a);
+  b->getCollisionShape()->getAabb(b->getWorldTransform(), min_b, max_b);
+  bool apart = false;
+  for (int k = 0; k < 3; ++k) apart = apart || std::max(min_b[k] - max_a[k], min_a[k] - max_b[k]) > 2.0 * threshold_m;
+  if (!apart || !pair.m_algorithm) return apart;
+  manifolds_.resize(0);
+  pair.m_algorithm->getAllContactManifolds(manifolds_);
+  for (int m = 0; m < manifolds_.size(); ++m)
+    if (manifolds_[m]->getNumContacts() > 0) return false;
+  return true;
 }
 
 Status Simulation::build(const std::vector<btQuaternion>& orientations) {

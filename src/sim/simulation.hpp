@@ -102,6 +102,9 @@ struct BodyState {
   btTransform still_anchor = btTransform::getIdentity();
   uint64_t still_since_step = kNotStill;
   double sleep_start_s = NAN;  // when it fell asleep; NaN while awake
+  // Bullet's contact breaking threshold of its shape (btCollisionShape::getContactBreakingThreshold),
+  // for StrikeDispatcher; the rigid body's user pointer is this state.
+  double breaking_threshold_m = 0.0;
 };
 
 /// Bullet's dispatcher, whose narrow phase skips pairs that hold no contact point and are too far

@@ -74,7 +74,32 @@ btVector3 hullVertex(const SimHull& hull, size_t v) {
   return btVector3(hull.vertices_xyz[3 * v], hull.vertices_xyz[3 * v + 1], hull.vertices_xyz[3 * v + 2]);
 }
 
+/// True when the hull's points are the 8 corners of a box centred at the origin with edges along
+/// the axes, to within tolerance_m; half_m receives its half extents.
+bool boxHalfExtents(const SimHull& hull, double tolerance_m, btVector3& half_m) {
+  if (hull.vertices_xyz.size() != 3 * 8) return false;
+  half_m = btVector3(0, 0, 0);
+  for (size_t v = 0; v < 8; ++v) half_m.setMax(hullVertex(hull, v).absolute());
+  for (size_t v = 0; v < 8; ++v) {
+    const btVector3 corner = hullVertex(hull, v).absolute();
+    for (int k = 0; k < 3; ++k)
+      if (!(half_m[k] > 0.0) || std::abs(corner[k] - half_m[k]) > tolerance_m) return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+std::shared_ptr<const SimHull> Simulation::bodyHull(const std::vector<double>& xyz, double shrink_m,
+                                                    double shrink_clamp) {
+  if (settings_.hull_memo) return convexHull(xyz, shrink_m, shrink_clamp, settings_.hull_memo);
+  // Without the caller's memory, identical bodies still share one hull within the run (twelve
+  // marbles: a twelfth of the time). The same points give the same hull, to the bit.
+  for (const RunHull& known : run_hulls_)
+    if (known.shrink_m == shrink_m && known.shrink_clamp == shrink_clamp && known.points_xyz == xyz) return known.hull;
+  run_hulls_.push_back({xyz, shrink_m, shrink_clamp, convexHull(xyz, shrink_m, shrink_clamp, {})});
+  return run_hulls_.back().hull;
+}
 
 Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   const SimBodyDesc& desc = descs_[index];
@@ -145,7 +170,7 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   if (state->min_extent_m <= 0.0) state->margin_m = std::clamp(0.002 * state->size_m, 1e-5, 0.01);
 
   // Shape choice.
-  const std::shared_ptr<const SimHull> hull = convexHull(state->body_xyz, 0.0, 0.0, settings_.hull_memo);
+  const std::shared_ptr<const SimHull> hull = bodyHull(state->body_xyz, 0.0, 0.0);
   const size_t hull_vertices = hull->vertices_xyz.size() / 3;
   const double hull_volume = hull->volume_m3;
   SimBodyDesc::Shape shape = desc.shape;
@@ -202,6 +227,15 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
         convex->recalcLocalAabb();
         convex->setMargin(state->margin_m);
         convex->initializePolyhedralFeatures();
+        // A hull that is a box about the centre of mass along the body axes (a box primitive,
+        // whose principal axes are its edges) gets a box twin for spheres: the same solid as GJK
+        // sees the hull (the points' box grown by the margin, edges rounded by it), on which a
+        // sphere takes the exact closest-point test instead of GJK (SphereAwareConvexConvex).
+        if (btVector3 half_m; boxHalfExtents(*hull, 1e-9 * state->size_m, half_m)) {
+          state->box_twin = std::make_unique<btBoxShape>(half_m + btVector3(1, 1, 1) * state->margin_m);
+          state->box_twin->setMargin(state->margin_m);
+          sphere_hull_->box_twins[convex.get()] = state->box_twin.get();
+        }
       } else {
         // Large hull, GJK/EPA only: those need a real margin for robust penetration depths, and
         // btConvexHullShape puts it outside the points. Shrink the hull by the margin first
@@ -209,7 +243,7 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
         // hull with edges rounded by the margin; the shrink is clamped to a quarter of the inner
         // radius for thin bodies.
         const std::shared_ptr<const SimHull> shrunk =
-            convexHull(state->body_xyz, state->margin_m, 0.25, settings_.hull_memo);
+            bodyHull(state->body_xyz, state->margin_m, 0.25);
         const double shrink = shrunk->shrink_m;
         const SimHull& used = shrink > 0.0 && !shrunk->vertices_xyz.empty() ? *shrunk : *hull;
         for (size_t v = 0; v < used.vertices_xyz.size() / 3; ++v) convex->addPoint(hullVertex(used, v), false);
@@ -308,6 +342,8 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   info.m_angularSleepingThreshold = 0.05;
   state->rigid = std::make_unique<btRigidBody>(info);
   state->rigid->setUserIndex(int(index));
+  state->rigid->setUserPointer(state.get());
+  state->breaking_threshold_m = state->shape->getContactBreakingThreshold(gContactBreakingThreshold);
   if (!desc.is_static) {
     // Bullet's integrator (symplectic Euler: v += g dt, then x += v dt) moves a body exactly along
     // the parabola of free fall when the stored velocity is the one half a step earlier; started

@@ -26,6 +26,89 @@ namespace strike {
 
 namespace detail {
 
+void StrikeWorld::calculateSimulationIslands() {
+  // Bullet links two bodies into one island when their broadphase boxes overlap, and those are
+  // loose: each box is grown by gContactBreakingThreshold (2 cm, a process global) and the
+  // broadphase tree keeps its leaves 5 cm fatter still (gDbvtMargin). Twelve marbles rolling 3 cm
+  // apart on a plate, none touching another, were one island: the solver iterated every marble
+  // until the slowest one converged, each one's result depended on the others, and none could
+  // sleep while another rolled. Here an island is what the solver needs: bodies linked by a
+  // manifold that holds a contact point, or by a CCD predictive manifold or a constraint (as
+  // Bullet's own btDiscreteDynamicsWorld::calculateSimulationIslands). A sleeping body is woken as
+  // before, by the first contact point an awake body makes with it.
+  btSimulationIslandManager& islands = *getSimulationIslandManager();
+  // As btSimulationIslandManager::updateActivationState, without its union of overlapping pairs.
+  int index = 0;
+  for (int i = 0; i < m_collisionObjects.size(); ++i) {
+    btCollisionObject* object = m_collisionObjects[i];
+    if (!object->isStaticOrKinematicObject()) object->setIslandTag(index++);
+    object->setCompanionId(-1);
+    object->setHitFraction(1.0);
+  }
+  islands.initUnionFind(index);
+  btUnionFind& unions = islands.getUnionFind();
+  for (int m = 0; m < m_dispatcher1->getNumManifolds(); ++m) {
+    const btPersistentManifold* manifold = m_dispatcher1->getManifoldByIndexInternal(m);
+    const btCollisionObject* a = manifold->getBody0();
+    const btCollisionObject* b = manifold->getBody1();
+    if (manifold->getNumContacts() > 0 && a->mergesSimulationIslands() && b->mergesSimulationIslands())
+      unions.unite(a->getIslandTag(), b->getIslandTag());
+  }
+  for (int m = 0; m < m_predictiveManifolds.size(); ++m) {
+    const btCollisionObject* a = m_predictiveManifolds[m]->getBody0();
+    const btCollisionObject* b = m_predictiveManifolds[m]->getBody1();
+    if (!a->isStaticOrKinematicObject() && !b->isStaticOrKinematicObject())
+      unions.unite(a->getIslandTag(), b->getIslandTag());
+  }
+  for (int c = 0; c < m_constraints.size(); ++c) {
+    const btTypedConstraint* constraint = m_constraints[c];
+    const btRigidBody& a = constraint->getRigidBodyA();
+    const btRigidBody& b = constraint->getRigidBodyB();
+    if (constraint->isEnabled() && !a.isStaticOrKinematicObject() && !b.isStaticOrKinematicObject())
+      unions.unite(a.getIslandTag(), b.getIslandTag());
+  }
+  islands.storeIslandActivationState(this);
+}
+
+void StrikeDispatcher::nearCallback(btBroadphasePair& pair, btCollisionDispatcher& dispatcher,
+                                    const btDispatcherInfo& info) {
+  if (static_cast<StrikeDispatcher&>(dispatcher).apartWithoutPoints(pair)) return;
+  btCollisionDispatcher::defaultNearCallback(pair, dispatcher, info);
+}
+
+bool StrikeDispatcher::apartWithoutPoints(const btBroadphasePair& pair) {
+  // The broadphase pairs bodies whose boxes come within 2 cm (gContactBreakingThreshold), and its
+  // tree keeps them paired until they part by 5 cm more (gDbvtMargin): eight blocks 2 cm apart
+  // on a plank made 22 block-block pairs, each a GJK query every substep that found nothing. The
+  // narrow phase adds a point only within the pair's contact breaking threshold (btManifoldResult::
+  // addContactPoint), so a pair whose boxes (margins included) are further apart than twice that
+  // on some axis finds none; if it holds no point either, there is nothing to refresh, and its
+  // query is skipped. A pair that holds a point is always left to Bullet.
+  const auto* a = static_cast<const btCollisionObject*>(pair.m_pProxy0->m_clientObject);
+  const auto* b = static_cast<const btCollisionObject*>(pair.m_pProxy1->m_clientObject);
+  // The pair's threshold as btCollisionDispatcher::getNewManifold takes it: the smaller of the
+  // shapes' (kept in BodyState; the ground plane's is huge, so the other body's).
+  const auto* state_a = static_cast<const BodyState*>(a->getUserPointer());
+  const auto* state_b = static_cast<const BodyState*>(b->getUserPointer());
+  if (!state_a && !state_b) return false;
+  const double threshold_m = (getDispatcherFlags() & CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD) == 0
+                                 ? gContactBreakingThreshold
+                             : !state_a ? state_b->breaking_threshold_m
+                             : !state_b ? state_a->breaking_threshold_m
+                                        : std::min(state_a->breaking_threshold_m, state_b->breaking_threshold_m);
+  btVector3 min_a, max_a, min_b, max_b;
+  a->getCollisionShape()->getAabb(a->getWorldTransform(), min_a, max_a);
+  b->getCollisionShape()->getAabb(b->getWorldTransform(), min_b, max_b);
+  bool apart = false;
+  for (int k = 0; k < 3; ++k) apart = apart || std::max(min_b[k] - max_a[k], min_a[k] - max_b[k]) > 2.0 * threshold_m;
+  if (!apart || !pair.m_algorithm) return apart;
+  manifolds_.resize(0);
+  pair.m_algorithm->getAllContactManifolds(manifolds_);
+  for (int m = 0; m < manifolds_.size(); ++m)
+    if (manifolds_[m]->getNumContacts() > 0) return false;
+  return true;
+}
+
 Status Simulation::build(const std::vector<btQuaternion>& orientations) {
   // Bullet's default pools hold 4096 contact manifolds and 4096 collision algorithms (MBs in
   // double precision), which its allocator zeroes whenever a world is made: a few percent of a
@@ -45,7 +128,7 @@ Status Simulation::build(const std::vector<btQuaternion>& orientations) {
   constexpr int kPerturbations = 3, kPerturbBelowPoints = 3;
   config_->setPlaneConvexMultipointIterations(kPerturbations, kPerturbBelowPoints);
   config_->setConvexConvexMultipointIterations(kPerturbations, kPerturbBelowPoints);
-  dispatcher_ = std::make_unique<btCollisionDispatcher>(config_.get());
+  dispatcher_ = std::make_unique<StrikeDispatcher>(config_.get());
   // Except for a sphere: the perturbation turns the shape about its own origin, which for a sphere
   // is its centre, and a turned sphere is the same sphere. Against the ground it finds the same
   // lowest point again (differing in the last bits), and against a hull Bullet moves the found
@@ -93,6 +176,13 @@ Status Simulation::build(const std::vector<btQuaternion>& orientations) {
   // larger than our objects).
   world_->getDispatchInfo().m_allowedCcdPenetration = 0.0;
   world_->getDispatchInfo().m_useContinuous = true;
+  // Islands are bodies linked by contact points (StrikeWorld::calculateSimulationIslands), so a
+  // pair's empty manifold may join bodies of two islands. Bullet hands each island's solve every
+  // manifold of its bodies, and a solve writes back (with a step of gravity added) every body its
+  // manifolds name: a block near another fell at twice gravity. With this flag Bullet passes only
+  // manifolds that hold points (btSimulationIslandManager::buildIslands), and also sorts pairs and
+  // manifolds by the bodies' ids.
+  world_->getDispatchInfo().m_deterministicOverlappingPairs = true;
 
   for (size_t i = 0; i < descs_.size(); ++i) {
     if (Status s = buildBody(i, orientations[i]); !s) return s;

@@ -23,6 +23,8 @@
 #include <LinearMath/btConvexHullComputer.h>
 #include <BulletCollision/CollisionDispatch/btConvexConvexAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btConvexPlaneCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btSimulationIslandManager.h>
+#include <BulletCollision/CollisionDispatch/btSphereBoxCollisionAlgorithm.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
 #include <btBulletDynamicsCommon.h>
 
@@ -91,6 +93,7 @@ struct BodyState {
   bool pieces_computed = false;
   double pieces_seconds = 0.0;
   std::unique_ptr<btCollisionShape> shape;
+  std::unique_ptr<btBoxShape> box_twin;  // a box hull's twin for sphere contacts (buildBody)
   std::unique_ptr<btRigidBody> rigid;
   // Saved at the start of each substep (pre-tick callback).
   btTransform pre_transform;
@@ -99,6 +102,23 @@ struct BodyState {
   btTransform still_anchor = btTransform::getIdentity();
   uint64_t still_since_step = kNotStill;
   double sleep_start_s = NAN;  // when it fell asleep; NaN while awake
+  // Bullet's contact breaking threshold of its shape (btCollisionShape::getContactBreakingThreshold),
+  // for StrikeDispatcher; the rigid body's user pointer is this state.
+  double breaking_threshold_m = 0.0;
+};
+
+/// Bullet's dispatcher, whose narrow phase skips pairs that hold no contact point and are too far
+/// apart to make one (sim.cpp).
+class StrikeDispatcher : public btCollisionDispatcher {
+ public:
+  explicit StrikeDispatcher(btCollisionConfiguration* config) : btCollisionDispatcher(config) {
+    setNearCallback(&StrikeDispatcher::nearCallback);
+  }
+
+ private:
+  static void nearCallback(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, const btDispatcherInfo& info);
+  bool apartWithoutPoints(const btBroadphasePair& pair);
+  btManifoldArray manifolds_;  // scratch, kept to stay allocation-free
 };
 
 /// btDiscreteDynamicsWorld keeps its CCD predictive manifolds protected; their points sit at the
@@ -120,10 +140,37 @@ class StrikeWorld : public btDiscreteDynamicsWorld {
     if (before_solve) before_solve();
     btDiscreteDynamicsWorld::solveConstraints(info);
   }
+  /// Islands of bodies linked by contact points (sim.cpp).
+  void calculateSimulationIslands() override;
 };
 
+/// A sphere against a hull that is a box: Bullet's exact sphere-box test run on the hull's box
+/// twin (BodyState::box_twin), the same solid. The test is the closest point of the box to the
+/// sphere's centre (a clamp to the half extents), or the nearest face when the centre is inside
+/// [Bullet btSphereBoxCollisionAlgorithm::getSphereDistance]; one point, as GJK found on the hull.
+class SphereOnBoxHull : public btSphereBoxCollisionAlgorithm {
+ public:
+  SphereOnBoxHull(const btBoxShape* twin, const btCollisionAlgorithmConstructionInfo& info,
+                  const btCollisionObjectWrapper* a, const btCollisionObjectWrapper* b, bool swapped)
+      : btSphereBoxCollisionAlgorithm(nullptr, info, a, b, swapped), twin_(twin), swapped_(swapped) {}
+  void processCollision(const btCollisionObjectWrapper* a, const btCollisionObjectWrapper* b,
+                        const btDispatcherInfo& info, btManifoldResult* result) override {
+    const btCollisionObjectWrapper* hull = swapped_ ? a : b;
+    const btCollisionObjectWrapper box(hull->m_parent, twin_, hull->getCollisionObject(), hull->getWorldTransform(),
+                                       hull->m_partId, hull->m_index);
+    btSphereBoxCollisionAlgorithm::processCollision(swapped_ ? &box : a, swapped_ ? b : &box, info, result);
+  }
+
+ private:
+  const btBoxShape* twin_;
+  bool swapped_;  // the hull is body 0
+};
+// Bullet's algorithm pool holds elements of its largest algorithm's size (allocateCollisionAlgorithm).
+static_assert(sizeof(SphereOnBoxHull) <= sizeof(btConvexConvexAlgorithm));
+
 /// Convex-convex contacts without Bullet's multipoint perturbation when the shape it would turn
-/// is a sphere (see Simulation::build); otherwise as Bullet's default.
+/// is a sphere (see Simulation::build); otherwise as Bullet's default. A sphere against a hull
+/// with a box twin takes SphereOnBoxHull.
 class SphereAwareConvexConvex : public btConvexConvexAlgorithm::CreateFunc {
  public:
   SphereAwareConvexConvex(btConvexPenetrationDepthSolver* solver, int iterations, int min_points)
@@ -140,11 +187,19 @@ class SphereAwareConvexConvex : public btConvexConvexAlgorithm::CreateFunc {
     const btCollisionShape* shape_b = b->getCollisionShape();
     const btCollisionShape* turned =
         shape_a->getAngularMotionDisc() < shape_b->getAngularMotionDisc() ? shape_a : shape_b;
+    const bool sphere_a = shape_a->getShapeType() == SPHERE_SHAPE_PROXYTYPE;
+    const auto twin = box_twins.find(sphere_a ? shape_b : shape_a);
+    if ((sphere_a || shape_b->getShapeType() == SPHERE_SHAPE_PROXYTYPE) && twin != box_twins.end()) {
+      void* memory = info.m_dispatcher1->allocateCollisionAlgorithm(sizeof(SphereOnBoxHull));
+      return new (memory) SphereOnBoxHull(twin->second, info, a, b, !sphere_a);
+    }
     const int iterations = turned->getShapeType() == SPHERE_SHAPE_PROXYTYPE ? 0 : m_numPerturbationIterations;
     void* memory = info.m_dispatcher1->allocateCollisionAlgorithm(sizeof(btConvexConvexAlgorithm));
     return new (memory) btConvexConvexAlgorithm(info.m_manifold, info, a, b, m_pdSolver, iterations,
                                                 m_minimumPointsPerturbationThreshold);
   }
+  /// Hulls that are boxes, and their twins (Simulation::buildBody).
+  std::map<const btCollisionShape*, const btBoxShape*> box_twins;
 };
 
 /// A contact point that strikes within the current substep (see Simulation::timeImpacts).
@@ -186,6 +241,9 @@ class Simulation {
 
  private:
   Status buildBody(size_t index, const btQuaternion& orientation);
+  /// The convex hull of body-frame points shrunk by shrink_m, through SimSettings::hull_memo or
+  /// else computed once per distinct point set in the run (shapes.cpp).
+  std::shared_ptr<const SimHull> bodyHull(const std::vector<double>& xyz, double shrink_m, double shrink_clamp);
   void preTick();
   void drive(size_t index);
   void timeImpacts();
@@ -224,6 +282,12 @@ class Simulation {
   std::unique_ptr<btRigidBody> ground_;
   bool gimpact_registered_ = false;
   std::map<uint64_t, std::vector<std::vector<double>>> pieces_by_surface_;  // by content hash
+  struct RunHull {
+    std::vector<double> points_xyz;
+    double shrink_m, shrink_clamp;
+    std::shared_ptr<const SimHull> hull;
+  };
+  std::vector<RunHull> run_hulls_;  // bodyHull()
 
   uint64_t step_ = 0;
   std::vector<ContactEvent> events_;

@@ -193,11 +193,10 @@ void RoughContact::generate(float* out, size_t frames) {
       const double want = std::max(0.25 * patch_len, std::max(va, vb) * h_);
       int level = want > kCellUnit_m ? static_cast<int>(std::floor(std::log2(want / kCellUnit_m))) : 0;
       level = std::clamp(level, 0, 40);
-      if (level != level_) level_ = level;
+      if (level != level_) level_ = level, cell_m_ = std::ldexp(kCellUnit_m, level);
     }
-    const double cell_m = std::ldexp(kCellUnit_m, level_);
-    advanceTrack(ta_, desc_.a, s.spot_a, ds_a, cell_m, level_);
-    advanceTrack(tb_, desc_.b, s.spot_b, ds_b, cell_m, level_);
+    advanceTrack(ta_, desc_.a, s.spot_a, ds_a, cell_m_, level_);
+    advanceTrack(tb_, desc_.b, s.spot_b, ds_b, cell_m_, level_);
     // The patch filter runs in track length on each surface's own profile.
     // One cascade for the sum, at the faster track's rate: a surface that moves slower under the
     // patch changes less within it (a sliding block's own profile stands still), so this is exact

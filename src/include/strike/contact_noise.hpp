@@ -110,6 +110,7 @@ class RoughContact {
   double lp1_ = 0.0, lp2_ = 0.0, lp_prev_ = 0.0;  // patch filter and its previous output
   double x_ = 0.0, v_ = 0.0;                      // displacement of the mass away from the surface
   int level_ = -1000;
+  double cell_m_ = 0.0;  // the grid spacing of level_, kCellUnit_m * 2^level_
   uint64_t lost_samples_ = 0;
   uint64_t still_samples_ = 0;
 };

@@ -128,7 +128,7 @@ struct SimSettings {
   /// the sound engine each frame. ~80 bytes per body and substep.
   bool record_states = false;
   ProgressFn progress;  ///< phase "simulate", fraction of simulated time; every ~100 ms of wall time
-  SimHullMemo hull_memo;  ///< empty: every body's hull is computed
+  SimHullMemo hull_memo;  ///< empty: each distinct body's hull is computed once in the run
 };
 
 constexpr uint32_t kGroundBody = 0xffffffffu;

@@ -255,5 +255,91 @@ TEST(SimContactState, RestingSpherePatchIsHertzUnderItsWeight) {
   EXPECT_EQ(hertzPatchRadius(0.0, 0.01, 0.0, 1e-11, 1e-11), 0.0);
 }
 
+// Marbles on a static steel plate, 3 cm apart, never touching: the first lies still, the others
+// roll past it; and two blocks slide side by side, 2 cm apart, down a tilted plank. Each body's
+// motion is its own: run together, each must move exactly (to the bit) as it does alone, and the
+// still marble must fall asleep when it would alone. (Bullet joined bodies whose loose broadphase
+// boxes overlapped into one island: solved until the slowest converged, each result depended on
+// its neighbours, and the still marble stayed awake while its neighbours rolled.)
+TEST(SimContactState, BodiesApartMoveAsIfAlone) {
+  SimBodyDesc plate = makeBox("plate", {0.6, 0.4, 0.006}, 10.0);
+  plate.is_static = true;
+  plate.position_m = {0, 0, 0.003};
+  const std::array<double, 4> tilt = quaternion({0, 1, 0}, 0.5);  // 29 degrees: the blocks slide
+  SimBodyDesc plank = makeBox("plank", {1.0, 0.3, 0.02}, 10.0);
+  plank.is_static = true;
+  plank.position_m = {1.0, 0, 0.5};
+  plank.orientation_wxyz = tilt;
+  std::vector<SimBodyDesc> movers;
+  for (int k = 0; k < 3; ++k) {
+    Sphere s = sphere(0.01, 0.03);
+    const double speed = k == 0 ? 0.0 : 0.1 * k;
+    s.body.position_m = {-0.2, 0.03 * k, 0.006 + s.radius_m};
+    s.body.velocity_m_s = {speed, 0, 0};
+    s.body.angular_velocity_rad_s = {0, speed / s.radius_m, 0};
+    s.body.rolling_resistance = 0.01;
+    movers.push_back(s.body);
+  }
+  for (int k = 0; k < 2; ++k) {
+    SimBodyDesc block = makeBox("block", {0.05, 0.04, 0.03}, 0.05);
+    block.orientation_wxyz = tilt;
+    // On the plank's upper face (its normal is the tilt's z axis), 2 cm apart across it.
+    const double lift = 0.01 + 0.015 + 1e-4, s = std::sin(0.5), c = std::cos(0.5);
+    block.position_m = {1.0 - 0.3 * c + lift * s, -0.035 + 0.07 * k, 0.5 + 0.3 * s + lift * c};
+    block.friction = 0.3;
+    movers.push_back(block);
+  }
+  SimSettings settings = flatGround(1.0);
+  settings.end_when_all_asleep = false;
+  std::vector<SimBodyDesc> together{plate, plank};
+  together.insert(together.end(), movers.begin(), movers.end());
+  const Result<SimResult> all = simulateOrFail(together, settings);
+  ASSERT_TRUE(all.ok());
+  for (size_t k = 0; k < movers.size(); ++k) {
+    const Result<SimResult> alone = simulateOrFail({plate, plank, movers[k]}, settings);
+    ASSERT_TRUE(alone.ok());
+    EXPECT_EQ(all->final_position_m[k + 2], alone->final_position_m[2]) << "body " << k;
+    EXPECT_EQ(all->final_velocity_m_s[k + 2], alone->final_velocity_m_s[2]) << "body " << k;
+    EXPECT_EQ(all->final_angular_velocity_rad_s[k + 2], alone->final_angular_velocity_rad_s[2]) << "body " << k;
+    std::vector<double> impulses_all, impulses_alone;
+    for (const ContactEvent& e : all->events)
+      if (e.body_a == k + 2 || e.body_b == k + 2) impulses_all.push_back(e.normal_impulse_n_s);
+    for (const ContactEvent& e : alone->events) impulses_alone.push_back(e.normal_impulse_n_s);
+    EXPECT_EQ(impulses_all, impulses_alone) << "body " << k;
+    EXPECT_GT(impulses_alone.size(), 200u) << "body " << k;  // it touched throughout
+    if (k >= 3) {
+      EXPECT_LT(alone->final_position_m[2][2], movers[k].position_m[2] - 0.05) << "block " << k;  // it slid
+    }
+    if (k == 0) {
+      EXPECT_NEAR(alone->sleep_start_s[2], settings.sleep_after_still_s, 0.01);
+      EXPECT_EQ(all->sleep_start_s[2], alone->sleep_start_s[2]);
+    }
+  }
+}
+
+// A sphere on a box: the contact is the box's point nearest the sphere's centre, so the normal of
+// a sphere rolling on the top face is the face's normal exactly (GJK's iterate left it 1e-15 off).
+TEST(SimContactState, SphereOnABoxTouchesAlongTheFaceNormal) {
+  SimBodyDesc plate = makeBox("plate", {0.6, 0.4, 0.006}, 10.0);
+  plate.is_static = true;
+  plate.position_m = {0, 0, 0.003};
+  Sphere s = sphere(0.01, 0.03);
+  s.body.position_m = {-0.2, 0.01, 0.006 + s.radius_m};
+  s.body.velocity_m_s = {0.2, 0.05, 0};
+  s.body.angular_velocity_rad_s = {-0.05 / s.radius_m, 0.2 / s.radius_m, 0};
+  const Result<SimResult> r = simulateOrFail({plate, s.body}, flatGround(0.3));
+  ASSERT_TRUE(r.ok());
+  size_t on_plate = 0;
+  for (const ContactEvent& e : r->events) {
+    ASSERT_EQ(e.body_a, 0u);
+    ASSERT_EQ(e.body_b, 1u);
+    EXPECT_EQ(e.normal_world[0], 0.0);
+    EXPECT_EQ(e.normal_world[1], 0.0);
+    EXPECT_NEAR(std::abs(e.normal_world[2]), 1.0, 1e-15);
+    ++on_plate;
+  }
+  EXPECT_GT(on_plate, 250u);
+}
+
 }  // namespace
 }  // namespace strike

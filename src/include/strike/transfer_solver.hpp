@@ -64,9 +64,10 @@ struct TransferSettings {
 /// same inputs give other numbers (2: the faster assembly, far field and single-precision LU of
 /// 2026-11; 3: modes share a solve while the gap costs a tenth of the target, the far field is
 /// first projected to a lower order, a group goes straight to the budget when a lower frequency
-/// missed the target there), so cached transfers are solved again rather than mixed with the
-/// new solver's.
-constexpr uint32_t kTransferSolverRevision = 3;
+/// missed the target there; 4: least-squares (interior-point) systems by a single-precision QR
+/// refined in double, which changes the last bits of a few coefficients), so cached transfers
+/// are solved again rather than mixed with the new solver's.
+constexpr uint32_t kTransferSolverRevision = 4;
 
 /// What one mode's solve cost and found (for studies and reports).
 struct TransferModeStats {

@@ -22,9 +22,10 @@
 // Cost (docs/acoustic-transfer.md): a row is summed over the cut's pieces in vectorized passes;
 // the near triangles' quadrature is built once per cut (rules at the bank's largest k) and
 // only its exponentials are evaluated per mode; modes of one frequency share the system and
-// its LU (single precision, refined in double); the far field is summed at the directions of
-// a Gauss-Legendre x uniform rule and projected on the harmonics. The rows and the directions
-// are each done in two fixed halves, the second on a helper thread (same bits on one thread).
+// its LU or least-squares QR (single precision, refined in double); the far field is summed at
+// the directions of a Gauss-Legendre x uniform rule and projected on the harmonics. The rows
+// and the directions are each done in two fixed halves, the second on a helper thread (same
+// bits on one thread), as are the fine solve and the error estimate's coarse one.
 #pragma once
 
 #include <cstdint>

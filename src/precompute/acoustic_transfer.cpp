@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -374,14 +375,22 @@ struct RuleChoice {
   int points = 0;
 };
 
-inline RuleChoice chooseRule(const V3& x, const V3& a, const V3& b, const V3& c, const V3& m, double k, int depth) {
-  const double d = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-  const double dist = (x - m).norm();
+/// The choice for a triangle of longest edge d whose centroid is `dist` from x.
+inline RuleChoice ruleFor(double dist, double d, double k, int depth) {
   const double kd = k * d;
   if (dist > kFarRatio * d && kd <= kCellPhase) return {nullptr, 1};
   if (dist > kNearRatio * d && kd <= 2.0 * kCellPhase) return {kRule3, 3};
   if ((dist > 2.0 * d && kd <= 2.5) || depth >= kNearMaxDepth) return {kRule7, 7};
   return {nullptr, 0};
+}
+
+/// The longest edge of triangle (a, b, c), as chooseRule measures it.
+inline double longestEdge(const V3& a, const V3& b, const V3& c) {
+  return std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+}
+
+inline RuleChoice chooseRule(const V3& x, const V3& a, const V3& b, const V3& c, const V3& m, double k, int depth) {
+  return ruleFor((x - m).norm(), longestEdge(a, b, c), k, depth);
 }
 
 /// The four quarters of triangle (a, b, c) (split at its edges' midpoints), in the order that
@@ -633,6 +642,47 @@ Pieces makePieces(const Surface& s, const Cut& cut, double k) {
   return p;
 }
 
+/// The triangles too large in wavelengths for one point or for their quarters as points
+/// (k D > 2 kPointPhase: the plate's 2 cm triangles at its top modes), which integrateTriangle
+/// integrates row by row. It always splits them in four at the first level (k D > 2.5), and
+/// then gives each quarter the 7-point rule whenever the quarter is more than two of its edges
+/// from x (their k d is above the 3-point rule's): those quarters' points do not depend on x, so
+/// they are laid out here once per solve, and a row evaluates their kernels in vectorized passes
+/// with integrateTriangle's own arithmetic, in its order (the same bits). A triangle with a
+/// quarter that needs more (x nearer) goes through integrateTriangle as before.
+struct BigTriangles {
+  std::vector<int32_t> of_piece;  // per piece: its index here, or -1
+  std::vector<uint32_t> tri;      // per big triangle
+  std::vector<V3> quarter_centroid;
+  std::vector<double> quarter_edge;  // longest edge (chooseRule's d)
+  std::vector<V3> point;             // 7 per quarter, 28 per triangle, in integrateTriangle's order
+  std::vector<double> weight;
+  size_t size() const { return tri.size(); }
+};
+constexpr int kBigPoints = 28;  // 4 quarters x 7 points
+
+BigTriangles bigTriangles(const Surface& s, const Pieces& p) {
+  BigTriangles big;
+  big.of_piece.assign(p.size(), -1);
+  for (size_t j = 0; j < p.size(); ++j) {
+    if (p.one_point[j] || p.leaf_tri[j] < 0) continue;
+    const uint32_t t = static_cast<uint32_t>(p.leaf_tri[j]);
+    const Triangle& tri = s.tris[t];
+    big.of_piece[j] = static_cast<int32_t>(big.tri.size());
+    big.tri.push_back(t);
+    const double quarter = 0.25 * tri.area;  // as integrateTriangle passes it down
+    for (const Corners& q : quarters(tri.v[0], tri.v[1], tri.v[2])) {
+      big.quarter_centroid.push_back((q[0] + q[1] + q[2]) / 3.0);
+      big.quarter_edge.push_back(longestEdge(q[0], q[1], q[2]));
+      for (int i = 0; i < 7; ++i) {
+        big.point.push_back(V3(kRule7[i][0] * q[0] + kRule7[i][1] * q[1] + kRule7[i][2] * q[2]));
+        big.weight.push_back(kRule7[i][3] * quarter);
+      }
+    }
+  }
+  return big;
+}
+
 /// The boundary data of several modes at one wavenumber, per piece: Q = int q dS and the first
 /// moment D = int (y - centroid) q dS (index rhs * pieces + piece).
 struct PieceData {
@@ -781,7 +831,84 @@ struct RowScratch {
   std::vector<int32_t> stack;
   std::vector<uint32_t> near_stamp;  // per triangle: the row that found it near (+1)
   uint32_t stamp = 0;
+  // The big triangles (BigTriangles): per point, then per triangle.
+  std::vector<double> big_r, big_w, big_dn, big_phase, big_sin, big_cos, big_g_re, big_g_im, big_dg_re, big_dg_im;
+  std::vector<size_t> big_first;  // per big triangle: its first point, or SIZE_MAX (integrateTriangle)
+  std::vector<cd> big_g, big_dg;  // per big triangle: int G, int dG/dn
 };
+
+/// int G and int dG/dn over the big triangles (BigTriangles) whose four quarters all take the
+/// 7-point rule from x, into w.big_g and w.big_dg: integrateTriangle's points, weights and
+/// arithmetic (kernel(): G = e^{ikr} (1/r / 4 pi), dG/dr / r = G (-1/r^2 + ik/r)), the sums
+/// in its order. The others (and the near ones) are marked SIZE_MAX in w.big_first.
+void integrateBigTriangles(const Surface& s, const BigTriangles& big, double k, const V3& x, RowScratch& w) {
+  const size_t count = big.size();
+  w.big_first.assign(count, SIZE_MAX);
+  w.big_g.resize(count);
+  w.big_dg.resize(count);
+  for (auto* v : {&w.big_r, &w.big_w, &w.big_dn}) v->resize(count * kBigPoints);
+  size_t points = 0;
+  for (size_t b = 0; b < count; ++b) {
+    const uint32_t t = big.tri[b];
+    if (w.near_stamp[t] == w.stamp) continue;  // near: in the cache
+    bool seven = true;
+    for (size_t q = 4 * b; q < 4 * b + 4; ++q)
+      seven = seven && ruleFor((x - big.quarter_centroid[q]).norm(), big.quarter_edge[q], k, 1).points == 7;
+    if (!seven) continue;
+    const V3& normal = s.tris[t].normal;
+    bool finite = true;
+    for (size_t i = 0; i < static_cast<size_t>(kBigPoints); ++i) {
+      const V3 yx = big.point[b * kBigPoints + i] - x;
+      const double r = yx.norm();
+      finite = finite && r > 0;
+      w.big_r[points + i] = r;
+      w.big_w[points + i] = big.weight[b * kBigPoints + i];
+      w.big_dn[points + i] = yx.dot(normal);
+    }
+    if (!finite) continue;  // (x on the triangle: integrateTriangle skips that point)
+    w.big_first[b] = points;
+    points += kBigPoints;
+  }
+  for (auto* v : {&w.big_phase, &w.big_sin, &w.big_cos, &w.big_g_re, &w.big_g_im, &w.big_dg_re, &w.big_dg_im})
+    v->resize(points);
+  for (size_t i = 0; i < points; ++i) w.big_phase[i] = k * w.big_r[i];
+  sinCosArray(w.big_phase.data(), w.big_sin.data(), w.big_cos.data(), points);
+  {
+    const double* __restrict r_i = w.big_r.data();
+    const double* __restrict w_i = w.big_w.data();
+    const double* __restrict dn_i = w.big_dn.data();
+    const double* __restrict sin_i = w.big_sin.data();
+    const double* __restrict cos_i = w.big_cos.data();
+    double* __restrict g_re_i = w.big_g_re.data();
+    double* __restrict g_im_i = w.big_g_im.data();
+    double* __restrict dg_re_i = w.big_dg_re.data();
+    double* __restrict dg_im_i = w.big_dg_im.data();
+    STRIKE_IVDEP
+    for (size_t i = 0; i < points; ++i) {
+      const double inv_r = 1.0 / r_i[i];
+      const double scale = inv_r / kFourPi;
+      const double g_re = cos_i[i] * scale, g_im = sin_i[i] * scale;
+      const double a = -inv_r * inv_r, b = k * inv_r;
+      const double dg_re = g_re * a - g_im * b, dg_im = g_re * b + g_im * a;
+      g_re_i[i] = w_i[i] * g_re;
+      g_im_i[i] = w_i[i] * g_im;
+      dg_re_i[i] = (w_i[i] * dg_re) * dn_i[i];
+      dg_im_i[i] = (w_i[i] * dg_im) * dn_i[i];
+    }
+  }
+  for (size_t b = 0; b < count; ++b) {
+    if (w.big_first[b] == SIZE_MAX) continue;
+    double g_re = 0.0, g_im = 0.0, dg_re = 0.0, dg_im = 0.0;
+    for (size_t i = w.big_first[b]; i < w.big_first[b] + kBigPoints; ++i) {
+      g_re += w.big_g_re[i];
+      g_im += w.big_g_im[i];
+      dg_re += w.big_dg_re[i];
+      dg_im += w.big_dg_im[i];
+    }
+    w.big_g[b] = cd(g_re, g_im);
+    w.big_dg[b] = cd(dg_re, dg_im);
+  }
+}
 
 /// The part of a row at x from the subtree of `start`, the triangles near x left out (the
 /// NearCache has them): M[col] += int_cluster dG/dn_y, lq[r] += int G q_r.
@@ -844,7 +971,7 @@ cd sumTwo(const double* a_re, const double* a_im, const double* w, const double*
 /// (phaseSpread); the rest walked down the tree (assembleNear). The sums are split into
 /// passes over arrays (distances, exponentials, kernels, then the sums) that vectorize, with
 /// complex products written out (no library complex multiplication and its NaN checks).
-void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceData& pd,
+void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceData& pd, const BigTriangles& big,
                  const std::vector<NodeData>& data, const NearCache& near, size_t row, double k, const V3& x, cd* M,
                  cd* lq, RowScratch& w) {
   const size_t count = p.size(), rhs = data.size();
@@ -969,6 +1096,7 @@ void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceD
     lq[rr] += sumTwo(w.g_re.data(), w.g_im.data(), Q, w.dg_re.data(), w.dg_im.data(), w.phase.data(), count);
   }
   // The pieces not summed as one point.
+  if (big.size() > 0) integrateBigTriangles(s, big, k, x, w);
   for (size_t j = 0; j < count; ++j) {
     if (w.far[j] > 0) continue;
     const Node& n = s.nodes[p.node[j]];
@@ -981,7 +1109,13 @@ void assembleRow(const Surface& s, const Cut& cut, const Pieces& p, const PieceD
     if (p.quarter[j] > 1) continue;            // (a quarter's triangle is done with its first)
     const Triangle& tri = s.tris[t];           // too large for one point at this k
     cd int_g = 0.0, int_dg = 0.0;
-    integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
+    const int32_t b = big.of_piece[j];
+    if (b >= 0 && w.big_first[static_cast<size_t>(b)] != SIZE_MAX) {
+      int_g = w.big_g[static_cast<size_t>(b)];
+      int_dg = w.big_dg[static_cast<size_t>(b)];
+    } else {
+      integrateTriangle(x, tri.v[0], tri.v[1], tri.v[2], tri.normal, tri.area, k, 0, int_g, int_dg);
+    }
     M[p.col[j]] += int_dg;
     for (size_t rr = 0; rr < rhs; ++rr) lq[rr] += int_g * data[rr].q[t];
   }
@@ -1312,6 +1446,48 @@ Eigen::MatrixXcd solveSquare(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& 
   return X;
 }
 
+/// min |A x - B| for a tall A (the interior points' rows under the surface's): Householder QR
+/// in single precision (half the time of double), then iterative refinement of the augmented
+/// system [I A; A^H 0] [r; x] = [B; 0] with its residuals in double (Bjorck 1967, "Iterative
+/// refinement of linear least squares solutions I", BIT 7), which converges to the double-
+/// precision solution at a rate ~ cond(A) eps_float per step whatever the residual's size.
+/// Each correction: h = R^-H g, [f1; f2] = Q^H f, dx = R^-1 (f1 - h), dr = Q [h; f2], for the
+/// residuals f = B - r - A x and g = -A^H r. The residuals are explicit loops (fixed order).
+Eigen::MatrixXcd solveLeastSquares(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B) {
+  using cf = std::complex<float>;
+  using MatrixCf = Eigen::Matrix<cf, Eigen::Dynamic, Eigen::Dynamic>;
+  const Eigen::Index m = A.rows(), n = A.cols(), cols = B.cols();
+  const Eigen::HouseholderQR<MatrixCf> qr(A.cast<cf>());
+  const auto R = qr.matrixQR().topLeftCorner(n, n).triangularView<Eigen::Upper>();
+  Eigen::MatrixXcd X = qr.solve(B.cast<cf>()).cast<cd>();
+  Eigen::MatrixXcd r(m, cols), f(m, cols), g(n, cols);
+  auto residualOfX = [&](Eigen::MatrixXcd& out, const Eigen::MatrixXcd& start) {  // start - A X
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      for (Eigen::Index i = 0; i < m; ++i) out(i, c) = start(i, c);
+      for (Eigen::Index j = 0; j < n; ++j) {
+        const cd x = X(j, c);
+        for (Eigen::Index i = 0; i < m; ++i) out(i, c) -= A(i, j) * x;
+      }
+    }
+  };
+  residualOfX(r, B);
+  for (int step = 0; step < 2; ++step) {
+    residualOfX(f, B - r);
+    for (Eigen::Index c = 0; c < cols; ++c)
+      for (Eigen::Index j = 0; j < n; ++j) {
+        cd sum = 0.0;
+        for (Eigen::Index i = 0; i < m; ++i) sum += std::conj(A(i, j)) * r(i, c);
+        g(j, c) = -sum;
+      }
+    const MatrixCf h = R.adjoint().solve(g.cast<cf>());
+    MatrixCf qf = qr.householderQ().adjoint() * f.cast<cf>();
+    X += R.solve(qf.topRows(n) - h).cast<cd>();
+    qf.topRows(n) = h;
+    r += (qr.householderQ() * qf).cast<cd>();
+  }
+  return X;
+}
+
 struct ModeSolve {
   std::vector<Eigen::VectorXcd> p;       // per right-hand side, per cluster
   std::vector<Eigen::VectorXcd> p_diff;  // p minus the coarse solve's, per cluster
@@ -1336,6 +1512,7 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
   const NearCache& near = cached->second;
   out.pieces = makePieces(s, cut, k);
   out.piece_data = pieceData(s, out.pieces, data);
+  const BigTriangles big = bigTriangles(s, out.pieces);
   const size_t n = cut.nodes.size(), rhs = data.size();
   chief = std::min(chief, s.chief_candidates.size());
   const size_t rows = n + chief;
@@ -1354,10 +1531,10 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
       std::fill(lq.begin(), lq.end(), cd(0.0));
       if (r < n) {
         const uint32_t host = s.nodes[cut.nodes[r]].rep;
-        assembleRow(s, cut, out.pieces, out.piece_data, data, near, r, k, s.tris[host].centroid, M.data(), lq.data(),
-                    stack);
+        assembleRow(s, cut, out.pieces, out.piece_data, big, data, near, r, k, s.tris[host].centroid, M.data(),
+                    lq.data(), stack);
       } else {
-        assembleRow(s, cut, out.pieces, out.piece_data, data, near, r, k, s.chief_candidates[r - n], M.data(),
+        assembleRow(s, cut, out.pieces, out.piece_data, big, data, near, r, k, s.chief_candidates[r - n], M.data(),
                     lq.data(), stack);
       }
       // 1/2 p(x) - int p dG/dn = - int G q (x on S); 0 - int p dG/dn = - int G q (x inside).
@@ -1368,21 +1545,23 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
   });
   auto solve = [](const Eigen::MatrixXcd& matrix, const Eigen::MatrixXcd& rhs_m) -> Eigen::MatrixXcd {
     if (matrix.rows() == matrix.cols()) return solveSquare(matrix, rhs_m);
-    return matrix.householderQr().solve(rhs_m);
+    return solveLeastSquares(matrix, rhs_m);
   };
   out.assembly_seconds = secondsSince(assembly_start);
   const auto factor_start = std::chrono::steady_clock::now();
-  const Eigen::MatrixXcd P = solve(A, b);
-  out.elements = n;
-  out.chief = chief;
-  out.p.resize(rhs);
-  out.p_diff.resize(rhs);
-  for (size_t q = 0; q < rhs; ++q) out.p[q] = P.col(static_cast<Eigen::Index>(q));
-
-  // The coarse solve: clusters merged with their siblings, rows a subset, columns summed.
+  // The coarse solve: clusters merged with their siblings, rows a subset, columns summed. It
+  // reads A and b only, so it runs beside the fine solve, on the helper thread (each solve is
+  // the same whoever computes it: the same bits with or without the helper).
   const Coarse coarse = coarsen(s, cut);
   const size_t nc = coarse.count;
-  if (nc < n && nc > 0) {
+  const bool coarse_solve = nc < n && nc > 0;
+  Eigen::MatrixXcd P, pc;
+  parts.run(size_t{2}, size_t{1}, [&](size_t begin, size_t, int) {
+    if (begin == 0) {
+      P = solve(A, b);
+      return;
+    }
+    if (!coarse_solve) return;
     Eigen::MatrixXcd Ac = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(nc + chief), static_cast<Eigen::Index>(nc));
     Eigen::MatrixXcd bc(static_cast<Eigen::Index>(nc + chief), R);
     for (size_t j = 0; j < nc + chief; ++j) {
@@ -1395,7 +1574,14 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
       if (j < nc) Ac(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j)) += 0.5;
       bc.row(static_cast<Eigen::Index>(j)) = b.row(static_cast<Eigen::Index>(fine_row));
     }
-    const Eigen::MatrixXcd pc = solve(Ac, bc);
+    pc = solve(Ac, bc);
+  });
+  out.elements = n;
+  out.chief = chief;
+  out.p.resize(rhs);
+  out.p_diff.resize(rhs);
+  for (size_t q = 0; q < rhs; ++q) out.p[q] = P.col(static_cast<Eigen::Index>(q));
+  if (coarse_solve) {
     for (size_t q = 0; q < rhs; ++q) {
       out.p_diff[q].resize(static_cast<Eigen::Index>(n));
       for (size_t c = 0; c < n; ++c)

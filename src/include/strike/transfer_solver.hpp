@@ -22,9 +22,10 @@
 // Cost (docs/acoustic-transfer.md): a row is summed over the cut's pieces in vectorized passes;
 // the near triangles' quadrature is built once per cut (rules at the bank's largest k) and
 // only its exponentials are evaluated per mode; modes of one frequency share the system and
-// its LU (single precision, refined in double); the far field is summed at the directions of
-// a Gauss-Legendre x uniform rule and projected on the harmonics. The rows and the directions
-// are each done in two fixed halves, the second on a helper thread (same bits on one thread).
+// its LU or least-squares QR (single precision, refined in double); the far field is summed at
+// the directions of a Gauss-Legendre x uniform rule and projected on the harmonics. The rows
+// and the directions are each done in two fixed halves, the second on a helper thread (same
+// bits on one thread), as are the fine solve and the error estimate's coarse one.
 #pragma once
 
 #include <cstdint>
@@ -64,9 +65,10 @@ struct TransferSettings {
 /// same inputs give other numbers (2: the faster assembly, far field and single-precision LU of
 /// 2026-11; 3: modes share a solve while the gap costs a tenth of the target, the far field is
 /// first projected to a lower order, a group goes straight to the budget when a lower frequency
-/// missed the target there), so cached transfers are solved again rather than mixed with the
-/// new solver's.
-constexpr uint32_t kTransferSolverRevision = 3;
+/// missed the target there; 4: least-squares (interior-point) systems by a single-precision QR
+/// refined in double, which changes the last bits of a few coefficients), so cached transfers
+/// are solved again rather than mixed with the new solver's.
+constexpr uint32_t kTransferSolverRevision = 4;
 
 /// What one mode's solve cost and found (for studies and reports).
 struct TransferModeStats {

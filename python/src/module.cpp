@@ -93,7 +93,7 @@ using BankPtr = std::shared_ptr<ModeBank>;
 
 BankPtr computeModes(const std::string& mesh, const Material& material, int order, double size_m, double max_freq_hz,
                      int max_modes, int64_t max_tets, std::optional<bool> error_estimate,
-                     std::optional<double> tolerance) {
+                     std::optional<double> tolerance, bool transfer) {
   PrecomputeSettings settings;
   settings.mesh_spec = mesh;
   settings.material = material;
@@ -102,6 +102,7 @@ BankPtr computeModes(const std::string& mesh, const Material& material, int orde
   settings.max_freq_hz = max_freq_hz;
   settings.max_modes = max_modes;
   settings.max_tets = max_tets;
+  settings.acoustic_transfer = transfer;  // default on, as `strike modes` (--no-transfer)
   // The CLI's default (cmd_modes.cpp): on when the mesh can be coarsened.
   settings.error_estimate = error_estimate.value_or(canRemesh(mesh));
   std::optional<Result<PrecomputeResult>> result;
@@ -234,7 +235,7 @@ py::object eventsArray(const RenderResult& r) {
 
 PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration, double gain,
                             const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
-                            std::shared_ptr<RenderSession> session) {
+                            bool transfer, std::shared_ptr<RenderSession> session) {
   Scene scene = take(std::move(parsed));
   RenderSettings settings;
   settings.sample_rate_hz = rate;
@@ -244,6 +245,7 @@ PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration
   settings.max_tets = max_tets;
   settings.max_events = static_cast<size_t>(max_events);
   settings.similar_reuse = similar;
+  settings.acoustic_transfer = transfer;
   settings.session = session.get();  // `session` holds it through the render
   std::optional<Result<RenderResult>> result;
   {
@@ -354,9 +356,10 @@ PYBIND11_MODULE(_strike, m) {
 
   m.def("modes",
         [](const std::string& mesh, const py::dict& material, int order, double size_m, double max_freq_hz,
-           int max_modes, int64_t max_tets, std::optional<bool> error_estimate, std::optional<double> tolerance) {
+           int max_modes, int64_t max_tets, std::optional<bool> error_estimate, std::optional<double> tolerance,
+           bool transfer) {
           return computeModes(mesh, materialFrom(material), order, size_m, max_freq_hz, max_modes, max_tets,
-                              error_estimate, tolerance);
+                              error_estimate, tolerance, transfer);
         });
 
   m.def("hit", [](const ModeBank& bank, std::optional<size_t> vertex, std::optional<std::array<double, 3>> at,
@@ -429,15 +432,15 @@ PYBIND11_MODULE(_strike, m) {
       .def("clear", &RenderSession::clear);
   m.def("render_file", [](const std::string& path, double rate, double duration, double gain,
                           const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
-                          std::shared_ptr<RenderSession> session) {
+                          bool transfer, std::shared_ptr<RenderSession> session) {
     return renderParsed(loadScene(path), rate, duration, gain, cache_dir, max_tets, max_events, similar,
-                        std::move(session));
+                        transfer, std::move(session));
   });
   m.def("render_text", [](const std::string& text, const std::string& path, double rate, double duration, double gain,
                           const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
-                          std::shared_ptr<RenderSession> session) {
+                          bool transfer, std::shared_ptr<RenderSession> session) {
     return renderParsed(parseScene(text, path), rate, duration, gain, cache_dir, max_tets, max_events, similar,
-                        std::move(session));
+                        transfer, std::move(session));
   });
   m.def("default_cache_dir", &defaultCacheDir);
   m.def("default_max_tets", []() { return static_cast<int64_t>(kDefaultMaxTets); });

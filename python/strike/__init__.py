@@ -116,7 +116,8 @@ def _material(value: Union[str, Mapping[str, Any]]) -> dict:
 
 def modes(mesh: Union[str, os.PathLike], material: Union[str, Mapping[str, Any]] = "steel", order: Optional[int] = None,
           tolerance: Optional[float] = None, size: Optional[float] = None, max_freq: float = 20000.0,
-          max_modes: int = 200, max_tets: Optional[int] = None, error_estimate: Optional[bool] = None) -> Bank:
+          max_modes: int = 200, max_tets: Optional[int] = None, error_estimate: Optional[bool] = None,
+          transfer: bool = True) -> Bank:
     """Computes an object's free vibration modes, as ``strike modes MESH -o BANK.modes`` does.
 
     mesh: a surface mesh (.obj .stl .ply), a tet mesh (.msh, TetGen .node/.ele) or a primitive in
@@ -129,6 +130,8 @@ def modes(mesh: Union[str, os.PathLike], material: Union[str, Mapping[str, Any]]
     max_freq: keep every mode up to this, Hz. max_modes: but at most this many.
     max_tets: refuse meshes with more tets (memory cap). error_estimate: default on for primitives
         and surfaces, as in the CLI.
+    transfer: solve each mode's acoustic transfer (default, as the CLI; False: ``--no-transfer``,
+        each mode heard at its direction-averaged level, docs/listener.md).
 
     Returns a :class:`Bank`: ``frequencies_hz``, ``decay_per_s`` (numpy), ``save(path)``,
     ``Bank.load(path)``. The GIL is released during the solve; solves in several threads of one
@@ -154,7 +157,8 @@ def modes(mesh: Union[str, os.PathLike], material: Union[str, Mapping[str, Any]]
         max_tets = _strike.default_max_tets()
     if not isinstance(max_tets, int) or max_tets < 1:
         raise _bad(f"max_tets = {max_tets!r} (must be >= 1)")
-    return _strike.modes(mesh, mat, int(order), size_m, max_freq, max_modes, max_tets, error_estimate, tolerance)
+    return _strike.modes(mesh, mat, int(order), size_m, max_freq, max_modes, max_tets, error_estimate, tolerance,
+                         bool(transfer))
 
 
 def hit(bank: Union[Bank, str, os.PathLike], at: Optional[Sequence[float]] = None, impulse: Optional[Sequence[float]] = None,
@@ -259,7 +263,8 @@ def similar(bank: Bank, scale: float = 1.0, material: Union[str, Mapping[str, An
 def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[float] = None,
            duration: Optional[float] = None, gain: float = 1.0, cache: Union[str, os.PathLike, None, bool] = True,
            base_dir: Union[str, os.PathLike, None] = None, max_tets: Optional[int] = None,
-           max_events: Optional[int] = None, similar: bool = False, session: Optional[Session] = None) -> RenderResult:
+           max_events: Optional[int] = None, similar: bool = False, session: Optional[Session] = None,
+           transfer: bool = True) -> RenderResult:
     """Renders a collision scene, as ``strike render SCENE.json -o OUT.wav`` does (same engine,
     same samples; :meth:`RenderResult.save` writes the CLI's bytes).
 
@@ -271,6 +276,8 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
     similar: exact similarity reuse (``--similar``, docs/datasets.md): one eigen-solve per shape at
         unit size, scaled to every size and material of its Poisson ratio; the same bytes as
         ``strike render --similar``, which differ from a render without it in some modes' polarity.
+    transfer: banks this render computes get an acoustic transfer (default, as the CLI; False:
+        ``--no-transfer``). Banks given in the scene are used as they are.
     session: a :class:`Session` whose hulls and bank surfaces this render reuses and adds to
         (renders in a loop: ~3 ms each of a small scene); the same bytes without it.
     The GIL is released during the render.
@@ -297,11 +304,11 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
         # Why a file name: it anchors relative paths and names the source in messages.
         anchor = os.path.join(os.path.abspath(os.fspath(base_dir or ".")), "<scene dict>")
         native = _strike.render_text(json.dumps(scene), anchor, rate_hz, duration_s, gain, cache_dir, max_tets, max_events,
-                                     bool(similar), session)
+                                     bool(similar), bool(transfer), session)
         return RenderResult(native, scene)
     path = os.fspath(scene)
     native = _strike.render_file(path, rate_hz, duration_s, gain, cache_dir, max_tets, max_events, bool(similar),
-                                 session)
+                                 bool(transfer), session)
     return RenderResult(native, path)
 
 

@@ -496,6 +496,14 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     report.warnings.push_back(std::move(text));
   };
   for (std::string& text : checkStartingPlacement(scene, sim_bodies)) warn(std::move(text));
+  // A bank given in the scene is used as it is: one without a transfer (older formats, or solved
+  // with --no-transfer) is heard with the direction-averaged model (radiation.cpp). Say so once.
+  if (settings.acoustic_transfer)
+    for (const Body& body : bodies)
+      if (!body.object->bank.empty() && body.bank.transfer.empty() && body.bank.modeCount() > 0)
+        warn("objects \"" + body.object->name + "\": bank " + body.object->bank +
+             " has no acoustic transfer: heard at each mode's direction-averaged level, with no direction "
+             "(solve it again with `strike modes` for the transfer; docs/listener.md)");
   // Convex pieces of concave moving bodies from the cache (computed ones are written after).
   std::vector<uint64_t> surface_hashes(bodies.size(), 0);
   for (size_t i = 0; i < bodies.size(); ++i) {

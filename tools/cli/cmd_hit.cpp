@@ -191,6 +191,12 @@ int runHit(const std::vector<std::string>& raw_args) {
     else
       std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL at %.3g m)\n", peak,
                    20.0 * std::log10(peak), 20.0 * std::log10(peak * kFullScalePascal / *gain / 20e-6), *distance);
+    if (bank.transfer.empty() && bank.modeCount() > 0)
+      std::fprintf(stderr,
+                   "  note        the bank has no acoustic transfer (format %u, or solved with --no-transfer): each mode\n"
+                   "              is heard at its direction-averaged level, no direction, a sign that depends on the\n"
+                   "              solve (docs/listener.md); `strike modes` solves it by default\n",
+                   bank.format_version);
     if (clipped > 0)
       std::fprintf(stderr, "  CLIPPING    %zu samples at or above full scale%s; lower --gain\n", clipped,
                    encoding == SampleEncoding::Float32 ? " (kept in the float file)" : " (clipped in the file)");

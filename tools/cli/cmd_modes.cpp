@@ -66,12 +66,14 @@ CommandSpec modesSpec() {
       {"--compact", "",
        "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
        "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
-      {"--transfer", "",
-       "also solve each mode's acoustic transfer (its far field in every direction, with the body\n"
-       "as an obstacle: boundary elements; docs/listener.md): renders then hear each impact in the\n"
-       "listener's direction, and the same object solved twice sounds the same. Costs 0.8x-1.8x\n"
-       "the eigen-solve on the order-2 examples (bowl, coin, glass, bar), 5x-20x on plates and\n"
-       "planks of linear tets, whose eigen-solve is cheap (docs/acoustic-transfer.md)"},
+      {"--no-transfer", "",
+       "do not solve each mode's acoustic transfer (solved by default: its far field in every\n"
+       "direction, with the body as an obstacle: boundary elements; docs/listener.md). Without it\n"
+       "renders hear each mode at its direction-averaged level, whose sign depends on the solve.\n"
+       "The transfer costs 0.8x-1.8x the eigen-solve on the order-2 examples (bowl, coin, glass,\n"
+       "bar), more on plates, planks and blocks of linear tets, whose eigen-solve is cheap\n"
+       "(docs/acoustic-transfer.md)"},
+      {"--transfer", "", "solve the acoustic transfer (the default; kept so older scripts run)"},
       {"--similar", "",
        "solve the shape at unit size with a reference material and scale the bank to the object,\n"
        "as `strike render --similar` does: the bank that render uses (frequencies equal to a\n"
@@ -337,7 +339,9 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (*order != 1 && *order != 2)
     return reportError("modes", badInput("--order = " + args.text("--order") + " (must be 1 or 2)"));
   settings.order = static_cast<int>(*order);
-  settings.acoustic_transfer = args.has("--transfer");
+  if (args.has("--transfer") && args.has("--no-transfer"))
+    return reportError("modes", badInput("give --transfer or --no-transfer, not both"));
+  settings.acoustic_transfer = !args.has("--no-transfer");
   Result<double> size = args.number("--size", 0.0);
   if (!size) return reportError("modes", size.error());
   if (args.has("--size") && !(*size > 0))

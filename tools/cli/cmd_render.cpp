@@ -42,11 +42,12 @@ CommandSpec renderSpec() {
        "after the render, remove the least recently used banks until the cache fits\n"
        "in SIZE (e.g. 500M, 2G; 0 = no cap); default 2G. See `strike cache`"},
       {"--max-tets", "N", "refuse object meshes with more tets than this (memory cap); default 2000000"},
-      {"--transfer", "",
-       "solve the acoustic transfer of every bank computed (as `strike modes --transfer`): each\n"
-       "impact is heard in the listener's direction, and the sound no longer depends on the\n"
-       "eigen-solver's choice of signs. Costs 0.8x-1.8x the eigen-solve per bank on the order-2\n"
-       "examples, 5x-20x on plates and planks of linear tets, whose eigen-solve is cheap (cached)"},
+      {"--no-transfer", "",
+       "solve no acoustic transfer for the banks computed (solved by default, as by `strike modes`):\n"
+       "each mode is then heard at its direction-averaged level, with no direction and a sign that\n"
+       "depends on the eigen-solver. The transfer costs 0.8x-1.8x the eigen-solve per bank on the\n"
+       "order-2 examples, more on plates, planks and blocks of linear tets (cached)"},
+      {"--transfer", "", "solve the acoustic transfer (the default; kept so older scripts run)"},
       {"--similar", "",
        "exact similarity reuse: solve each shape once at unit size and scale it to every size and\n"
        "material (same Poisson ratio) of the scene and the cache (docs/datasets.md); changes the\n"
@@ -203,7 +204,9 @@ int runRender(const std::vector<std::string>& raw_args) {
   settings.simd = *simd;
   if (args.has("--via-library")) settings.output = libraryOutput(settings.gain);
   settings.similar_reuse = args.has("--similar");
-  settings.acoustic_transfer = args.has("--transfer");
+  if (args.has("--transfer") && args.has("--no-transfer"))
+    return reportError("render", badInput("give --transfer or --no-transfer, not both"));
+  settings.acoustic_transfer = !args.has("--no-transfer");
   settings.cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
   if (args.has("--cache-max-size")) {
     Result<uint64_t> cap = parseByteSize(args.text("--cache-max-size"), "--cache-max-size");

@@ -30,12 +30,13 @@ struct PrecomputeSettings {
   /// Estimate each mode's frequency error (src/precompute/error_estimate.cpp) at extra cost;
   /// does not change the modes, so it is not part of the cache key.
   bool error_estimate = false;
-  /// Solve each mode's acoustic transfer (bank.transfer, its own phase "transfer"; issue 17;
-  /// `strike modes --transfer`, `strike render --transfer`). Opt-in: it costs 0.4x to 1.3x
-  /// the eigen-solve on the examples (docs/acoustic-transfer.md), not yet within the issue's
-  /// budget for the bowl (1x), so it is not yet the default. Off
-  /// for solves whose frequencies are not the object's (the normalized problem, the --tolerance
-  /// trials, which solve it once on the bank they choose). Part of the cache key.
+  /// Solve each mode's acoustic transfer (bank.transfer, its own phase "transfer"; issue 17).
+  /// The tools turn it on (`strike modes`, `strike render` and the Python package solve it unless
+  /// told `--no-transfer` / transfer=False); here, as error_estimate, it is asked for. Without it
+  /// the sound depends on the eigen-solver's signs and degenerate bases and has no direction. It costs 0.8x to 1.8x the eigen-solve on the order-2 examples, more on coarse
+  /// linear-tet plates and blocks (docs/acoustic-transfer.md, "On the examples' banks").
+  /// Off for solves whose frequencies are not the object's (the normalized problem, the
+  /// --tolerance trials, which solve it once on the bank they choose). Part of the cache key.
   bool acoustic_transfer = false;
   TransferSettings transfer;  ///< air and resolution of the transfer solve
 };

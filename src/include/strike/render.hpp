@@ -88,6 +88,8 @@ struct RenderSettings {
   /// (the same modes, frequencies equal to 2e-12) and the committed golden renders would not match.
   bool similar_reuse = false;
   /// Banks computed by this render get an acoustic transfer (PrecomputeSettings::acoustic_transfer).
+  /// `strike render` and the Python package turn it on unless told `--no-transfer`; here it is
+  /// asked for, as in PrecomputeSettings. Banks given in the scene are used as they are.
   bool acoustic_transfer = false;
   /// Physics step, s (at most 1 ms, what the issue allows). Contact times fall on this grid, so an
   /// impact is placed within one step (48 samples at 48 kHz); 1 ms halves the simulation cost of

@@ -300,6 +300,9 @@ TEST_F(SteelBar, HitRejectsBadStrikePoints) {
 
 // Decay rates through the whole chain: a bar with distinct widths (no degenerate bending pairs to
 // beat against each other), struck, analysed: each strong peak's decay within 3% of the bank's.
+// A peak 30 dB or more below another within 100 Hz is not judged: with the acoustic transfer the
+// 4397 Hz torsion-like mode is heard 35 dB below the 4356 Hz bending mode 40 Hz away, and a
+// per-peak fit of a line that weak beside one that strong reads their beating (5.6% here).
 TEST(CliHit, FittedDecayRatesMatchTheBank) {
   const std::string bank = temp("bar-2x3.modes"), wav = temp("bar-2x3.wav");
   CliResult r = runCli("modes box:0.3,0.02,0.03 --material aluminium --max-freq 8000 --quiet -o '" + bank + "'");
@@ -313,6 +316,11 @@ TEST(CliHit, FittedDecayRatesMatchTheBank) {
   for (const auto& p : a["peaks"]) {
     if (p["level_db"].get<double>() < -40 || !p.contains("decay_per_s")) continue;
     const double fp = p["freq_hz"];
+    bool masked = false;
+    for (const auto& q : a["peaks"])
+      masked |= std::fabs(q["freq_hz"].get<double>() - fp) < 100.0 &&
+                q["level_db"].get<double>() - p["level_db"].get<double>() >= 30.0;
+    if (masked) continue;
     size_t best = 0;
     for (size_t i = 0; i < info["frequencies_hz"].size(); ++i)
       if (std::fabs(info["frequencies_hz"][i].get<double>() - fp) <
@@ -322,7 +330,7 @@ TEST(CliHit, FittedDecayRatesMatchTheBank) {
     EXPECT_NEAR(p["decay_per_s"].get<double>(), expected, 0.03 * expected) << "peak at " << fp << " Hz";
     ++checked;
   }
-  EXPECT_GE(checked, 3);
+  EXPECT_GE(checked, 5);
 }
 
 // ---- strike render ------------------------------------------------------------------------------

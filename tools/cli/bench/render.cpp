@@ -96,6 +96,7 @@ int runBenchRender(const std::vector<std::string>& raw_args) {
       RenderSettings settings;
       settings.cache_dir = parsed->text("--cache", defaultCacheDir());
       settings.substep_s = configs[c].substep_s;
+      settings.acoustic_transfer = true;  // the banks `strike render` caches by default
       const double loadavg = loadAverage();
       const double cpu_start = cpuSeconds();
       Result<RenderResult> result = renderScene(*scene, settings);

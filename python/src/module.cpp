@@ -142,6 +142,7 @@ py::dict reportDict(const PyRenderResult& r) {
     entry["cache_key"] = b.cache_key ? py::object(py::str(hex64(b.cache_key))) : py::object(py::none());
     entry["given"] = b.given_path.empty() ? py::object(py::none()) : py::object(py::str(b.given_path));
     entry["sounded"] = b.sounded;
+    entry["transfer_key"] = b.transfer_key ? py::object(py::str(hex64(b.transfer_key))) : py::object(py::none());
     banks.append(entry);
   }
   d["banks"] = banks;
@@ -154,6 +155,9 @@ py::dict reportDict(const PyRenderResult& r) {
   d["banks_computed"] = s.banks_computed;
   d["banks_shared"] = s.banks_shared;
   d["banks_scaled"] = s.banks_scaled;
+  d["transfers_solved"] = s.transfers_solved;
+  d["transfers_cached"] = s.transfers_cached;
+  d["transfers_shared"] = s.transfers_shared;
   d["events"] = s.events;
   d["impacts"] = s.impacts;
   d["sustained_contacts"] = s.sustained_contacts;
@@ -174,6 +178,7 @@ py::dict reportDict(const PyRenderResult& r) {
   seconds["synthesize"] = s.synthesize_seconds;
   seconds["total"] = s.total_seconds;
   seconds["saved_by_cache"] = s.precompute_saved_seconds;
+  seconds["transfers_saved_by_cache"] = s.transfer_saved_seconds;
   d["seconds"] = seconds;
   return d;
 }

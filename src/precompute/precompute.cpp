@@ -128,19 +128,20 @@ uint64_t bankCacheKey(uint64_t mesh_hash, const PrecomputeSettings& settings) {
   if (settings.mesh_scale != 1.0) key = fnv1a64(&settings.mesh_scale, sizeof settings.mesh_scale, key);
   // A bank with an acoustic transfer is another bank than one without, and so is one solved to
   // another target or budget.
-  if (settings.acoustic_transfer) {
-    const TransferSettings& t = settings.transfer;
-    const double transfer[] = {t.air_density_kg_m3,
-                               t.speed_of_sound_m_s,
-                               t.target_relative_error,
-                               static_cast<double>(t.max_elements),
-                               static_cast<double>(t.min_elements),
-                               static_cast<double>(t.fixed_elements),
-                               t.chief ? 1.0 : 0.0,
-                               static_cast<double>(kTransferSolverRevision)};
-    key = fnv1a64(transfer, sizeof transfer, key);
-  }
+  if (settings.acoustic_transfer) key = transferSettingsKey(settings.transfer, key);
   return fnv1a64(STRIKE_VERSION_STRING, sizeof STRIKE_VERSION_STRING - 1, key);
+}
+
+uint64_t transferSettingsKey(const TransferSettings& t, uint64_t key) {
+  const double transfer[] = {t.air_density_kg_m3,
+                             t.speed_of_sound_m_s,
+                             t.target_relative_error,
+                             static_cast<double>(t.max_elements),
+                             static_cast<double>(t.min_elements),
+                             static_cast<double>(t.fixed_elements),
+                             t.chief ? 1.0 : 0.0,
+                             static_cast<double>(kTransferSolverRevision)};
+  return fnv1a64(transfer, sizeof transfer, key);
 }
 
 ModeBank massAndSurfaceBank(const LoadedMesh& loaded, const PrecomputeSettings& settings) {

@@ -10,6 +10,19 @@
 
 namespace strike {
 
+AcousticTransfer scaledTransfer(const AcousticTransfer& from, size_t keep, double scale, double shape_factor) {
+  AcousticTransfer to = from;
+  for (int a = 0; a < 3; ++a) to.centre_m[a] = from.centre_m[a] * scale;
+  to.order.resize(keep);
+  to.offset.resize(keep + 1);
+  to.relative_error.resize(keep);
+  to.coefficients.resize(to.offset[keep]);
+  const float factor = static_cast<float>(shape_factor * scale * scale);
+  for (std::complex<float>& c : to.coefficients) c *= factor;
+  for (double& m : to.translation_dipole_m3) m *= scale * scale * scale;
+  return to;
+}
+
 Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Material& material, double max_freq_hz,
                              const std::string& mesh_spec, const TransferSettings* transfer_settings) {
   auto text = [](double v) {  // shortest round-trip form: 0.1, not 0.10000000000000001
@@ -72,17 +85,7 @@ Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Materia
   const double ka_factor = std::sqrt(lambda_factor) * scale;  // omega' / omega times s
   out.transfer = AcousticTransfer{};
   if (solved.transfer.modeCount() == solved.modeCount() && std::abs(ka_factor - 1.0) <= 1e-12) {
-    const AcousticTransfer& from = solved.transfer;
-    AcousticTransfer& to = out.transfer;
-    to = from;
-    for (int a = 0; a < 3; ++a) to.centre_m[a] = from.centre_m[a] * scale;
-    to.order.resize(keep);
-    to.offset.resize(keep + 1);
-    to.relative_error.resize(keep);
-    to.coefficients.resize(to.offset[keep]);
-    const float factor = static_cast<float>(shape_factor * scale * scale);
-    for (std::complex<float>& c : to.coefficients) c *= factor;
-    for (double& m : to.translation_dipole_m3) m *= scale * scale * scale;
+    out.transfer = scaledTransfer(solved.transfer, keep, scale, shape_factor);
     out.transfer_seconds = 0.0;
   } else if (transfer_settings) {
     if (Status transfer = solveTransferInto(out, *transfer_settings); !transfer) return transfer.error();

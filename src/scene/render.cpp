@@ -70,6 +70,7 @@ struct Body {
   uint64_t identity_key = 0;  ///< of the object itself: equal for identical objects
   uint64_t normal_mesh_hash = 0;
   ModeBank normal_bank;  ///< the normalized solve: mass and surface, header, or whole once read
+  uint64_t transfer_key = 0;  ///< with the transfer too: its unit transfer's (unitTransferCacheKey)
 };
 
 std::string hex(uint64_t value) {
@@ -205,8 +206,8 @@ Status scaleSolve(Body& body, size_t index, std::map<uint64_t, size_t>& solved_b
 /// Phase 2 for one sounding body with similar_reuse: its shape's solve (shared with an earlier
 /// body, read from the cache, or solved now and cached), scaled to it.
 template <class Warn>
-Status similarPhase2(std::vector<Body>& bodies, size_t i, const RenderSettings& settings,
-                     std::map<uint64_t, size_t>& solved_by_key, RenderReport& report, Warn& warn) {
+Status similarModes(std::vector<Body>& bodies, size_t i, const RenderSettings& settings,
+                    std::map<uint64_t, size_t>& solved_by_key, RenderReport& report, Warn& warn) {
   Body& body = bodies[i];
   if (auto shared = solved_by_key.find(body.cache_key); shared != solved_by_key.end()) {
     const Body& holder = bodies[shared->second];
@@ -245,6 +246,77 @@ Status similarPhase2(std::vector<Body>& bodies, size_t i, const RenderSettings& 
     (void)writeBank(cachePath(settings.cache_dir, body.cache_key, ".modes"), body.normal_bank);
   }
   return scaleSolve(body, i, solved_by_key);
+}
+
+/// The unit transfer `key` from the cache, if there and the one of these modes (a damaged,
+/// foreign or stale entry is solved again, not trusted); marked as used.
+std::optional<ModeBank> readCachedTransfer(const std::string& cache_dir, uint64_t key, const ModeBank& normal,
+                                           const PrecomputeSettings& actual, size_t kept_modes) {
+  const std::string path = cachePath(cache_dir, key, ".transfer");
+  if (!std::filesystem::is_regular_file(path)) return std::nullopt;
+  Result<ModeBank> cached = readBank(path);
+  if (!cached || !isUnitTransferOf(*cached, normal, actual, kept_modes)) return std::nullopt;
+  touchCacheEntry(path);
+  return std::move(*cached);
+}
+
+/// With similar_reuse and the transfer: the body's (already scaled) bank gets its unit transfer,
+/// scaled (normalized_problem.hpp): shared with an earlier body of the same shape, wave speed and
+/// modes kept, read from the cache, or solved now on the normalized solve and cached. Which one
+/// changes no bit of the body's transfer.
+Status similarTransfer(std::vector<Body>& bodies, size_t i, const RenderSettings& settings,
+                       const std::map<uint64_t, size_t>& solved_by_key, std::map<uint64_t, ModeBank>& unit_by_key,
+                       RenderReport& report) {
+  Body& body = bodies[i];
+  const ModeBank& normal = bodies[solved_by_key.at(body.cache_key)].normal_bank;  // whole: shapes loaded
+  const size_t kept = body.bank.modeCount();
+  body.transfer_key = unitTransferCacheKey(body.cache_key, body.precompute, kept);
+  auto attach = [&](const ModeBank& unit) -> Status {
+    Status attached = attachUnitTransfer(body.bank, unit, body.normal, body.precompute);
+    if (!attached) return badInput("objects \"" + body.object->name + "\": " + attached.error().message);
+    return {};
+  };
+  if (auto shared = unit_by_key.find(body.transfer_key); shared != unit_by_key.end()) {
+    ++report.transfers_shared;
+    return attach(shared->second);
+  }
+  std::optional<ModeBank> unit;
+  // Held until the transfer is in the cache: a render elsewhere that needs it waits, then reads it.
+  CacheEntryLock lock;
+  if (!settings.cache_dir.empty()) {
+    unit = readCachedTransfer(settings.cache_dir, body.transfer_key, normal, body.precompute, kept);
+    if (!unit) {
+      lock = CacheEntryLock(cachePath(settings.cache_dir, body.transfer_key, ".lock"));
+      // Solved by whoever held the lock while this render waited.
+      if (lock.held()) unit = readCachedTransfer(settings.cache_dir, body.transfer_key, normal, body.precompute, kept);
+    }
+  }
+  if (unit) {
+    ++report.transfers_cached;
+    report.transfer_saved_seconds += unit->transfer_seconds;
+  } else {
+    if (settings.progress) settings.progress("transfer " + body.object->name, -1.0);
+    Result<ModeBank> solved = solveUnitTransfer(normal, body.precompute, kept);
+    if (!solved) return badInput("objects \"" + body.object->name + "\": " + solved.error().message);
+    ++report.transfers_solved;
+    // A failed cache write costs the next render time, never this one its result.
+    if (!settings.cache_dir.empty())
+      (void)writeBank(cachePath(settings.cache_dir, body.transfer_key, ".transfer"), *solved);
+    unit = std::move(*solved);
+  }
+  Status attached = attach(*unit);
+  unit_by_key.emplace(body.transfer_key, std::move(*unit));
+  return attached;
+}
+
+/// Phase 2 for one sounding body with similar_reuse: its bank, and with the transfer its transfer.
+template <class Warn>
+Status similarPhase2(std::vector<Body>& bodies, size_t i, const RenderSettings& settings,
+                     std::map<uint64_t, size_t>& solved_by_key, std::map<uint64_t, ModeBank>& unit_by_key,
+                     RenderReport& report, Warn& warn) {
+  if (Status made = similarModes(bodies, i, settings, solved_by_key, report, warn); !made) return made;
+  if (!settings.acoustic_transfer) return {};
+  return similarTransfer(bodies, i, settings, solved_by_key, unit_by_key, report);
 }
 
 /// Phase 1 for one object: a bank with at least mass properties and surface.
@@ -591,6 +663,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   const auto precompute_start = std::chrono::steady_clock::now();
   std::map<uint64_t, size_t> computed_by_key;  // identical objects share one eigen-solve
   std::map<uint64_t, size_t> solved_by_key;    // similar_reuse: objects of one shape share one solve
+  std::map<uint64_t, ModeBank> unit_by_key;    // ...and one transfer per wave speed and modes kept
   for (size_t i = 0; i < bodies.size(); ++i) {
     Body& body = bodies[i];
     if (body.max_velocity_change_m_s == 0.0 && !settings.leave_nothing_out) continue;
@@ -601,7 +674,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     }
     body.sounded = true;
     if (settings.similar_reuse && body.object->bank.empty()) {
-      if (Status made = similarPhase2(bodies, i, settings, solved_by_key, report, warn); !made) return made.error();
+      if (Status made = similarPhase2(bodies, i, settings, solved_by_key, unit_by_key, report, warn); !made)
+        return made.error();
       continue;
     }
     if (body.file) {
@@ -766,7 +840,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   report.max_active_modes = engine_stats.max_active_modes;
   report.synthesize_seconds = secondsSince(synth_start);
   for (const Body& body : bodies)
-    result.banks.push_back({body.object->bank.empty() ? body.cache_key : 0, body.object->bank, body.sounded});
+    result.banks.push_back(
+        {body.object->bank.empty() ? body.cache_key : 0, body.object->bank, body.sounded, body.transfer_key});
   report.total_seconds = secondsSince(start);
   return result;
 }

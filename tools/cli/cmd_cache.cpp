@@ -91,7 +91,13 @@ int runCache(const std::vector<std::string>& raw_args) {
         }
         Result<BankFile> bank = BankFile::open(e.path);  // the header only: shapes are not read
         std::string what = "(unreadable: " + (bank ? std::string() : bank.error().message) + ")";
-        if (bank) {
+        const bool transfer = name.size() > 9 && name.compare(name.size() - 9, 9, ".transfer") == 0;
+        if (bank && transfer) {
+          char text[512];
+          std::snprintf(text, sizeof text, "acoustic transfer of %s at unit size, %zu modes (render --similar)",
+                        bank->bank().mesh_source.c_str(), bank->bank().modeCount());
+          what = text;
+        } else if (bank) {
           char text[512];
           std::snprintf(text, sizeof text, "%s, %s, Tet%d, %zu modes", bank->bank().mesh_source.c_str(),
                         bank->bank().material.name.c_str(), bank->bank().element_order == 2 ? 10 : 4,

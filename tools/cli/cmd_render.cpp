@@ -51,7 +51,8 @@ CommandSpec renderSpec() {
       {"--similar", "",
        "exact similarity reuse: solve each shape once at unit size and scale it to every size and\n"
        "material (same Poisson ratio) of the scene and the cache (docs/datasets.md); changes the\n"
-       "polarity of some modes against a render without it"},
+       "polarity of some modes against a render without it. With the transfer, one transfer per shape,\n"
+       "wave speed E/rho and number of modes kept, scaled to every size and density (cached)"},
       {"--max-events", "N", "stop if the simulation records more contact events (memory cap); default 20000000"},
       {"--simd", "KERNEL", kSimdHelp},
       {"--via-library", "",
@@ -93,6 +94,11 @@ void printSummary(const RenderResult& result, const std::string& output, double 
                "  banks       %zu given, %zu from the cache, %zu computed, %zu shared between identical objects, "
                "%zu scaled from a solve of the same shape\n",
                r.banks_given, r.banks_cached, r.banks_computed, r.banks_shared, r.banks_scaled);
+  if (r.transfers_solved + r.transfers_cached + r.transfers_shared > 0)
+    std::fprintf(stderr,
+                 "  transfers   %zu solved, %zu from the cache, %zu shared (one per shape, wave speed and modes kept, "
+                 "scaled to each size)\n",
+                 r.transfers_solved, r.transfers_cached, r.transfers_shared);
   if (r.shape_vertices_total > 0)
     std::fprintf(stderr,
                  "  shapes      read at %zu of the bank files' %zu surface vertices (%.1f%%: where contacts landed)\n",
@@ -151,6 +157,8 @@ void printSummary(const RenderResult& result, const std::string& output, double 
   for (const std::string& note : r.collision_notes) std::fprintf(stderr, "  collision   %s\n", note.c_str());
   if (r.precompute_saved_seconds > 0)
     std::fprintf(stderr, "  saved       %.2f s of eigen-solves answered by the cache\n", r.precompute_saved_seconds);
+  if (r.transfer_saved_seconds > 0)
+    std::fprintf(stderr, "  saved       %.2f s of transfer solves answered by the cache\n", r.transfer_saved_seconds);
 }
 
 }  // namespace

@@ -21,6 +21,26 @@ Result<uint64_t> specHash(const std::string& spec) {
   return fnv1a64(bytes->data(), bytes->size());
 }
 
+/// With the transfer: `scaled` gets its unit transfer (normalized_problem.hpp) from the cache
+/// entry KEY.transfer that `strike render --similar --transfer` uses, or solved and put there.
+Status attachTransfer(ModeBank& scaled, const ModeBank& normalized, const NormalizedProblem& problem,
+                      const PrecomputeSettings& settings, const std::string& cache_dir, uint64_t normalized_key) {
+  const size_t kept = scaled.modeCount();
+  char name[32];
+  std::snprintf(name, sizeof name, "/%016llx.transfer",
+                static_cast<unsigned long long>(unitTransferCacheKey(normalized_key, settings, kept)));
+  const std::string path = cache_dir + name;
+  if (std::filesystem::is_regular_file(path)) {
+    Result<ModeBank> cached = readBank(path);
+    if (cached && isUnitTransferOf(*cached, normalized, settings, kept))  // else solved again
+      return attachUnitTransfer(scaled, *cached, problem, settings);
+  }
+  Result<ModeBank> unit = solveUnitTransfer(normalized, settings, kept);
+  if (!unit) return unit.error();
+  (void)writeBank(path, *unit);  // a failed cache write costs the next run time
+  return attachUnitTransfer(scaled, *unit, problem, settings);
+}
+
 }  // namespace
 
 Result<PrecomputeResult> similarModeBank(const PrecomputeSettings& settings, const std::string& cache_dir,
@@ -31,9 +51,9 @@ Result<PrecomputeResult> similarModeBank(const PrecomputeSettings& settings, con
   const NormalizedProblem problem = normalizeProblem(settings);
   Result<uint64_t> normal_hash = specHash(problem.settings.mesh_spec);
   if (!normal_hash) return normal_hash.error();
+  const uint64_t normalized_key = normalizedBankCacheKey(*normal_hash, problem);
   char name[32];
-  std::snprintf(name, sizeof name, "/%016llx.modes",
-                static_cast<unsigned long long>(normalizedBankCacheKey(*normal_hash, problem)));
+  std::snprintf(name, sizeof name, "/%016llx.modes", static_cast<unsigned long long>(normalized_key));
   source.cache_entry = cache_dir + name;
   if (std::filesystem::is_regular_file(source.cache_entry)) {
     Result<ModeBank> cached = readBank(source.cache_entry);
@@ -42,6 +62,9 @@ Result<PrecomputeResult> similarModeBank(const PrecomputeSettings& settings, con
         (!settings.error_estimate || cached->frequency_error_estimate.size() == cached->modeCount())) {
       Result<ModeBank> scaled = scaleNormalizedBank(*cached, problem, settings, *actual_hash);
       if (!scaled) return scaled.error();
+      if (settings.acoustic_transfer)
+        if (Status t = attachTransfer(*scaled, *cached, problem, settings, cache_dir, normalized_key); !t)
+          return t.error();
       PrecomputeResult result;
       result.bank = std::move(*scaled);
       result.report.capped_by_max_modes = cached->modeCount() >= cached->max_modes;
@@ -56,6 +79,9 @@ Result<PrecomputeResult> similarModeBank(const PrecomputeSettings& settings, con
   (void)writeBank(source.cache_entry, solved->bank);  // a failed cache write costs the next run time
   Result<ModeBank> scaled = scaleNormalizedBank(solved->bank, problem, settings, *actual_hash);
   if (!scaled) return scaled.error();
+  if (settings.acoustic_transfer)
+    if (Status t = attachTransfer(*scaled, solved->bank, problem, settings, cache_dir, normalized_key); !t)
+      return t.error();
   solved->bank = std::move(*scaled);
   return solved;
 }

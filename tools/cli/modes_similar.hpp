@@ -16,7 +16,8 @@ struct SimilarSource {
 
 /// The bank of `settings`' object, scaled from its normalized solve. With a cache folder the
 /// solve is read from there when present (and, if an error estimate is asked for, has one), else
-/// solved and written there. The result's modes do not depend on which.
+/// solved and written there; so is its unit transfer (KEY.transfer) with settings.acoustic_transfer.
+/// The result's modes and transfer do not depend on which.
 Result<PrecomputeResult> similarModeBank(const PrecomputeSettings& settings, const std::string& cache_dir,
                                          SimilarSource& source);
 

@@ -63,7 +63,48 @@ uint64_t normalizedBankCacheKey(uint64_t mesh_hash, const NormalizedProblem& pro
 Result<ModeBank> scaleNormalizedBank(const ModeBank& normalized, const NormalizedProblem& problem,
                                      const PrecomputeSettings& actual, uint64_t mesh_hash);
 
-/// What `strike modes` and a render compute: the normalized solve, scaled.
+// ---- The acoustic transfer of similar banks (issue 17) ----------------------------------------
+// The transfer depends on ka of each mode, which similarity changes only through the material:
+// scaled by s from the unit size and made of E, rho, a mode's omega is the normalized one times
+// sqrt((E/rho) / (E_ref/rho_ref)) / s and the body's radius s times the unit one, so ka is the
+// normalized ka times the ratio of wave speeds, whatever the size. The exterior problem of the
+// scaled body with data scaled by shape_factor then has the solution p'(s x) = shape_factor s
+// p(x) of the unit body's (similar_bank.cpp), so F' = shape_factor s^2 F exactly. So ONE solve
+// serves every object of a shape and of one E/rho, at any size and density: the UNIT TRANSFER,
+// solved on the normalized solve at unit size with its eigenvalues scaled to the object's wave
+// speed (unitTransferBank) and scaled to each object (attachUnitTransfer).
+// Determinism: the unit transfer depends on the shape, E/rho, the modes kept and the transfer
+// settings only, never on which object of a render came first or on the cache (the cache keeps its
+// exact bits: floats and doubles as they are). The modes kept are part of its key: the solver's
+// near-quadrature rules are chosen at the bank's largest k, so a transfer of 12 modes is not the
+// prefix of one of 20. With no mode kept the transfer is the rigid translation's dipole alone,
+// which does not depend on the material: one for every material.
+
+/// Cache key of the unit transfer (the cache entry KEY.transfer) of an object of `actual`'s
+/// material and transfer settings that keeps `kept_modes` modes of the normalized solve keyed
+/// `normalized_key` (normalizedBankCacheKey).
+uint64_t unitTransferCacheKey(uint64_t normalized_key, const PrecomputeSettings& actual, size_t kept_modes);
+
+/// The bank the unit transfer is solved on: `normalized` (shapes loaded) at unit size, its first
+/// `kept_modes` modes, eigenvalues times (E/rho) / (E_ref/rho_ref) of `actual`'s material.
+ModeBank unitTransferBank(const ModeBank& normalized, const PrecomputeSettings& actual, size_t kept_modes);
+
+/// Solves the unit transfer (actual.transfer's settings). The result is what the cache keeps: the
+/// unit bank's header, eigenvalues and transfer, without surface or shapes (a few hundred kB).
+Result<ModeBank> solveUnitTransfer(const ModeBank& normalized, const PrecomputeSettings& actual, size_t kept_modes);
+
+/// Whether `cached` (a KEY.transfer entry read back) is the unit transfer of these: the same
+/// normalized mesh, the same eigenvalues to the bit, a transfer of every mode in the same air.
+bool isUnitTransferOf(const ModeBank& cached, const ModeBank& normalized, const PrecomputeSettings& actual,
+                      size_t kept_modes);
+
+/// Sets `scaled.transfer` (a bank from scaleNormalizedBank, kept_modes modes) to the unit
+/// transfer `unit` scaled to its object: F' = shape_factor s^2 F, the dipole times s^3.
+Status attachUnitTransfer(ModeBank& scaled, const ModeBank& unit, const NormalizedProblem& problem,
+                          const PrecomputeSettings& actual);
+
+/// What `strike modes` and a render compute: the normalized solve, scaled (and with
+/// actual.acoustic_transfer, the unit transfer solved and scaled).
 Result<PrecomputeResult> computeSimilarModeBank(const PrecomputeSettings& actual);
 
 }  // namespace strike

@@ -78,6 +78,9 @@ Status solveTransferInto(ModeBank& bank, const TransferSettings& settings, const
 /// Cache key of the bank that `settings` would compute from a mesh whose source hashes to
 /// mesh_hash: every input that changes the result goes in.
 uint64_t bankCacheKey(uint64_t mesh_hash, const PrecomputeSettings& settings);
+/// `key` hashed on with every transfer setting that changes the result and kTransferSolverRevision
+/// (part of bankCacheKey with acoustic_transfer, and of the unit transfer's key).
+uint64_t transferSettingsKey(const TransferSettings& transfer, uint64_t key);
 
 /// Restricts a full mode-shape matrix (3N by #modes) to the surface of `mesh` and fills the
 /// bank's surface (positions, area-weighted outward normals, triangles, node index) and shapes.

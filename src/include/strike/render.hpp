@@ -120,6 +120,10 @@ struct RenderReport {
   /// Banks scaled from a solve of the same shape made in this render for an object of another
   /// size or material (every computed bank is a normalized solve, scaled: normalized_problem.hpp).
   size_t banks_scaled = 0;
+  /// With similar_reuse and the acoustic transfer: unit transfers (one per shape, wave speed E/rho
+  /// and number of modes kept; normalized_problem.hpp) solved by this render, read from the cache,
+  /// and taken from an earlier object of this render; each body's is its unit transfer, scaled.
+  size_t transfers_solved = 0, transfers_cached = 0, transfers_shared = 0;
   /// Surface vertices whose mode shapes were read from given or cached bank files, of all theirs
   /// (a render reads shapes only where its contacts land).
   size_t shape_vertices_read = 0, shape_vertices_total = 0;
@@ -146,6 +150,7 @@ struct RenderReport {
   size_t clipped_samples = 0;
   double load_seconds = 0, simulate_seconds = 0, precompute_seconds = 0, synthesize_seconds = 0, total_seconds = 0;
   double precompute_saved_seconds = 0;  ///< eigen-solve time the cache answered (as recorded in the banks)
+  double transfer_saved_seconds = 0;    ///< unit transfer solves the cache answered (as recorded in them)
   size_t cache_pruned = 0;              ///< banks removed from the cache by its size cap after this render
   uint64_t cache_pruned_bytes = 0;
   double pieces_seconds = 0;  ///< of simulate_seconds: computing convex pieces (cached for the next render)
@@ -161,6 +166,9 @@ struct BodyBank {
   uint64_t cache_key = 0;  ///< 0 when the scene gave the bank file
   std::string given_path;  ///< the scene's "bank", or empty
   bool sounded = false;    ///< struck hard enough to be heard (its bank was used)
+  /// With similar_reuse and the transfer: the cache address of its unit transfer (KEY.transfer),
+  /// equal for bodies that share it; 0 otherwise.
+  uint64_t transfer_key = 0;
 };
 
 struct RenderResult {

@@ -8,7 +8,9 @@
 // Rayleigh damping is the new material's (applied per mode from lambda', as always), and the
 // radiation strengths are recomputed from the scaled surface and shapes. The acoustic transfer
 // is scaled exactly when ka is unchanged (E/rho unchanged: F' = F s^2 / sqrt((rho'/rho) s^3)),
-// else solved again on the scaled bank (src/precompute/similar_bank.cpp).
+// else solved again on the scaled bank (src/precompute/similar_bank.cpp). Banks scaled from a
+// normalized solve get theirs from the unit transfer of their wave speed instead
+// (attachUnitTransfer, normalized_problem.hpp), solved once for every size.
 #pragma once
 
 #include <string>
@@ -29,5 +31,12 @@ namespace strike {
 /// then).
 Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Material& material, double max_freq_hz,
                              const std::string& mesh_spec, const TransferSettings* transfer = nullptr);
+
+/// The transfer of a body scaled by `scale` whose mode shapes are `shape_factor` times those
+/// `from` was solved for, at the same ka per mode (the frequencies times 1 / scale): its first
+/// `keep` modes (keep <= from.modeCount()), F' = shape_factor scale^2 F (rounded once to float),
+/// the dipole tensor times scale^3 and the centre times scale. The same bits from the same inputs,
+/// whichever body is scaled first.
+AcousticTransfer scaledTransfer(const AcousticTransfer& from, size_t keep, double scale, double shape_factor);
 
 }  // namespace strike

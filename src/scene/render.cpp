@@ -97,6 +97,7 @@ bool openCached(const std::string& cache_dir, Body& body, RenderReport& report) 
   Result<BankFile> cached = BankFile::open(path);
   // A damaged cache entry is recomputed, not trusted (damaged shapes are found in phase 2).
   if (!cached || cached->bank().mesh_hash != body.mesh_hash) return false;
+  touchCacheEntry(path);  // read by this render: the size cap removes it last (least recently used)
   body.bank = cached->bank();
   body.file = std::move(*cached);
   body.has_modes = true;
@@ -116,6 +117,7 @@ bool openCachedSolve(const std::string& cache_dir, Body& body, RenderReport& rep
   Result<BankFile> cached = BankFile::open(path);
   // A damaged cache entry is recomputed, not trusted (damaged shapes are found in phase 2).
   if (!cached || cached->bank().mesh_hash != body.normal_mesh_hash) return false;
+  touchCacheEntry(path);  // as openCached()
   body.normal_bank = cached->bank();
   body.file = std::move(*cached);
   body.has_modes = true;

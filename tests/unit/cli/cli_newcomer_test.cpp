@@ -2,6 +2,7 @@
 // Issue 15, "A newcomer's first hour": outputs checked before any work (item 9), scenes that
 // cannot be right named (10), silent results flagged (11), `hit --at` and the events summary
 // (13), the bank cache tool (14), and the CLI reference in docs/cli.md (5).
+#include <chrono>
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -344,6 +345,25 @@ TEST(NewcomerCache, ARenderKeepsTheCacheUnderItsCapRemovingTheLeastRecentlyUsed)
   EXPECT_NE(r.err.find("cache       removed 1 least recently used banks"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(cache + "/00000000000000aa.modes"));
   EXPECT_EQ(filesIn(cache), 1u);
+}
+
+// A render that reads a bank from the cache marks it as used (its modification time), so the size
+// cap, which removes the least recently used first, keeps the banks in use over those merely written
+// long ago. Fails when the read leaves the entry's time alone.
+TEST(NewcomerCache, ARenderThatReadsABankMarksItUsed) {
+  const std::string dir = folder("touch");
+  const std::string cache = dir + "/cache";
+  write(dir + "/drop.json", kDrop);
+  ASSERT_EQ(runCli("render '" + dir + "/drop.json' -o '" + dir + "/a.wav' --cache '" + cache + "' --quiet").exit_code,
+            0);
+  ASSERT_EQ(filesIn(cache), 1u);
+  const fs::path bank = fs::directory_iterator(cache)->path();
+  const auto long_ago = fs::file_time_type::clock::now() - std::chrono::hours(24 * 60);
+  fs::last_write_time(bank, long_ago);
+  CliResult r = runCli("render '" + dir + "/drop.json' -o '" + dir + "/b.wav' --cache '" + cache + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("1 from the cache"), std::string::npos) << r.err;
+  EXPECT_GT(fs::last_write_time(bank), long_ago + std::chrono::hours(24 * 59));
 }
 
 // ---- Item 5: the command line is documented in the repository ----------------------------------

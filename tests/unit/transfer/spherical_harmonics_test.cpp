@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <complex>
+#include <cstring>
+#include <random>
 #include <vector>
 
 #include "strike/acoustic_transfer.hpp"
@@ -109,6 +111,50 @@ TEST(AcousticTransfer, EvaluatesTheSumAndItsRmsAndChecksItsShape) {
   EXPECT_NEAR(t.rmsFarField(1), std::sqrt((2.0 + 0.25) / (4 * M_PI)), 1e-7);
   t.offset[2] = 4;
   EXPECT_NE(t.checkConsistency(2), "");
+}
+
+// The per-impact evaluation (src/synth/sound_paths.cpp) uses the tabulated recurrence and the
+// modes interleaved four at a time; both must give exactly what the plain forms give, or a
+// render would depend on which one ran.
+TEST(SphericalHarmonics, TheTabulatedRecurrenceGivesTheSameBits) {
+  const double directions[][3] = {{0.3, -0.5, 0.812403840463596}, {0, 0, 1},  {0, 0, -1},   {-0.0, 0.0, 1.0},
+                                  {1e-300, 0, 0},                 {1, 1, 1}, {-2, 3, -0.5}, {0.0, 0.0, 0.0}};
+  for (uint32_t order : {0u, 1u, 2u, 7u, 31u, 64u}) {
+    const SphericalHarmonicsTable table = sphericalHarmonicsTable(order);
+    const size_t count = size_t(order + 1) * (order + 1);
+    std::vector<double> plain(count), tabulated(count);
+    for (const auto& d : directions) {
+      realSphericalHarmonics(order, d, plain.data());
+      realSphericalHarmonics(table, d, tabulated.data());
+      EXPECT_EQ(std::memcmp(plain.data(), tabulated.data(), count * sizeof(double)), 0) << "order " << order;
+    }
+  }
+}
+
+TEST(AcousticTransfer, ManyModesEvaluateToTheBitsOfEachModeAlone) {
+  // 11 modes (two groups of four and a remainder) of orders that differ inside each group.
+  AcousticTransfer t;
+  t.order = {3, 0, 5, 2, 9, 9, 1, 4, 6, 2, 7};
+  t.offset = {0};
+  for (uint32_t n : t.order) t.offset.push_back(t.offset.back() + uint64_t(n + 1) * (n + 1));
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+  for (uint64_t j = 0; j < t.offset.back(); ++j) t.coefficients.emplace_back(uniform(random), uniform(random));
+  const uint32_t order = t.maxOrder();
+  std::vector<double> Y(size_t(order + 1) * (order + 1));
+  const double d[3] = {0.2, -0.7, 0.4};
+  realSphericalHarmonics(order, d, Y.data());
+  std::vector<std::complex<double>> F(t.modeCount());
+  evaluateFarField(t, Y.data(), F.data());
+  for (size_t i = 0; i < t.modeCount(); ++i) {
+    double re = 0.0, im = 0.0;
+    for (uint64_t j = t.offset[i]; j < t.offset[i + 1]; ++j) {
+      re += static_cast<double>(t.coefficients[j].real()) * Y[j - t.offset[i]];
+      im += static_cast<double>(t.coefficients[j].imag()) * Y[j - t.offset[i]];
+    }
+    EXPECT_EQ(std::memcmp(&F[i], &re, sizeof re), 0) << "mode " << i;
+    EXPECT_EQ(std::memcmp(reinterpret_cast<const double*>(&F[i]) + 1, &im, sizeof im), 0) << "mode " << i;
+  }
 }
 
 }  // namespace

@@ -171,21 +171,25 @@ namespace {
 // imaginary parts in one instruction: the same two additions, so again the same bits.
 constexpr size_t kLanes = 8;
 
-void evaluateFarFieldLanes(const AcousticTransfer& transfer, size_t first, const double* sh,
+// Modes [first, first + lanes), lanes <= kLanes; the lanes past them have no coefficients.
+void evaluateFarFieldLanes(const AcousticTransfer& transfer, size_t first, size_t lanes, const double* sh,
                            std::complex<double>* out) {
   const std::complex<float>* c[kLanes];
   size_t count[kLanes];
   size_t common = SIZE_MAX;
   for (size_t l = 0; l < kLanes; ++l) {
-    c[l] = transfer.coefficients.data() + transfer.offset[first + l];
-    count[l] = static_cast<size_t>(transfer.offset[first + l + 1] - transfer.offset[first + l]);
+    const size_t mode = first + std::min(l, lanes - 1);
+    c[l] = transfer.coefficients.data() + transfer.offset[mode];
+    count[l] = l < lanes ? static_cast<size_t>(transfer.offset[mode + 1] - transfer.offset[mode]) : 0;
     common = std::min(common, count[l]);
   }
 #if defined(__SSE2__)
   __m128d sum[kLanes];
+#pragma GCC unroll 8
   for (size_t l = 0; l < kLanes; ++l) sum[l] = _mm_setzero_pd();
   for (size_t j = 0; j < common; ++j) {
     const __m128d y = _mm_set1_pd(sh[j]);
+#pragma GCC unroll 8  // keeps the eight sums in registers (a loop over them would store each one every time)
     for (size_t l = 0; l < kLanes; ++l) {
       double pair;  // the coefficient's two floats, (re, im)
       std::memcpy(&pair, c[l] + j, sizeof pair);
@@ -196,6 +200,7 @@ void evaluateFarFieldLanes(const AcousticTransfer& transfer, size_t first, const
   const size_t longest = *std::max_element(count, count + kLanes);
   for (size_t j = common; j < longest; ++j) {  // the longer lanes go on, each in its own order
     const __m128d y = _mm_set1_pd(sh[j]);
+#pragma GCC unroll 8
     for (size_t l = 0; l < kLanes; ++l) {
       if (j >= count[l]) continue;
       double pair;
@@ -204,7 +209,7 @@ void evaluateFarFieldLanes(const AcousticTransfer& transfer, size_t first, const
       sum[l] = _mm_add_pd(sum[l], _mm_mul_pd(value, y));
     }
   }
-  for (size_t l = 0; l < kLanes; ++l)
+  for (size_t l = 0; l < lanes; ++l)
     out[first + l] = {_mm_cvtsd_f64(sum[l]), _mm_cvtsd_f64(_mm_unpackhi_pd(sum[l], sum[l]))};
 #else
   double re[kLanes], im[kLanes];
@@ -216,7 +221,7 @@ void evaluateFarFieldLanes(const AcousticTransfer& transfer, size_t first, const
       im[l] += static_cast<double>(c[l][j].imag()) * y;
     }
   }
-  for (size_t l = 0; l < kLanes; ++l) {
+  for (size_t l = 0; l < lanes; ++l) {
     for (size_t j = common; j < count[l]; ++j) {
       re[l] += static_cast<double>(c[l][j].real()) * sh[j];
       im[l] += static_cast<double>(c[l][j].imag()) * sh[j];
@@ -230,18 +235,7 @@ void evaluateFarFieldLanes(const AcousticTransfer& transfer, size_t first, const
 
 void evaluateFarField(const AcousticTransfer& transfer, const double* sh, std::complex<double>* out) {
   const size_t modes = transfer.modeCount();
-  size_t i = 0;
-  for (; i + kLanes <= modes; i += kLanes) evaluateFarFieldLanes(transfer, i, sh, out);
-  for (; i < modes; ++i) {
-    const std::complex<float>* c = transfer.coefficients.data() + transfer.offset[i];
-    const size_t count = static_cast<size_t>(transfer.offset[i + 1] - transfer.offset[i]);
-    double re = 0.0, im = 0.0;
-    for (size_t j = 0; j < count; ++j) {
-      re += static_cast<double>(c[j].real()) * sh[j];
-      im += static_cast<double>(c[j].imag()) * sh[j];
-    }
-    out[i] = {re, im};
-  }
+  for (size_t i = 0; i < modes; i += kLanes) evaluateFarFieldLanes(transfer, i, std::min(kLanes, modes - i), sh, out);
 }
 
 }  // namespace strike

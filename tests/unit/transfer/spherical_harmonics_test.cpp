@@ -4,6 +4,7 @@
 // and the far-field sum.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <cstring>
@@ -154,6 +155,50 @@ TEST(AcousticTransfer, ManyModesEvaluateToTheBitsOfEachModeAlone) {
     }
     EXPECT_EQ(std::memcmp(&F[i], &re, sizeof re), 0) << "mode " << i;
     EXPECT_EQ(std::memcmp(reinterpret_cast<const double*>(&F[i]) + 1, &im, sizeof im), 0) << "mode " << i;
+  }
+}
+
+// The sound engine keeps a rolling source's far-field factors while N theta <= 1e-3
+// (sound_paths.cpp), relying on Bernstein's inequality: along a great circle a spherical
+// polynomial of degree N changes by at most N theta times its largest value. Checked on random
+// far fields, with the largest value taken over a dense grid (which can only underestimate it).
+TEST(SphericalHarmonics, AFarFieldOfOrderNTurnsByAtMostNThetaOfItsPeak) {
+  std::mt19937 random(11);
+  std::normal_distribution<double> normal;
+  for (uint32_t order : {4u, 16u, 40u}) {
+    const size_t count = size_t(order + 1) * (order + 1);
+    std::vector<double> c(count), Y(count);
+    for (double& x : c) x = normal(random);
+    auto field = [&](const double d[3]) {
+      realSphericalHarmonics(order, d, Y.data());
+      double f = 0.0;
+      for (size_t j = 0; j < count; ++j) f += c[j] * Y[j];
+      return f;
+    };
+    double peak = 0.0;
+    const int grid = static_cast<int>(8 * order + 16);
+    for (int i = 0; i <= grid; ++i)
+      for (int k = 0; k < 2 * grid; ++k) {
+        const double theta = M_PI * i / grid, phi = M_PI * k / grid;
+        const double d[3] = {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+        peak = std::max(peak, std::abs(field(d)));
+      }
+    double worst = 0.0;  // largest |F(d') - F(d)| / (N theta peak)
+    for (int trial = 0; trial < 2000; ++trial) {
+      double a[3] = {normal(random), normal(random), normal(random)}, b[3] = {normal(random), normal(random), normal(random)};
+      const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      for (double& x : a) x /= la;
+      // b: a turned by a small angle about a random axis (perpendicular part of b).
+      const double along = b[0] * a[0] + b[1] * a[1] + b[2] * a[2];
+      for (int k = 0; k < 3; ++k) b[k] -= along * a[k];
+      const double lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+      const double theta = 0.5 / order * std::pow(10.0, -3.0 * (trial % 4) / 3.0);
+      double d[3];
+      for (int k = 0; k < 3; ++k) d[k] = std::cos(theta) * a[k] + std::sin(theta) * b[k] / lb;
+      worst = std::max(worst, std::abs(field(d) - field(a)) / (order * theta * peak));
+    }
+    EXPECT_LE(worst, 1.0) << "order " << order;
+    EXPECT_GT(worst, 0.2) << "order " << order << ": the bound should be nearly reached, or the test sees nothing";
   }
 }
 

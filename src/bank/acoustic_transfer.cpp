@@ -3,7 +3,13 @@
 // C++ standard library only, no allocation in the evaluation: libstrike calls it per impact.
 #include "strike/acoustic_transfer.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace strike {
 
@@ -50,7 +56,40 @@ std::string AcousticTransfer::checkConsistency(size_t modes) const {
   return {};
 }
 
-void realSphericalHarmonics(uint32_t order, const double direction[3], double* out) {
+namespace {
+
+// The recurrence's constants, one function each, so that the table and the direct evaluation get
+// the same bits from them.
+double sectoralFactor(int m) { return std::sqrt((2.0 * m + 1.0) / (2.0 * m)); }  // Q_m^m / Q_{m-1}^{m-1}
+double firstFactor(int m) { return std::sqrt(2.0 * m + 3.0); }                    // Q_{m+1}^m / (z Q_m^m)
+double stepA(int n, int m) {
+  const double nn = n, mm = m;
+  return std::sqrt((4.0 * nn * nn - 1.0) / (nn * nn - mm * mm));
+}
+double stepB(int n, int m) {
+  const double nn = n, mm = m;
+  return std::sqrt(((nn - 1.0) * (nn - 1.0) - mm * mm) / (4.0 * (nn - 1.0) * (nn - 1.0) - 1.0));
+}
+
+// Computes the constants as it goes.
+struct DirectConstants {
+  double sectoral(int m) const { return sectoralFactor(m); }
+  double first(int m) const { return firstFactor(m); }
+  double a(int n, int m) const { return stepA(n, m); }
+  double b(int n, int m) const { return stepB(n, m); }
+};
+
+// Reads them from a table (SphericalHarmonicsTable's layout).
+struct TableConstants {
+  const SphericalHarmonicsTable& t;
+  double sectoral(int m) const { return t.sectoral[static_cast<size_t>(m)]; }
+  double first(int m) const { return t.first[static_cast<size_t>(m)]; }
+  double a(int n, int m) const { return t.a[static_cast<size_t>(n * n + n + m)]; }
+  double b(int n, int m) const { return t.b[static_cast<size_t>(n * n + n + m)]; }
+};
+
+template <class Constants>
+void sphericalHarmonics(int n_max, const double direction[3], const Constants& k, double* out) {
   double x = direction[0], y = direction[1], z = direction[2];
   const double length = std::sqrt(x * x + y * y + z * z);
   if (length > 0 && std::isfinite(length)) {
@@ -65,12 +104,11 @@ void realSphericalHarmonics(uint32_t order, const double direction[3], double* o
   // Fully normalized associated Legendre recurrences in z, times Re/Im (x + i y)^m, which is
   // sin^m(theta) cos/sin(m phi): no trigonometry, no pole special case, no Condon-Shortley phase
   // (so Y_11 = +sqrt(3/4pi) x). Q_n^m = N_n^m P_n^m / sin^m; stable to high order.
-  const int n_max = static_cast<int>(order);
   double q_mm = 1.0 / std::sqrt(4.0 * M_PI);  // Q_0^0
   double c_m = 1.0, s_m = 0.0;                // Re, Im of (x + i y)^m
   for (int m = 0; m <= n_max; ++m) {
     if (m > 0) {
-      q_mm *= std::sqrt((2.0 * m + 1.0) / (2.0 * m));
+      q_mm *= k.sectoral(m);
       const double c = x * c_m - y * s_m;
       s_m = x * s_m + y * c_m;
       c_m = c;
@@ -81,12 +119,9 @@ void realSphericalHarmonics(uint32_t order, const double direction[3], double* o
     for (int n = m; n <= n_max; ++n) {
       if (n == m + 1) {
         q_prev = q;
-        q = std::sqrt(2.0 * m + 3.0) * z * q_mm;
+        q = k.first(m) * z * q_mm;
       } else if (n > m + 1) {
-        const double nn = n, mm = m;
-        const double a = std::sqrt((4.0 * nn * nn - 1.0) / (nn * nn - mm * mm));
-        const double b = std::sqrt(((nn - 1.0) * (nn - 1.0) - mm * mm) / (4.0 * (nn - 1.0) * (nn - 1.0) - 1.0));
-        const double next = a * (z * q - b * q_prev);
+        const double next = k.a(n, m) * (z * q - k.b(n, m) * q_prev);
         q_prev = q;
         q = next;
       }
@@ -96,18 +131,111 @@ void realSphericalHarmonics(uint32_t order, const double direction[3], double* o
   }
 }
 
+}  // namespace
+
+void realSphericalHarmonics(uint32_t order, const double direction[3], double* out) {
+  sphericalHarmonics(static_cast<int>(order), direction, DirectConstants{}, out);
+}
+
+SphericalHarmonicsTable sphericalHarmonicsTable(uint32_t order) {
+  const int n_max = static_cast<int>(order);
+  const size_t count = static_cast<size_t>(n_max + 1) * static_cast<size_t>(n_max + 1);
+  SphericalHarmonicsTable t;
+  t.order = order;
+  t.sectoral.assign(static_cast<size_t>(n_max) + 1, 0.0);
+  t.first.assign(static_cast<size_t>(n_max) + 1, 0.0);
+  t.a.assign(count, 0.0);
+  t.b.assign(count, 0.0);
+  for (int m = 0; m <= n_max; ++m) {
+    if (m > 0) t.sectoral[static_cast<size_t>(m)] = sectoralFactor(m);
+    t.first[static_cast<size_t>(m)] = firstFactor(m);
+    for (int n = m + 2; n <= n_max; ++n) {
+      t.a[static_cast<size_t>(n * n + n + m)] = stepA(n, m);
+      t.b[static_cast<size_t>(n * n + n + m)] = stepB(n, m);
+    }
+  }
+  return t;
+}
+
+void realSphericalHarmonics(const SphericalHarmonicsTable& table, const double direction[3], double* out) {
+  sphericalHarmonics(static_cast<int>(table.order), direction, TableConstants{table}, out);
+}
+
+namespace {
+
+// F_i = sum_j c_ij Y_j for the modes [first, first + kLanes). Each mode's sums run in the same
+// order as one mode alone (j ascending, real and imaginary parts apart), so the result has the
+// same bits as the plain loop; interleaving eight modes gives the processor eight independent
+// chains of additions instead of one (the plain sum is bound by the latency of one addition
+// feeding the next), and SSE2, which every x86-64 processor has, adds a coefficient's real and
+// imaginary parts in one instruction: the same two additions, so again the same bits.
+constexpr size_t kLanes = 8;
+
+// Modes [first, first + lanes), lanes <= kLanes; the lanes past them have no coefficients.
+void evaluateFarFieldLanes(const AcousticTransfer& transfer, size_t first, size_t lanes, const double* sh,
+                           std::complex<double>* out) {
+  const std::complex<float>* c[kLanes];
+  size_t count[kLanes];
+  size_t common = SIZE_MAX;
+  for (size_t l = 0; l < kLanes; ++l) {
+    const size_t mode = first + std::min(l, lanes - 1);
+    c[l] = transfer.coefficients.data() + transfer.offset[mode];
+    count[l] = l < lanes ? static_cast<size_t>(transfer.offset[mode + 1] - transfer.offset[mode]) : 0;
+    common = std::min(common, count[l]);
+  }
+#if defined(__SSE2__)
+  __m128d sum[kLanes];
+#pragma GCC unroll 8
+  for (size_t l = 0; l < kLanes; ++l) sum[l] = _mm_setzero_pd();
+  for (size_t j = 0; j < common; ++j) {
+    const __m128d y = _mm_set1_pd(sh[j]);
+#pragma GCC unroll 8  // keeps the eight sums in registers (a loop over them would store each one every time)
+    for (size_t l = 0; l < kLanes; ++l) {
+      double pair;  // the coefficient's two floats, (re, im)
+      std::memcpy(&pair, c[l] + j, sizeof pair);
+      const __m128d value = _mm_cvtps_pd(_mm_castpd_ps(_mm_set_sd(pair)));
+      sum[l] = _mm_add_pd(sum[l], _mm_mul_pd(value, y));
+    }
+  }
+  const size_t longest = *std::max_element(count, count + kLanes);
+  for (size_t j = common; j < longest; ++j) {  // the longer lanes go on, each in its own order
+    const __m128d y = _mm_set1_pd(sh[j]);
+#pragma GCC unroll 8
+    for (size_t l = 0; l < kLanes; ++l) {
+      if (j >= count[l]) continue;
+      double pair;
+      std::memcpy(&pair, c[l] + j, sizeof pair);
+      const __m128d value = _mm_cvtps_pd(_mm_castpd_ps(_mm_set_sd(pair)));
+      sum[l] = _mm_add_pd(sum[l], _mm_mul_pd(value, y));
+    }
+  }
+  for (size_t l = 0; l < lanes; ++l)
+    out[first + l] = {_mm_cvtsd_f64(sum[l]), _mm_cvtsd_f64(_mm_unpackhi_pd(sum[l], sum[l]))};
+#else
+  double re[kLanes], im[kLanes];
+  for (size_t l = 0; l < kLanes; ++l) re[l] = im[l] = 0.0;
+  for (size_t j = 0; j < common; ++j) {
+    const double y = sh[j];
+    for (size_t l = 0; l < kLanes; ++l) {
+      re[l] += static_cast<double>(c[l][j].real()) * y;
+      im[l] += static_cast<double>(c[l][j].imag()) * y;
+    }
+  }
+  for (size_t l = 0; l < lanes; ++l) {
+    for (size_t j = common; j < count[l]; ++j) {
+      re[l] += static_cast<double>(c[l][j].real()) * sh[j];
+      im[l] += static_cast<double>(c[l][j].imag()) * sh[j];
+    }
+    out[first + l] = {re[l], im[l]};
+  }
+#endif
+}
+
+}  // namespace
+
 void evaluateFarField(const AcousticTransfer& transfer, const double* sh, std::complex<double>* out) {
   const size_t modes = transfer.modeCount();
-  for (size_t i = 0; i < modes; ++i) {
-    const std::complex<float>* c = transfer.coefficients.data() + transfer.offset[i];
-    const size_t count = static_cast<size_t>(transfer.offset[i + 1] - transfer.offset[i]);
-    double re = 0.0, im = 0.0;
-    for (size_t j = 0; j < count; ++j) {
-      re += static_cast<double>(c[j].real()) * sh[j];
-      im += static_cast<double>(c[j].imag()) * sh[j];
-    }
-    out[i] = {re, im};
-  }
+  for (size_t i = 0; i < modes; i += kLanes) evaluateFarFieldLanes(transfer, i, std::min(kLanes, modes - i), sh, out);
 }
 
 }  // namespace strike

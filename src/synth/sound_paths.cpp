@@ -30,6 +30,7 @@
 // left out: a compact body's rotation has no dipole, and its quadrupole is a factor ka weaker.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "strike/engine.hpp"
 
@@ -67,19 +68,50 @@ int SoundEngine::arrivals(const Voice& v, const std::array<double, 3>& world_poi
   return 2;
 }
 
-bool SoundEngine::radiationToward(Voice& v, const Arrival& a) {
-  if (!v.pressure_) return false;
-  const size_t modes = v.transfer_.size();
-  if (v.far_field_.empty()) {
-    if (a.gain == 1.0) return false;
-    std::fill(v.transfer_.begin(), v.transfer_.end(), std::complex<double>(a.gain, 0.0));
-    return true;
+namespace {
+
+// sin of the angle between two directions (any lengths): |a x b| / (|a| |b|), or 1 when they
+// point apart (a negative dot product) or either is zero.
+double sinAngleBetween(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  const double cross[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  const double dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const double lengths = std::sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) * (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
+  if (!(dot > 0.0) || !(lengths > 0.0)) return 1.0;
+  return std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]) / lengths;
+}
+
+}  // namespace
+
+const std::complex<double>* SoundEngine::radiationToward(Voice& v, const Arrival& a, int path, Reuse reuse) {
+  if (!v.pressure_) return nullptr;
+  if (v.far_field_.empty() && a.gain == 1.0) return nullptr;
+  Voice::PathTransfer& p = v.path_transfer_[static_cast<size_t>(path)];
+  if (p.valid && std::memcmp(&p.gain, &a.gain, sizeof a.gain) == 0) {
+    // The same bits (not ==, which equates -0 and +0): a reuse gives exactly what an evaluation would.
+    if (std::memcmp(p.direction.data(), a.direction.data(), sizeof a.direction) == 0) return p.factor.data();
+    // A continuous source may keep factors evaluated at a direction theta away while N theta <=
+    // kContinuousTransferTolerance, N the highest order of the body's transfer. Along any great
+    // circle F_i is a trigonometric polynomial of degree <= N, so by Bernstein's inequality
+    // |F_i(d') - F_i(d)| <= N theta max|F_i|: the kept factor is within that fraction of the mode's
+    // loudest direction. The per-step evaluation it saves was already a hold of one step.
+    if (reuse == Reuse::WithinTolerance && !v.far_field_.empty()) {
+      const double order = std::max(1.0, static_cast<double>(v.sh_table_.order));
+      if (order * sinAngleBetween(p.direction, a.direction) <= kContinuousTransferTolerance) return p.factor.data();
+    }
   }
-  const AcousticTransfer& t = v.bank_->transfer;
-  realSphericalHarmonics(t.maxOrder(), a.direction.data(), v.sh_.data());
-  evaluateFarField(t, v.sh_.data(), v.far_field_.data());
-  for (size_t i = 0; i < modes; ++i) v.transfer_[i] = std::conj(v.far_field_[i]) * (v.inv_rms_[i] * a.gain);
-  return true;
+  const size_t modes = p.factor.size();
+  if (v.far_field_.empty()) {
+    std::fill(p.factor.begin(), p.factor.end(), std::complex<double>(a.gain, 0.0));
+  } else {
+    const AcousticTransfer& t = v.bank_->transfer;
+    realSphericalHarmonics(v.sh_table_, a.direction.data(), v.sh_.data());
+    evaluateFarField(t, v.sh_.data(), v.far_field_.data());
+    for (size_t i = 0; i < modes; ++i) p.factor[i] = std::conj(v.far_field_[i]) * (v.inv_rms_[i] * a.gain);
+  }
+  p.direction = a.direction;
+  p.gain = a.gain;
+  p.valid = true;
+  return p.factor.data();
 }
 
 void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
@@ -93,7 +125,7 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
     impact.duration_s = duration_s;
     impact.shape = shape;
     impact.modal_impulse = modal;
-    impact.modal_transfer = radiationToward(v, paths[k]) ? v.transfer_.data() : nullptr;
+    impact.modal_transfer = radiationToward(v, paths[k], k);
     const ImpactResult r = settings_.realtime ? v.synth_.addImpactNoAlloc(impact) : v.synth_.addImpact(impact);
     if (k == 0) {  // one impact, however many paths it takes
       switch (r) {
@@ -117,7 +149,7 @@ void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double
     step.time_s = time_s + paths[k].delay_s;
     step.ramp_s = ramp_s;
     step.modal_force_change = modal_change;
-    step.modal_transfer = radiationToward(v, paths[k]) ? v.transfer_.data() : nullptr;
+    step.modal_transfer = radiationToward(v, paths[k], k);
     const ImpactResult r = settings_.realtime ? v.synth_.addForceStepNoAlloc(step) : v.synth_.addForceStep(step);
     if (k > 0) continue;
     if (r == ImpactResult::NoCapacity)

@@ -99,11 +99,12 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
   const size_t modes = bank.modeCount();
   pressure_ = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
   if (!pressure_) return;
-  transfer_.assign(modes, std::complex<double>(1.0, 0.0));
+  for (PathTransfer& p : path_transfer_) p.factor.assign(modes, std::complex<double>(1.0, 0.0));
   const AcousticTransfer& t = bank.transfer;
   if (t.modeCount() == modes && modes > 0) {
     const size_t order = t.maxOrder();
     sh_.assign((order + 1) * (order + 1), 0.0);
+    sh_table_ = sphericalHarmonicsTable(static_cast<uint32_t>(order));
     far_field_.assign(modes, 0.0);
     inv_rms_.assign(modes, 0.0);
     for (size_t i = 0; i < modes; ++i) {

@@ -58,6 +58,17 @@ struct AcousticTransfer {
 /// No allocation (real-time safe).
 void realSphericalHarmonics(uint32_t order, const double direction[3], double* out);
 
+/// The constants of realSphericalHarmonics' recurrence up to `order` (square roots of ratios),
+/// computed once so that an evaluation per impact does only multiplications and additions.
+struct SphericalHarmonicsTable {
+  uint32_t order = 0;
+  std::vector<double> sectoral, first;  ///< per m
+  std::vector<double> a, b;             ///< per (n, m), at n*n + n + m
+};
+SphericalHarmonicsTable sphericalHarmonicsTable(uint32_t order);
+/// realSphericalHarmonics(table.order, direction, out), to the same bits. No allocation.
+void realSphericalHarmonics(const SphericalHarmonicsTable& table, const double direction[3], double* out);
+
 /// F_i(d) for every mode into out[0 .. #modes), given Y from realSphericalHarmonics() at
 /// order >= maxOrder(). No allocation (real-time safe).
 void evaluateFarField(const AcousticTransfer& transfer, const double* sh, std::complex<double>* out);

@@ -231,8 +231,19 @@ class Voice {
   // Radiation toward the listener (radiation.cpp).
   bool pressure_ = false;                                 ///< output is pressure (VoiceDesc::pressure_scale > 0)
   std::vector<double> sh_;                                ///< spherical harmonics scratch, (max order + 1)^2
+  SphericalHarmonicsTable sh_table_;                      ///< their recurrence's constants to the max order
   std::vector<std::complex<double>> far_field_;           ///< #modes: F_i toward the listener (scratch)
-  std::vector<std::complex<double>> transfer_;            ///< #modes: the factor handed to the oscillators
+  /// The per-mode factors handed to the oscillators for one path (direct, ground image), kept
+  /// with the direction and gain they were evaluated for: a body that has not turned relative to
+  /// the listener since its last event (resting, static, or several events in one physics step)
+  /// reuses them, bit for bit, instead of evaluating its far field again.
+  struct PathTransfer {
+    std::vector<std::complex<double>> factor;  ///< #modes
+    std::array<double, 3> direction{};
+    double gain = 0.0;
+    bool valid = false;
+  };
+  std::array<PathTransfer, 2> path_transfer_;
   std::vector<double> inv_rms_;                           ///< #modes: 1 / rms_d |F_i| (0 for a silent mode)
   bool clicks_ = false;                                   ///< acceleration noise (a free body with mass)
   std::array<std::array<double, 3>, 3> click_axis_{};     ///< principal axes of the dipole tensor, mesh frame
@@ -346,8 +357,14 @@ class SoundEngine {
     std::array<double, 3> direction{};  ///< toward the (image) listener, mesh frame, unit
   };
   int arrivals(const Voice& v, const std::array<double, 3>& world_point, Arrival out[2]) const;
-  /// The per-mode factor for one arrival into v.transfer_; false when 1 for every mode.
-  bool radiationToward(Voice& v, const Arrival& a);
+  /// The per-mode factors for one arrival along path 0 (direct) or 1 (ground image); nullptr
+  /// when the factor is 1 for every mode. Impacts and load changes reuse the last factors only
+  /// for the same direction to the bit; a continuous (rolling, sliding) source also within a
+  /// bounded angle (sound_paths.cpp).
+  enum class Reuse { SameDirection, WithinTolerance };
+  static constexpr double kContinuousTransferTolerance = 1e-3;  ///< of a mode's loudest far field
+  const std::complex<double>* radiationToward(Voice& v, const Arrival& a, int path,
+                                              Reuse reuse = Reuse::SameDirection);
   void scheduleClick(Voice& v, const Arrival& a, double time_s, double duration_s,
                      const std::array<double, 3>& impulse_local);
   void updateGains(Voice& v);

@@ -4,8 +4,11 @@
 // and the far-field sum.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstring>
+#include <random>
 #include <vector>
 
 #include "strike/acoustic_transfer.hpp"
@@ -109,6 +112,94 @@ TEST(AcousticTransfer, EvaluatesTheSumAndItsRmsAndChecksItsShape) {
   EXPECT_NEAR(t.rmsFarField(1), std::sqrt((2.0 + 0.25) / (4 * M_PI)), 1e-7);
   t.offset[2] = 4;
   EXPECT_NE(t.checkConsistency(2), "");
+}
+
+// The per-impact evaluation (src/synth/sound_paths.cpp) uses the tabulated recurrence and the
+// modes interleaved four at a time; both must give exactly what the plain forms give, or a
+// render would depend on which one ran.
+TEST(SphericalHarmonics, TheTabulatedRecurrenceGivesTheSameBits) {
+  const double directions[][3] = {{0.3, -0.5, 0.812403840463596}, {0, 0, 1},  {0, 0, -1},   {-0.0, 0.0, 1.0},
+                                  {1e-300, 0, 0},                 {1, 1, 1}, {-2, 3, -0.5}, {0.0, 0.0, 0.0}};
+  for (uint32_t order : {0u, 1u, 2u, 7u, 31u, 64u}) {
+    const SphericalHarmonicsTable table = sphericalHarmonicsTable(order);
+    const size_t count = size_t(order + 1) * (order + 1);
+    std::vector<double> plain(count), tabulated(count);
+    for (const auto& d : directions) {
+      realSphericalHarmonics(order, d, plain.data());
+      realSphericalHarmonics(table, d, tabulated.data());
+      EXPECT_EQ(std::memcmp(plain.data(), tabulated.data(), count * sizeof(double)), 0) << "order " << order;
+    }
+  }
+}
+
+TEST(AcousticTransfer, ManyModesEvaluateToTheBitsOfEachModeAlone) {
+  // 11 modes (two groups of four and a remainder) of orders that differ inside each group.
+  AcousticTransfer t;
+  t.order = {3, 0, 5, 2, 9, 9, 1, 4, 6, 2, 7};
+  t.offset = {0};
+  for (uint32_t n : t.order) t.offset.push_back(t.offset.back() + uint64_t(n + 1) * (n + 1));
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+  for (uint64_t j = 0; j < t.offset.back(); ++j) t.coefficients.emplace_back(uniform(random), uniform(random));
+  const uint32_t order = t.maxOrder();
+  std::vector<double> Y(size_t(order + 1) * (order + 1));
+  const double d[3] = {0.2, -0.7, 0.4};
+  realSphericalHarmonics(order, d, Y.data());
+  std::vector<std::complex<double>> F(t.modeCount());
+  evaluateFarField(t, Y.data(), F.data());
+  for (size_t i = 0; i < t.modeCount(); ++i) {
+    double re = 0.0, im = 0.0;
+    for (uint64_t j = t.offset[i]; j < t.offset[i + 1]; ++j) {
+      re += static_cast<double>(t.coefficients[j].real()) * Y[j - t.offset[i]];
+      im += static_cast<double>(t.coefficients[j].imag()) * Y[j - t.offset[i]];
+    }
+    EXPECT_EQ(std::memcmp(&F[i], &re, sizeof re), 0) << "mode " << i;
+    EXPECT_EQ(std::memcmp(reinterpret_cast<const double*>(&F[i]) + 1, &im, sizeof im), 0) << "mode " << i;
+  }
+}
+
+// The sound engine keeps a rolling source's far-field factors while N theta <= 1e-3
+// (sound_paths.cpp), relying on Bernstein's inequality: along a great circle a spherical
+// polynomial of degree N changes by at most N theta times its largest value. Checked on random
+// far fields, with the largest value taken over a dense grid (which can only underestimate it).
+TEST(SphericalHarmonics, AFarFieldOfOrderNTurnsByAtMostNThetaOfItsPeak) {
+  std::mt19937 random(11);
+  std::normal_distribution<double> normal;
+  for (uint32_t order : {4u, 16u, 40u}) {
+    const size_t count = size_t(order + 1) * (order + 1);
+    std::vector<double> c(count), Y(count);
+    for (double& x : c) x = normal(random);
+    auto field = [&](const double d[3]) {
+      realSphericalHarmonics(order, d, Y.data());
+      double f = 0.0;
+      for (size_t j = 0; j < count; ++j) f += c[j] * Y[j];
+      return f;
+    };
+    double peak = 0.0;
+    const int grid = static_cast<int>(8 * order + 16);
+    for (int i = 0; i <= grid; ++i)
+      for (int k = 0; k < 2 * grid; ++k) {
+        const double theta = M_PI * i / grid, phi = M_PI * k / grid;
+        const double d[3] = {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+        peak = std::max(peak, std::abs(field(d)));
+      }
+    double worst = 0.0;  // largest |F(d') - F(d)| / (N theta peak)
+    for (int trial = 0; trial < 2000; ++trial) {
+      double a[3] = {normal(random), normal(random), normal(random)}, b[3] = {normal(random), normal(random), normal(random)};
+      const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      for (double& x : a) x /= la;
+      // b: a turned by a small angle about a random axis (perpendicular part of b).
+      const double along = b[0] * a[0] + b[1] * a[1] + b[2] * a[2];
+      for (int k = 0; k < 3; ++k) b[k] -= along * a[k];
+      const double lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+      const double theta = 0.5 / order * std::pow(10.0, -3.0 * (trial % 4) / 3.0);
+      double d[3];
+      for (int k = 0; k < 3; ++k) d[k] = std::cos(theta) * a[k] + std::sin(theta) * b[k] / lb;
+      worst = std::max(worst, std::abs(field(d) - field(a)) / (order * theta * peak));
+    }
+    EXPECT_LE(worst, 1.0) << "order " << order;
+    EXPECT_GT(worst, 0.2) << "order " << order << ": the bound should be nearly reached, or the test sees nothing";
+  }
 }
 
 }  // namespace

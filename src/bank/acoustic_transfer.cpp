@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <cstring>
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -161,81 +160,72 @@ void realSphericalHarmonics(const SphericalHarmonicsTable& table, const double d
   sphericalHarmonics(static_cast<int>(table.order), direction, TableConstants{table}, out);
 }
 
+#if defined(__SSE2__)
 namespace {
 
-// F_i = sum_j c_ij Y_j for the modes [first, first + kLanes). Each mode's sums run in the same
-// order as one mode alone (j ascending, real and imaginary parts apart), so the result has the
-// same bits as the plain loop; interleaving eight modes gives the processor eight independent
-// chains of additions instead of one (the plain sum is bound by the latency of one addition
-// feeding the next), and SSE2, which every x86-64 processor has, adds a coefficient's real and
-// imaginary parts in one instruction: the same two additions, so again the same bits.
+// F_i = sum_j c_ij Y_j for the modes [first, first + lanes), lanes <= kLanes. Each mode's sums
+// run in the same order as one mode alone (j ascending, real and imaginary parts apart), so the
+// result has the same bits as the plain loop below; interleaving eight modes gives the processor
+// eight independent chains of additions instead of one (the plain sum is bound by the latency of
+// one addition feeding the next), and SSE2, which every x86-64 processor has, adds a
+// coefficient's real and imaginary parts in one instruction: the same two additions.
 constexpr size_t kLanes = 8;
 
-// Modes [first, first + lanes), lanes <= kLanes; the lanes past them have no coefficients.
+// sum + (re, im) * y, both parts in one instruction.
+__m128d addProduct(__m128d sum, const std::complex<float>* coefficient, __m128d y) {
+  double pair;  // the coefficient's two floats, (re, im)
+  std::memcpy(&pair, coefficient, sizeof pair);
+  return _mm_add_pd(sum, _mm_mul_pd(_mm_cvtps_pd(_mm_castpd_ps(_mm_set_sd(pair))), y));
+}
+
 void evaluateFarFieldLanes(const AcousticTransfer& transfer, size_t first, size_t lanes, const double* sh,
                            std::complex<double>* out) {
   const std::complex<float>* c[kLanes];
-  size_t count[kLanes];
-  size_t common = SIZE_MAX;
+  size_t count[kLanes];  // 0 for the lanes past `lanes`
   for (size_t l = 0; l < kLanes; ++l) {
     const size_t mode = first + std::min(l, lanes - 1);
     c[l] = transfer.coefficients.data() + transfer.offset[mode];
     count[l] = l < lanes ? static_cast<size_t>(transfer.offset[mode + 1] - transfer.offset[mode]) : 0;
-    common = std::min(common, count[l]);
   }
-#if defined(__SSE2__)
+  const size_t common = *std::min_element(count, count + kLanes);
+  const size_t longest = *std::max_element(count, count + kLanes);
   __m128d sum[kLanes];
 #pragma GCC unroll 8
   for (size_t l = 0; l < kLanes; ++l) sum[l] = _mm_setzero_pd();
   for (size_t j = 0; j < common; ++j) {
     const __m128d y = _mm_set1_pd(sh[j]);
 #pragma GCC unroll 8  // keeps the eight sums in registers (a loop over them would store each one every time)
-    for (size_t l = 0; l < kLanes; ++l) {
-      double pair;  // the coefficient's two floats, (re, im)
-      std::memcpy(&pair, c[l] + j, sizeof pair);
-      const __m128d value = _mm_cvtps_pd(_mm_castpd_ps(_mm_set_sd(pair)));
-      sum[l] = _mm_add_pd(sum[l], _mm_mul_pd(value, y));
-    }
+    for (size_t l = 0; l < kLanes; ++l) sum[l] = addProduct(sum[l], c[l] + j, y);
   }
-  const size_t longest = *std::max_element(count, count + kLanes);
   for (size_t j = common; j < longest; ++j) {  // the longer lanes go on, each in its own order
     const __m128d y = _mm_set1_pd(sh[j]);
 #pragma GCC unroll 8
-    for (size_t l = 0; l < kLanes; ++l) {
-      if (j >= count[l]) continue;
-      double pair;
-      std::memcpy(&pair, c[l] + j, sizeof pair);
-      const __m128d value = _mm_cvtps_pd(_mm_castpd_ps(_mm_set_sd(pair)));
-      sum[l] = _mm_add_pd(sum[l], _mm_mul_pd(value, y));
-    }
+    for (size_t l = 0; l < kLanes; ++l)
+      if (j < count[l]) sum[l] = addProduct(sum[l], c[l] + j, y);
   }
   for (size_t l = 0; l < lanes; ++l)
     out[first + l] = {_mm_cvtsd_f64(sum[l]), _mm_cvtsd_f64(_mm_unpackhi_pd(sum[l], sum[l]))};
-#else
-  double re[kLanes], im[kLanes];
-  for (size_t l = 0; l < kLanes; ++l) re[l] = im[l] = 0.0;
-  for (size_t j = 0; j < common; ++j) {
-    const double y = sh[j];
-    for (size_t l = 0; l < kLanes; ++l) {
-      re[l] += static_cast<double>(c[l][j].real()) * y;
-      im[l] += static_cast<double>(c[l][j].imag()) * y;
-    }
-  }
-  for (size_t l = 0; l < lanes; ++l) {
-    for (size_t j = common; j < count[l]; ++j) {
-      re[l] += static_cast<double>(c[l][j].real()) * sh[j];
-      im[l] += static_cast<double>(c[l][j].imag()) * sh[j];
-    }
-    out[first + l] = {re[l], im[l]};
-  }
-#endif
 }
 
 }  // namespace
+#endif
 
 void evaluateFarField(const AcousticTransfer& transfer, const double* sh, std::complex<double>* out) {
   const size_t modes = transfer.modeCount();
+#if defined(__SSE2__)
   for (size_t i = 0; i < modes; i += kLanes) evaluateFarFieldLanes(transfer, i, std::min(kLanes, modes - i), sh, out);
+#else
+  for (size_t i = 0; i < modes; ++i) {
+    const std::complex<float>* c = transfer.coefficients.data() + transfer.offset[i];
+    const size_t count = static_cast<size_t>(transfer.offset[i + 1] - transfer.offset[i]);
+    double re = 0.0, im = 0.0;
+    for (size_t j = 0; j < count; ++j) {
+      re += static_cast<double>(c[j].real()) * sh[j];
+      im += static_cast<double>(c[j].imag()) * sh[j];
+    }
+    out[i] = {re, im};
+  }
+#endif
 }
 
 }  // namespace strike

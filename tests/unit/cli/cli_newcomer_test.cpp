@@ -328,12 +328,19 @@ TEST(NewcomerCache, ListSizeAndPruneByAgeAndSize) {
   EXPECT_NE(bad.err.find("--max-size = '12parsecs'"), std::string::npos) << bad.err;
 }
 
-TEST(NewcomerCache, ARenderKeepsTheCacheUnderItsCapRemovingTheLeastRecentlyUsed) {
-  const std::string dir = folder("cap");
-  const std::string cache = dir + "/cache";
+// A folder `name` with the drop scene rendered once into its own cache, `name`/cache (one bank).
+std::string folderWithOneCachedBank(const std::string& name) {
+  const std::string dir = folder(name);
   write(dir + "/drop.json", kDrop);
-  ASSERT_EQ(runCli("render '" + dir + "/drop.json' -o '" + dir + "/a.wav' --cache '" + cache + "' --quiet").exit_code,
+  EXPECT_EQ(runCli("render '" + dir + "/drop.json' -o '" + dir + "/a.wav' --cache '" + dir + "/cache' --quiet").exit_code,
             0);
+  EXPECT_EQ(filesIn(dir + "/cache"), 1u);
+  return dir;
+}
+
+TEST(NewcomerCache, ARenderKeepsTheCacheUnderItsCapRemovingTheLeastRecentlyUsed) {
+  const std::string dir = folderWithOneCachedBank("cap");
+  const std::string cache = dir + "/cache";
   ASSERT_EQ(filesIn(cache), 1u);
   const uintmax_t bank_bytes = fs::directory_iterator(cache)->file_size();
   makeEntry(cache + "/00000000000000aa.modes", 5000, 30 * 86400.0);  // an old bank of another scene
@@ -351,11 +358,8 @@ TEST(NewcomerCache, ARenderKeepsTheCacheUnderItsCapRemovingTheLeastRecentlyUsed)
 // cap, which removes the least recently used first, keeps the banks in use over those merely written
 // long ago. Fails when the read leaves the entry's time alone.
 TEST(NewcomerCache, ARenderThatReadsABankMarksItUsed) {
-  const std::string dir = folder("touch");
+  const std::string dir = folderWithOneCachedBank("touch");
   const std::string cache = dir + "/cache";
-  write(dir + "/drop.json", kDrop);
-  ASSERT_EQ(runCli("render '" + dir + "/drop.json' -o '" + dir + "/a.wav' --cache '" + cache + "' --quiet").exit_code,
-            0);
   ASSERT_EQ(filesIn(cache), 1u);
   const fs::path bank = fs::directory_iterator(cache)->path();
   const auto long_ago = fs::file_time_type::clock::now() - std::chrono::hours(24 * 60);

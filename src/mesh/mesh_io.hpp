@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Private helpers shared by the mesh readers (not a public header): whole-file reading with
 // clear errors, a tokenizer that remembers line numbers, strict number parsing, and the
-// message format of STYLE.md section 5 ("path:line: error: what, got value, expected range").
+// project's error message format ("path:line: error: what, got value, expected range").
 #pragma once
 
 #include <cstddef>

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Result<T> and Status: the core never throws; it returns a value or an Error that names
-// the file, line, field and value (see STYLE.md section 5). Modelled on JPH Core/Result.h.
+// the file, line, field and value ("path:line: error: what, got value, expected range").
+// Modelled on JPH Core/Result.h.
 #pragma once
 
 #include <optional>

@@ -9,6 +9,7 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#include <array>
 
 namespace strike {
 
@@ -160,62 +161,8 @@ void realSphericalHarmonics(const SphericalHarmonicsTable& table, const double d
   sphericalHarmonics(static_cast<int>(table.order), direction, TableConstants{table}, out);
 }
 
-#if defined(__SSE2__)
-namespace {
-
-// F_i = sum_j c_ij Y_j for the modes [first, first + lanes), lanes <= kLanes. Each mode's sums
-// run in the same order as one mode alone (j ascending, real and imaginary parts apart), so the
-// result has the same bits as the plain loop below; interleaving eight modes gives the processor
-// eight independent chains of additions instead of one (the plain sum is bound by the latency of
-// one addition feeding the next), and SSE2, which every x86-64 processor has, adds a
-// coefficient's real and imaginary parts in one instruction: the same two additions.
-constexpr size_t kLanes = 8;
-
-// sum + (re, im) * y, both parts in one instruction.
-__m128d addProduct(__m128d sum, const std::complex<float>* coefficient, __m128d y) {
-  double pair;  // the coefficient's two floats, (re, im)
-  std::memcpy(&pair, coefficient, sizeof pair);
-  return _mm_add_pd(sum, _mm_mul_pd(_mm_cvtps_pd(_mm_castpd_ps(_mm_set_sd(pair))), y));
-}
-
-void evaluateFarFieldLanes(const AcousticTransfer& transfer, size_t first, size_t lanes, const double* sh,
-                           std::complex<double>* out) {
-  const std::complex<float>* c[kLanes];
-  size_t count[kLanes];  // 0 for the lanes past `lanes`
-  for (size_t l = 0; l < kLanes; ++l) {
-    const size_t mode = first + std::min(l, lanes - 1);
-    c[l] = transfer.coefficients.data() + transfer.offset[mode];
-    count[l] = l < lanes ? static_cast<size_t>(transfer.offset[mode + 1] - transfer.offset[mode]) : 0;
-  }
-  const size_t common = *std::min_element(count, count + kLanes);
-  const size_t longest = *std::max_element(count, count + kLanes);
-  __m128d sum[kLanes];
-#pragma GCC unroll 8
-  for (size_t l = 0; l < kLanes; ++l) sum[l] = _mm_setzero_pd();
-  for (size_t j = 0; j < common; ++j) {
-    const __m128d y = _mm_set1_pd(sh[j]);
-#pragma GCC unroll 8  // keeps the eight sums in registers (a loop over them would store each one every time)
-    for (size_t l = 0; l < kLanes; ++l) sum[l] = addProduct(sum[l], c[l] + j, y);
-  }
-  for (size_t j = common; j < longest; ++j) {  // the longer lanes go on, each in its own order
-    const __m128d y = _mm_set1_pd(sh[j]);
-#pragma GCC unroll 8
-    for (size_t l = 0; l < kLanes; ++l)
-      if (j < count[l]) sum[l] = addProduct(sum[l], c[l] + j, y);
-  }
-  for (size_t l = 0; l < lanes; ++l)
-    out[first + l] = {_mm_cvtsd_f64(sum[l]), _mm_cvtsd_f64(_mm_unpackhi_pd(sum[l], sum[l]))};
-}
-
-}  // namespace
-#endif
-
 void evaluateFarField(const AcousticTransfer& transfer, const double* sh, std::complex<double>* out) {
-  const size_t modes = transfer.modeCount();
-#if defined(__SSE2__)
-  for (size_t i = 0; i < modes; i += kLanes) evaluateFarFieldLanes(transfer, i, std::min(kLanes, modes - i), sh, out);
-#else
-  for (size_t i = 0; i < modes; ++i) {
+  for (size_t i = 0; i < transfer.modeCount(); ++i) {
     const std::complex<float>* c = transfer.coefficients.data() + transfer.offset[i];
     const size_t count = static_cast<size_t>(transfer.offset[i + 1] - transfer.offset[i]);
     double re = 0.0, im = 0.0;
@@ -225,7 +172,87 @@ void evaluateFarField(const AcousticTransfer& transfer, const double* sh, std::c
     }
     out[i] = {re, im};
   }
+}
+
+void farFieldWeights(const double* sh, size_t count, float* weights) {
+  for (size_t j = 0; j < count; ++j) weights[2 * j] = weights[2 * j + 1] = static_cast<float>(sh[j]);
+}
+
+namespace {
+
+// The fast evaluation's arithmetic (acoustic_transfer.hpp) and its two forms, SSE2 (every x86-64
+// processor) and portable, which do the same single-precision operations in the same order.
+constexpr size_t kPartialSums = 8;
+
+/// One direction's partial sums, S_r at [2r] (real) and [2r + 1] (imaginary).
+using PartialSums = std::array<float, 2 * kPartialSums>;
+
+/// The coefficients past the last whole group of eight, each into its own partial sum, then the
+/// fixed reduction: ((S0 + S2) + (S4 + S6)) + ((S1 + S3) + (S5 + S7)), the last addition in double.
+std::complex<double> finishSum(PartialSums& s, const float* c, const float* w, size_t from, size_t count) {
+  for (size_t j = from; j < count; ++j) {
+    const size_t r = j % kPartialSums;
+    s[2 * r] += c[2 * j] * w[2 * j];
+    s[2 * r + 1] += c[2 * j + 1] * w[2 * j + 1];
+  }
+  double part[2][2];  // [even or odd sums][re, im]
+  for (int odd = 0; odd < 2; ++odd)
+    for (int k = 0; k < 2; ++k) {
+      const float* x = s.data() + 2 * odd + k;  // S_{odd}, S_{odd + 2}, ... at strides of 4 floats
+      part[odd][k] = static_cast<double>((x[0] + x[4]) + (x[8] + x[12]));
+    }
+  return {part[0][0] + part[1][0], part[0][1] + part[1][1]};
+}
+
+/// Mode i's far field at `Directions` directions: out[d][i].
+template <size_t Directions>
+void evaluateMode(const float* c, size_t count, const float* const* w, std::complex<double>* const* out, size_t i) {
+  const size_t whole = count - count % kPartialSums;
+  PartialSums s[Directions];
+#if defined(__SSE2__)
+  // A register holds two coefficients (re, im, re, im): four registers are the eight sums.
+  __m128 sum[Directions][4];
+  for (size_t d = 0; d < Directions; ++d)
+    for (__m128& x : sum[d]) x = _mm_setzero_ps();
+  for (size_t j = 0; j < whole; j += kPartialSums) {
+    const float* cj = c + 2 * j;
+    const __m128 c0 = _mm_loadu_ps(cj), c1 = _mm_loadu_ps(cj + 4), c2 = _mm_loadu_ps(cj + 8), c3 = _mm_loadu_ps(cj + 12);
+    for (size_t d = 0; d < Directions; ++d) {  // every coefficient read once for all directions
+      const float* wj = w[d] + 2 * j;
+      sum[d][0] = _mm_add_ps(sum[d][0], _mm_mul_ps(c0, _mm_loadu_ps(wj)));
+      sum[d][1] = _mm_add_ps(sum[d][1], _mm_mul_ps(c1, _mm_loadu_ps(wj + 4)));
+      sum[d][2] = _mm_add_ps(sum[d][2], _mm_mul_ps(c2, _mm_loadu_ps(wj + 8)));
+      sum[d][3] = _mm_add_ps(sum[d][3], _mm_mul_ps(c3, _mm_loadu_ps(wj + 12)));
+    }
+  }
+  for (size_t d = 0; d < Directions; ++d)
+    for (size_t k = 0; k < 4; ++k) _mm_storeu_ps(s[d].data() + 4 * k, sum[d][k]);
+#else
+  for (PartialSums& x : s) x.fill(0.0f);
+  for (size_t j = 0; j < whole; j += kPartialSums)
+    for (size_t d = 0; d < Directions; ++d)
+      for (size_t r = 0; r < 2 * kPartialSums; ++r) s[d][r] += c[2 * j + r] * w[d][2 * j + r];
 #endif
+  for (size_t d = 0; d < Directions; ++d) out[d][i] = finishSum(s[d], c, w[d], whole, count);
+}
+
+template <size_t Directions>
+void evaluateModes(const AcousticTransfer& transfer, const float* const* w, std::complex<double>* const* out) {
+  // std::complex<float> is two floats, (re, im), as an array (C++ [complex.numbers]).
+  const float* all = reinterpret_cast<const float*>(transfer.coefficients.data());
+  for (size_t i = 0; i < transfer.modeCount(); ++i)
+    evaluateMode<Directions>(all + 2 * transfer.offset[i],
+                             static_cast<size_t>(transfer.offset[i + 1] - transfer.offset[i]), w, out, i);
+}
+
+}  // namespace
+
+void evaluateFarFields(const AcousticTransfer& transfer, size_t directions, const float* const* weights,
+                       std::complex<double>* const* out) {
+  if (directions >= 2)
+    evaluateModes<2>(transfer, weights, out);
+  else if (directions == 1)
+    evaluateModes<1>(transfer, weights, out);
 }
 
 }  // namespace strike

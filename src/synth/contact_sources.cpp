@@ -142,7 +142,9 @@ void SoundEngine::continuousEndStep(Voice& v) {
       Arrival paths[2];
       const std::array<double, 3> world = {s.world_n[0] / n, s.world_n[1] / n, s.world_n[2] / n};
       arrivals(v, world, paths);
-      w.modal_transfer = radiationToward(v, paths[0], 0, Reuse::WithinTolerance);
+      const std::complex<double>* transfer[2];
+      radiationToward(v, paths, 1, transfer, Reuse::WithinTolerance);
+      w.modal_transfer = transfer[0];
     }
     (void)v.synth_.setForceWeights(w);  // a full queue keeps the weights in force
   }

@@ -37,7 +37,7 @@
 namespace strike {
 
 int SoundEngine::arrivals(const Voice& v, const std::array<double, 3>& world_point, Arrival out[2]) const {
-  const bool directional = !v.far_field_.empty();
+  const bool directional = !v.far_field_[0].empty();
   // The transfer's phases are about its centre: its sound leaves from there. Otherwise from the
   // contact, toward the centre of mass's direction.
   const std::array<double, 3> centre_of_mass = v.pose_.toWorld(v.centre_m_);
@@ -82,42 +82,58 @@ double sinAngleBetween(const std::array<double, 3>& a, const std::array<double, 
 
 }  // namespace
 
-const std::complex<double>* SoundEngine::radiationToward(Voice& v, const Arrival& a, int path, Reuse reuse) {
-  if (!v.pressure_) return nullptr;
-  if (v.far_field_.empty() && a.gain == 1.0) return nullptr;
-  Voice::PathTransfer& p = v.path_transfer_[static_cast<size_t>(path)];
-  if (p.valid && std::memcmp(&p.gain, &a.gain, sizeof a.gain) == 0) {
-    // The same bits (not ==, which equates -0 and +0): a reuse gives exactly what an evaluation would.
-    if (std::memcmp(p.direction.data(), a.direction.data(), sizeof a.direction) == 0) return p.factor.data();
-    // A continuous source may keep factors evaluated at a direction theta away while N theta <=
-    // kContinuousTransferTolerance, N the highest order of the body's transfer. Along any great
-    // circle F_i is a trigonometric polynomial of degree <= N, so by Bernstein's inequality
-    // |F_i(d') - F_i(d)| <= N theta max|F_i|: the kept factor is within that fraction of the mode's
-    // loudest direction. The per-step evaluation it saves was already a hold of one step.
-    if (reuse == Reuse::WithinTolerance && !v.far_field_.empty()) {
-      const double order = std::max(1.0, static_cast<double>(v.sh_table_.order));
-      if (order * sinAngleBetween(p.direction, a.direction) <= kContinuousTransferTolerance) return p.factor.data();
+void SoundEngine::radiationToward(Voice& v, const Arrival paths[], int count, const std::complex<double>* factors[2],
+                                  Reuse reuse) {
+  const bool directional = !v.far_field_[0].empty();
+  int evaluate[2];  // the paths whose factors are evaluated now
+  int evaluations = 0;
+  for (int k = 0; k < 2; ++k) factors[k] = nullptr;
+  for (int k = 0; k < count && v.pressure_; ++k) {
+    const Arrival& a = paths[k];
+    if (!directional && a.gain == 1.0) continue;
+    Voice::PathTransfer& p = v.path_transfer_[static_cast<size_t>(k)];
+    factors[k] = p.factor.data();
+    if (p.valid && std::memcmp(&p.gain, &a.gain, sizeof a.gain) == 0) {
+      // The same bits (not ==, which equates -0 and +0): a reuse gives exactly what an evaluation would.
+      if (std::memcmp(p.direction.data(), a.direction.data(), sizeof a.direction) == 0) continue;
+      // A continuous source may keep factors evaluated at a direction theta away while N theta <=
+      // kContinuousTransferTolerance, N the highest order of the body's transfer. Along any great
+      // circle F_i is a trigonometric polynomial of degree <= N, so by Bernstein's inequality
+      // |F_i(d') - F_i(d)| <= N theta max|F_i|: the kept factor is within that fraction of the mode's
+      // loudest direction. The per-step evaluation it saves was already a hold of one step.
+      if (reuse == Reuse::WithinTolerance && directional) {
+        const double order = std::max(1.0, static_cast<double>(v.sh_table_.order));
+        if (order * sinAngleBetween(p.direction, a.direction) <= kContinuousTransferTolerance) continue;
+      }
     }
-  }
-  const size_t modes = p.factor.size();
-  if (v.far_field_.empty()) {
-    std::fill(p.factor.begin(), p.factor.end(), std::complex<double>(a.gain, 0.0));
-  } else {
-    const AcousticTransfer& t = v.bank_->transfer;
+    p.direction = a.direction;
+    p.gain = a.gain;
+    p.valid = true;
+    if (!directional) {
+      std::fill(p.factor.begin(), p.factor.end(), std::complex<double>(a.gain, 0.0));
+      continue;
+    }
     realSphericalHarmonics(v.sh_table_, a.direction.data(), v.sh_.data());
-    evaluateFarField(t, v.sh_.data(), v.far_field_.data());
-    for (size_t i = 0; i < modes; ++i) p.factor[i] = std::conj(v.far_field_[i]) * (v.inv_rms_[i] * a.gain);
+    farFieldWeights(v.sh_.data(), v.sh_.size(), v.weights_[static_cast<size_t>(evaluations)].data());
+    evaluate[evaluations++] = k;
   }
-  p.direction = a.direction;
-  p.gain = a.gain;
-  p.valid = true;
-  return p.factor.data();
+  if (evaluations == 0) return;
+  const float* weights[2] = {v.weights_[0].data(), v.weights_[1].data()};
+  std::complex<double>* far_field[2] = {v.far_field_[0].data(), v.far_field_[1].data()};
+  evaluateFarFields(v.bank_->transfer, static_cast<size_t>(evaluations), weights, far_field);
+  for (int e = 0; e < evaluations; ++e) {
+    Voice::PathTransfer& p = v.path_transfer_[static_cast<size_t>(evaluate[e])];
+    const std::complex<double>* f = far_field[e];
+    for (size_t i = 0; i < p.factor.size(); ++i) p.factor[i] = std::conj(f[i]) * (v.inv_rms_[i] * p.gain);
+  }
 }
 
 void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
                                  const std::array<double, 3>& world_point, const std::array<double, 3>& impulse_local) {
   Arrival paths[2];
   const int count = arrivals(v, world_point, paths);
+  const std::complex<double>* transfer[2];
+  radiationToward(v, paths, count, transfer);
   for (int k = 0; k < count; ++k) {
     ImpactDesc impact;
     impact.object = 0;
@@ -125,7 +141,7 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
     impact.duration_s = duration_s;
     impact.shape = shape;
     impact.modal_impulse = modal;
-    impact.modal_transfer = radiationToward(v, paths[k], k);
+    impact.modal_transfer = transfer[k];
     const ImpactResult r = settings_.realtime ? v.synth_.addImpactNoAlloc(impact) : v.synth_.addImpact(impact);
     if (k == 0) {  // one impact, however many paths it takes
       switch (r) {
@@ -143,13 +159,15 @@ void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double
                                     const std::array<double, 3>& world_point) {
   Arrival paths[2];
   const int count = arrivals(v, world_point, paths);
+  const std::complex<double>* transfer[2];
+  radiationToward(v, paths, count, transfer);
   for (int k = 0; k < count; ++k) {
     ForceStepDesc step;
     step.object = 0;
     step.time_s = time_s + paths[k].delay_s;
     step.ramp_s = ramp_s;
     step.modal_force_change = modal_change;
-    step.modal_transfer = radiationToward(v, paths[k], k);
+    step.modal_transfer = transfer[k];
     const ImpactResult r = settings_.realtime ? v.synth_.addForceStepNoAlloc(step) : v.synth_.addForceStep(step);
     if (k > 0) continue;
     if (r == ImpactResult::NoCapacity)

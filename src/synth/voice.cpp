@@ -105,7 +105,8 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
     const size_t order = t.maxOrder();
     sh_.assign((order + 1) * (order + 1), 0.0);
     sh_table_ = sphericalHarmonicsTable(static_cast<uint32_t>(order));
-    far_field_.assign(modes, 0.0);
+    for (std::vector<float>& w : weights_) w.assign(2 * sh_.size(), 0.0f);
+    for (std::vector<std::complex<double>>& f : far_field_) f.assign(modes, 0.0);
     inv_rms_.assign(modes, 0.0);
     for (size_t i = 0; i < modes; ++i) {
       const double rms = t.rmsFarField(i);

@@ -232,7 +232,8 @@ class Voice {
   bool pressure_ = false;                                 ///< output is pressure (VoiceDesc::pressure_scale > 0)
   std::vector<double> sh_;                                ///< spherical harmonics scratch, (max order + 1)^2
   SphericalHarmonicsTable sh_table_;                      ///< their recurrence's constants to the max order
-  std::vector<std::complex<double>> far_field_;           ///< #modes: F_i toward the listener (scratch)
+  std::array<std::vector<float>, 2> weights_;             ///< per path: farFieldWeights of sh_ (scratch)
+  std::array<std::vector<std::complex<double>>, 2> far_field_;  ///< per path, #modes: F_i toward the listener (scratch)
   /// The per-mode factors handed to the oscillators for one path (direct, ground image), kept
   /// with the direction and gain they were evaluated for: a body that has not turned relative to
   /// the listener since its last event (resting, static, or several events in one physics step)
@@ -357,14 +358,15 @@ class SoundEngine {
     std::array<double, 3> direction{};  ///< toward the (image) listener, mesh frame, unit
   };
   int arrivals(const Voice& v, const std::array<double, 3>& world_point, Arrival out[2]) const;
-  /// The per-mode factors for one arrival along path 0 (direct) or 1 (ground image); nullptr
-  /// when the factor is 1 for every mode. Impacts and load changes reuse the last factors only
-  /// for the same direction to the bit; a continuous (rolling, sliding) source also within a
-  /// bounded angle (sound_paths.cpp).
+  /// The per-mode factors for the arrivals along paths [0, count) (0: direct, 1: ground image)
+  /// into factors[path]; nullptr when the factor is 1 for every mode. Impacts and load changes
+  /// reuse a path's last factors only for the same direction to the bit; a continuous (rolling,
+  /// sliding) source also within a bounded angle. The paths that need an evaluation share one
+  /// pass over the transfer's coefficients (sound_paths.cpp).
   enum class Reuse { SameDirection, WithinTolerance };
   static constexpr double kContinuousTransferTolerance = 1e-3;  ///< of a mode's loudest far field
-  const std::complex<double>* radiationToward(Voice& v, const Arrival& a, int path,
-                                              Reuse reuse = Reuse::SameDirection);
+  void radiationToward(Voice& v, const Arrival paths[], int count, const std::complex<double>* factors[2],
+                       Reuse reuse = Reuse::SameDirection);
   void scheduleClick(Voice& v, const Arrival& a, double time_s, double duration_s,
                      const std::array<double, 3>& impulse_local);
   void updateGains(Voice& v);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdio>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -114,9 +115,8 @@ TEST(AcousticTransfer, EvaluatesTheSumAndItsRmsAndChecksItsShape) {
   EXPECT_NE(t.checkConsistency(2), "");
 }
 
-// The per-impact evaluation (src/synth/sound_paths.cpp) uses the tabulated recurrence and the
-// modes interleaved four at a time; both must give exactly what the plain forms give, or a
-// render would depend on which one ran.
+// The per-impact evaluation (src/synth/sound_paths.cpp) uses the tabulated recurrence; it must
+// give exactly what the plain form gives, or a render would depend on which one ran.
 TEST(SphericalHarmonics, TheTabulatedRecurrenceGivesTheSameBits) {
   const double directions[][3] = {{0.3, -0.5, 0.812403840463596}, {0, 0, 1},  {0, 0, -1},   {-0.0, 0.0, 1.0},
                                   {1e-300, 0, 0},                 {1, 1, 1}, {-2, 3, -0.5}, {0.0, 0.0, 0.0}};
@@ -132,30 +132,112 @@ TEST(SphericalHarmonics, TheTabulatedRecurrenceGivesTheSameBits) {
   }
 }
 
-TEST(AcousticTransfer, ManyModesEvaluateToTheBitsOfEachModeAlone) {
-  // 11 modes (two groups of four and a remainder) of orders that differ inside each group.
+// The fast evaluation's arithmetic as acoustic_transfer.hpp states it, written out one
+// operation at a time: eight single-precision partial sums by j mod 8, then a fixed reduction.
+std::complex<double> documentedSum(const std::complex<float>* c, size_t count, const double* Y) {
+  float s[8][2] = {};
+  for (size_t j = 0; j < count; ++j) {
+    const float y = static_cast<float>(Y[j]);
+    const float re = c[j].real() * y, im = c[j].imag() * y;
+    s[j % 8][0] += re;
+    s[j % 8][1] += im;
+  }
+  double part[2];
+  for (int k = 0; k < 2; ++k) {
+    const float even = (s[0][k] + s[2][k]) + (s[4][k] + s[6][k]);
+    const float odd = (s[1][k] + s[3][k]) + (s[5][k] + s[7][k]);
+    part[k] = static_cast<double>(even) + static_cast<double>(odd);
+  }
+  return {part[0], part[1]};
+}
+
+// Modes of orders that give every remainder mod 8 (counts 1, 4, 9, ..., 144) and differ from
+// one mode to the next; random coefficients.
+AcousticTransfer randomTransfer(std::vector<uint32_t> orders, uint32_t seed) {
   AcousticTransfer t;
-  t.order = {3, 0, 5, 2, 9, 9, 1, 4, 6, 2, 7};
+  t.order = std::move(orders);
   t.offset = {0};
   for (uint32_t n : t.order) t.offset.push_back(t.offset.back() + uint64_t(n + 1) * (n + 1));
-  std::mt19937 random(7);
+  std::mt19937 random(seed);
   std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
   for (uint64_t j = 0; j < t.offset.back(); ++j) t.coefficients.emplace_back(uniform(random), uniform(random));
+  t.relative_error.assign(t.order.size(), 0.0f);
+  return t;
+}
+
+// Whatever the build (SSE2 or the portable loop) and whether one direction or two share a pass,
+// the engine's evaluation gives the documented sum to the bit: a render cannot depend on the
+// processor it ran on.
+TEST(AcousticTransfer, TheFastEvaluationGivesTheDocumentedSumToTheBit) {
+  const AcousticTransfer t = randomTransfer({3, 0, 5, 2, 9, 9, 1, 4, 6, 2, 7, 11, 8, 10}, 7);
   const uint32_t order = t.maxOrder();
-  std::vector<double> Y(size_t(order + 1) * (order + 1));
-  const double d[3] = {0.2, -0.7, 0.4};
-  realSphericalHarmonics(order, d, Y.data());
-  std::vector<std::complex<double>> F(t.modeCount());
-  evaluateFarField(t, Y.data(), F.data());
-  for (size_t i = 0; i < t.modeCount(); ++i) {
-    double re = 0.0, im = 0.0;
-    for (uint64_t j = t.offset[i]; j < t.offset[i + 1]; ++j) {
-      re += static_cast<double>(t.coefficients[j].real()) * Y[j - t.offset[i]];
-      im += static_cast<double>(t.coefficients[j].imag()) * Y[j - t.offset[i]];
-    }
-    EXPECT_EQ(std::memcmp(&F[i], &re, sizeof re), 0) << "mode " << i;
-    EXPECT_EQ(std::memcmp(reinterpret_cast<const double*>(&F[i]) + 1, &im, sizeof im), 0) << "mode " << i;
+  const size_t count = size_t(order + 1) * (order + 1);
+  const double directions[2][3] = {{0.2, -0.7, 0.4}, {-0.5, 0.1, -0.3}};
+  std::vector<double> Y[2];
+  std::vector<float> weights[2];
+  for (int k = 0; k < 2; ++k) {
+    Y[k].resize(count);
+    weights[k].resize(2 * count);
+    realSphericalHarmonics(order, directions[k], Y[k].data());
+    farFieldWeights(Y[k].data(), count, weights[k].data());
   }
+  std::vector<std::complex<double>> both[2], alone(t.modeCount());
+  for (auto& f : both) f.resize(t.modeCount());
+  const float* w[2] = {weights[0].data(), weights[1].data()};
+  std::complex<double>* out[2] = {both[0].data(), both[1].data()};
+  evaluateFarFields(t, 2, w, out);
+  for (int k = 0; k < 2; ++k) {
+    const float* one_w[1] = {weights[k].data()};
+    std::complex<double>* one_out[1] = {alone.data()};
+    evaluateFarFields(t, 1, one_w, one_out);
+    for (size_t i = 0; i < t.modeCount(); ++i) {
+      const std::complex<double> expected =
+          documentedSum(t.coefficients.data() + t.offset[i], t.offset[i + 1] - t.offset[i], Y[k].data());
+      EXPECT_EQ(std::memcmp(&both[k][i], &expected, sizeof expected), 0) << "direction " << k << " mode " << i;
+      EXPECT_EQ(std::memcmp(&alone[i], &expected, sizeof expected), 0) << "direction " << k << " mode " << i;
+    }
+  }
+}
+
+// Its rounding error against the plain double sum stays under the stated bound
+// (count / 8 + 4) 2^-24 sum_j |c_j Y_j| [Higham 2002, "Accuracy and Stability of Numerical
+// Algorithms", sec. 4.2: a sum of m terms is within (m - 1) u of exact, per term; the product
+// and the rounding of Y add 2 u, the reduction 2 u]. A term left out or added twice would be
+// ~1/count of the sum, far above it.
+TEST(AcousticTransfer, TheFastEvaluationIsWithinItsRoundingBoundOfTheExactSum) {
+  const AcousticTransfer t = randomTransfer({0, 1, 7, 20, 40, 63, 90}, 11);
+  const uint32_t order = t.maxOrder();
+  const size_t count = size_t(order + 1) * (order + 1);
+  std::vector<double> Y(count);
+  std::vector<float> weights(2 * count);
+  std::vector<std::complex<double>> exact(t.modeCount()), fast(t.modeCount());
+  std::mt19937 random(3);
+  std::normal_distribution<double> normal;
+  double worst = 0.0;  // error / bound
+  for (int trial = 0; trial < 20; ++trial) {
+    const double d[3] = {normal(random), normal(random), normal(random)};
+    realSphericalHarmonics(order, d, Y.data());
+    farFieldWeights(Y.data(), count, weights.data());
+    evaluateFarField(t, Y.data(), exact.data());
+    const float* w[1] = {weights.data()};
+    std::complex<double>* out[1] = {fast.data()};
+    evaluateFarFields(t, 1, w, out);
+    for (size_t i = 0; i < t.modeCount(); ++i) {
+      const size_t n = t.offset[i + 1] - t.offset[i];
+      double magnitude[2] = {0.0, 0.0};
+      for (size_t j = 0; j < n; ++j) {
+        magnitude[0] += std::abs(double(t.coefficients[t.offset[i] + j].real()) * Y[j]);
+        magnitude[1] += std::abs(double(t.coefficients[t.offset[i] + j].imag()) * Y[j]);
+      }
+      const double u = std::ldexp(1.0, -24), steps = double(n) / 8.0 + 4.0;
+      const double bound_re = steps * u * magnitude[0] * (1.0 + 1e-6), bound_im = steps * u * magnitude[1] * (1.0 + 1e-6);
+      EXPECT_LE(std::abs(fast[i].real() - exact[i].real()), bound_re) << "mode " << i;
+      EXPECT_LE(std::abs(fast[i].imag() - exact[i].imag()), bound_im) << "mode " << i;
+      worst = std::max({worst, std::abs(fast[i].real() - exact[i].real()) / bound_re,
+                        std::abs(fast[i].imag() - exact[i].imag()) / bound_im});
+    }
+  }
+  std::printf("  fast evaluation: worst error %.3g of its bound\n", worst);
 }
 
 // The sound engine keeps a rolling source's far-field factors while N theta <= 1e-3

@@ -133,7 +133,7 @@ void SoundEngine::continuousEndStep(Voice& v) {
     // Directivity, looked at each physics step (not once when the source starts): a rolling
     // body turns a full revolution every 2 pi r of travel, so the direction toward the listener
     // in its frame changes within a roll. A body with a transfer of high order (a 0.4 m plate to
-    // 20 kHz: order ~90, 2 MB of coefficients) costs ~0.15 ms an evaluation, so the factors are
+    // 20 kHz: order ~90, 2 MB of coefficients) costs ~0.1 ms an evaluation, so the factors are
     // kept while the direction has moved less than the bounded angle of radiationToward (a
     // resting or slowly sliding body, a static one). The direct path
     // only: the ground's image would need the force signal again behind its longer path (a delay

@@ -232,8 +232,10 @@ class Voice {
   bool pressure_ = false;                                 ///< output is pressure (VoiceDesc::pressure_scale > 0)
   std::vector<double> sh_;                                ///< spherical harmonics scratch, (max order + 1)^2
   SphericalHarmonicsTable sh_table_;                      ///< their recurrence's constants to the max order
-  std::array<std::vector<float>, 2> weights_;             ///< per path: farFieldWeights of sh_ (scratch)
-  std::array<std::vector<std::complex<double>>, 2> far_field_;  ///< per path, #modes: F_i toward the listener (scratch)
+  /// Scratch for one pass over the transfer's coefficients, which evaluates up to two directions
+  /// (the paths that need it): each one's farFieldWeights of sh_, and its F_i for the #modes.
+  std::array<std::vector<float>, 2> weights_;
+  std::array<std::vector<std::complex<double>>, 2> far_field_;
   /// The per-mode factors handed to the oscillators for one path (direct, ground image), kept
   /// with the direction and gain they were evaluated for: a body that has not turned relative to
   /// the listener since its last event (resting, static, or several events in one physics step)

@@ -6,10 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 #include <array>
+
+#include "far_field_kernels.hpp"
 
 namespace strike {
 
@@ -178,10 +177,70 @@ void farFieldWeights(const double* sh, size_t count, float* weights) {
   for (size_t j = 0; j < count; ++j) weights[2 * j] = weights[2 * j + 1] = static_cast<float>(sh[j]);
 }
 
+uint16_t floatToHalf(float x) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  const uint16_t sign = static_cast<uint16_t>((bits >> 16) & 0x8000u);
+  if (!(std::fabs(x) >= 0x1p-14f)) return sign;  // under the smallest normal half
+  // Drop 13 of the float's 23 fraction bits, rounding to nearest even; a carry out of the
+  // fraction moves into the exponent, as it should. Then rebias the exponent from 127 to 15.
+  const uint32_t magnitude = bits & 0x7fffffffu;
+  const uint32_t rounded = (magnitude + 0x0fffu + ((magnitude >> 13) & 1u)) >> 13;
+  return static_cast<uint16_t>(sign | (rounded - ((127u - 15u) << 10)));
+}
+
+float halfToFloat(uint16_t h) {
+  // A normal half's exponent rebiased from 15 to 127 and its fraction moved up by 13 bits; zero
+  // stays zero. Exact, as F16C's conversion is.
+  const uint32_t magnitude = h & 0x7fffu;
+  const uint32_t bits = (magnitude != 0 ? (magnitude << 13) + ((127u - 15u) << 23) : 0u) | (uint32_t(h & 0x8000u) << 16);
+  float x;
+  std::memcpy(&x, &bits, sizeof x);
+  return x;
+}
+
 namespace {
 
-// The fast evaluation's arithmetic (acoustic_transfer.hpp) and its two forms, SSE2 (every x86-64
-// processor) and portable, which do the same single-precision operations in the same order.
+bool cpuHasF16c() {
+#if defined(STRIKE_BANK_X86)
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
+#else
+  return false;
+#endif
+}
+
+}  // namespace
+
+CompactTransfer compactTransfer(const AcousticTransfer& transfer, bool allow_f16c) {
+  CompactTransfer compact;
+  compact.f16c = allow_f16c && cpuHasF16c();
+  const size_t modes = transfer.modeCount();
+  compact.offset = transfer.offset;
+  compact.halves.resize(2 * transfer.coefficients.size());
+  compact.scale.assign(modes, 1.0);
+  const float* all = reinterpret_cast<const float*>(transfer.coefficients.data());
+  for (size_t i = 0; i < modes; ++i) {
+    const size_t from = 2 * static_cast<size_t>(transfer.offset[i]), to = 2 * static_cast<size_t>(transfer.offset[i + 1]);
+    float largest = 0.0f;
+    for (size_t k = from; k < to; ++k) largest = std::max(largest, std::fabs(all[k]));
+    int exponent = 0;  // largest = f 2^exponent, f in [0.5, 1): largest 2^(15 - exponent) in [2^14, 2^15)
+    if (largest > 0.0f) (void)std::frexp(largest, &exponent);
+    const int shift = largest > 0.0f ? 15 - exponent : 0;
+    compact.scale[i] = std::ldexp(1.0, -shift);
+    // Exact in double; back in float exactly too, but for parts far under 2^-14 that are dropped.
+    const double up = std::ldexp(1.0, shift);
+    if (compact.f16c && shift >= -126 && shift <= 127)  // the same halves, eight at a time
+      detail::halvesF16c(all + from, to - from, static_cast<float>(up), compact.halves.data() + from);
+    else
+      for (size_t k = from; k < to; ++k) compact.halves[k] = floatToHalf(static_cast<float>(double(all[k]) * up));
+  }
+  return compact;
+}
+
+namespace {
+
+// The fast evaluation's arithmetic (acoustic_transfer.hpp) and its two forms, F16C with AVX2
+// (far_field_f16c.cpp) and portable, which do the same single-precision operations in the same order.
 constexpr size_t kPartialSums = 8;
 
 /// One direction's partial sums, S_r at [2r] (real) and [2r + 1] (imaginary).
@@ -189,11 +248,11 @@ using PartialSums = std::array<float, 2 * kPartialSums>;
 
 /// The coefficients past the last whole group of eight, each into its own partial sum, then the
 /// fixed reduction: ((S0 + S2) + (S4 + S6)) + ((S1 + S3) + (S5 + S7)), the last addition in double.
-std::complex<double> finishSum(PartialSums& s, const float* c, const float* w, size_t from, size_t count) {
+std::complex<double> finishSum(PartialSums& s, const uint16_t* h, const float* w, size_t from, size_t count) {
   for (size_t j = from; j < count; ++j) {
     const size_t r = j % kPartialSums;
-    s[2 * r] += c[2 * j] * w[2 * j];
-    s[2 * r + 1] += c[2 * j + 1] * w[2 * j + 1];
+    s[2 * r] += halfToFloat(h[2 * j]) * w[2 * j];
+    s[2 * r + 1] += halfToFloat(h[2 * j + 1]) * w[2 * j + 1];
   }
   double part[2][2];  // [even or odd sums][re, im]
   for (int odd = 0; odd < 2; ++odd)
@@ -206,48 +265,36 @@ std::complex<double> finishSum(PartialSums& s, const float* c, const float* w, s
 
 /// Mode i's far field at `Directions` directions: out[d][i].
 template <size_t Directions>
-void evaluateMode(const float* c, size_t count, const float* const* w, std::complex<double>* const* out, size_t i) {
+void evaluateMode(const uint16_t* h, size_t count, double scale, bool f16c, const float* const* w,
+                  std::complex<double>* const* out, size_t i) {
   const size_t whole = count - count % kPartialSums;
   PartialSums s[Directions];
-#if defined(__SSE2__)
-  // A register holds two coefficients (re, im, re, im): four registers are the eight sums.
-  __m128 sum[Directions][4];
-  for (size_t d = 0; d < Directions; ++d)
-    for (__m128& x : sum[d]) x = _mm_setzero_ps();
-  for (size_t j = 0; j < whole; j += kPartialSums) {
-    const float* cj = c + 2 * j;
-    const __m128 c0 = _mm_loadu_ps(cj), c1 = _mm_loadu_ps(cj + 4), c2 = _mm_loadu_ps(cj + 8), c3 = _mm_loadu_ps(cj + 12);
-    for (size_t d = 0; d < Directions; ++d) {  // every coefficient read once for all directions
-      const float* wj = w[d] + 2 * j;
-      sum[d][0] = _mm_add_ps(sum[d][0], _mm_mul_ps(c0, _mm_loadu_ps(wj)));
-      sum[d][1] = _mm_add_ps(sum[d][1], _mm_mul_ps(c1, _mm_loadu_ps(wj + 4)));
-      sum[d][2] = _mm_add_ps(sum[d][2], _mm_mul_ps(c2, _mm_loadu_ps(wj + 8)));
-      sum[d][3] = _mm_add_ps(sum[d][3], _mm_mul_ps(c3, _mm_loadu_ps(wj + 12)));
-    }
+  if (f16c) {
+    float sums[2 * 2 * kPartialSums];
+    detail::farFieldSumsF16c(h, whole, Directions, w, sums);
+    for (size_t d = 0; d < Directions; ++d) std::memcpy(s[d].data(), sums + 2 * kPartialSums * d, sizeof s[d]);
+  } else {
+    for (PartialSums& x : s) x.fill(0.0f);
+    for (size_t j = 0; j < whole; j += kPartialSums)
+      for (size_t r = 0; r < 2 * kPartialSums; ++r) {
+        const float c = halfToFloat(h[2 * j + r]);
+        for (size_t d = 0; d < Directions; ++d) s[d][r] += c * w[d][2 * j + r];
+      }
   }
-  for (size_t d = 0; d < Directions; ++d)
-    for (size_t k = 0; k < 4; ++k) _mm_storeu_ps(s[d].data() + 4 * k, sum[d][k]);
-#else
-  for (PartialSums& x : s) x.fill(0.0f);
-  for (size_t j = 0; j < whole; j += kPartialSums)
-    for (size_t d = 0; d < Directions; ++d)
-      for (size_t r = 0; r < 2 * kPartialSums; ++r) s[d][r] += c[2 * j + r] * w[d][2 * j + r];
-#endif
-  for (size_t d = 0; d < Directions; ++d) out[d][i] = finishSum(s[d], c, w[d], whole, count);
+  for (size_t d = 0; d < Directions; ++d) out[d][i] = finishSum(s[d], h, w[d], whole, count) * scale;
 }
 
 template <size_t Directions>
-void evaluateModes(const AcousticTransfer& transfer, const float* const* w, std::complex<double>* const* out) {
-  // std::complex<float> is two floats, (re, im), as an array (C++ [complex.numbers]).
-  const float* all = reinterpret_cast<const float*>(transfer.coefficients.data());
+void evaluateModes(const CompactTransfer& transfer, const float* const* w, std::complex<double>* const* out) {
   for (size_t i = 0; i < transfer.modeCount(); ++i)
-    evaluateMode<Directions>(all + 2 * transfer.offset[i],
-                             static_cast<size_t>(transfer.offset[i + 1] - transfer.offset[i]), w, out, i);
+    evaluateMode<Directions>(transfer.halves.data() + 2 * transfer.offset[i],
+                             static_cast<size_t>(transfer.offset[i + 1] - transfer.offset[i]), transfer.scale[i],
+                             transfer.f16c, w, out, i);
 }
 
 }  // namespace
 
-void evaluateFarFields(const AcousticTransfer& transfer, size_t directions, const float* const* weights,
+void evaluateFarFields(const CompactTransfer& transfer, size_t directions, const float* const* weights,
                        std::complex<double>* const* out) {
   if (directions >= 2)
     evaluateModes<2>(transfer, weights, out);

@@ -120,7 +120,7 @@ void SoundEngine::radiationToward(Voice& v, const Arrival paths[], int count, co
   if (evaluations == 0) return;
   const float* weights[2] = {v.weights_[0].data(), v.weights_[1].data()};
   std::complex<double>* far_field[2] = {v.far_field_[0].data(), v.far_field_[1].data()};
-  evaluateFarFields(v.bank_->transfer, static_cast<size_t>(evaluations), weights, far_field);
+  evaluateFarFields(v.transfer_, static_cast<size_t>(evaluations), weights, far_field);
   for (int e = 0; e < evaluations; ++e) {
     Voice::PathTransfer& p = v.path_transfer_[static_cast<size_t>(evaluate[e])];
     const std::complex<double>* f = far_field[e];

@@ -79,20 +79,45 @@ void evaluateFarField(const AcousticTransfer& transfer, const double* sh, std::c
 /// scales a coefficient's real and imaginary parts. No allocation.
 void farFieldWeights(const double* sh, size_t count, float* weights);
 
+/// IEEE binary16 ("half precision"): 1 sign, 5 exponent and 10 fraction bits.
+/// floatToHalf rounds a finite x with |x| < 65520 to the nearest half (ties to even); below the
+/// smallest normal half, 2^-14, it gives zero (with x's sign): a CompactTransfer never holds a
+/// subnormal half. halfToFloat is exact for zeros and normal halves.
+uint16_t floatToHalf(float x);
+float halfToFloat(uint16_t h);
+
+/// The coefficients as the sound engine reads them at every evaluation: in half precision, each
+/// mode scaled by a power of two that puts its largest real or imaginary part in [2^14, 2^15).
+/// An evaluation is bound by reading the coefficients (a 0.4 m plate to 20 kHz: 1.1 MB here,
+/// 2.2 MB as floats), so half the bytes is most of half the time. A half keeps 11 significant
+/// bits: each coefficient is within 2^-11 of itself (relative), and a far field within about
+/// 2^-11 / sqrt(3) = 2.8e-4 (-71 dB) of the float sum, rms over directions; parts under 2^-28
+/// of the mode's largest are dropped. The bank file keeps the floats (AcousticTransfer).
+struct CompactTransfer {
+  std::vector<uint64_t> offset;  ///< #modes + 1, as AcousticTransfer::offset (in coefficients)
+  std::vector<uint16_t> halves;  ///< 2 per coefficient: re, im (halves of c_j 2^s_i)
+  std::vector<double> scale;     ///< #modes: 2^-s_i, what mode i's sum is multiplied by
+  bool f16c = false;             ///< evaluate with F16C and AVX2 (the same bits as without)
+  size_t modeCount() const { return scale.size(); }
+  bool empty() const { return scale.empty(); }
+};
+/// allow_f16c = false keeps the portable loop even where the processor has F16C (tests).
+CompactTransfer compactTransfer(const AcousticTransfer& transfer, bool allow_f16c = true);
+
 /// F_i(d) for every mode at `directions` (1 or 2) directions in one pass over the coefficients:
-/// out[k][0 .. #modes) from weights[k] (farFieldWeights at order >= maxOrder()). An evaluation
-/// reads every coefficient (a 0.4 m plate to 20 kHz: 2 MB) and is bound by that, so the direct
-/// path and the ground's image share one reading. No allocation (real-time safe).
+/// out[k][0 .. #modes) from weights[k] (farFieldWeights at order >= the transfer's largest). The
+/// direct path and the ground's image share one reading. No allocation (real-time safe).
 ///
-/// Its arithmetic, the same bits on every x86-64 machine (SSE2 or the portable loop, whichever
-/// the build has): for each mode and direction, eight partial sums S_r in single precision, S_r
-/// taking the coefficients j = r, r + 8, r + 16, ... in that order (a float product c_j y_j, then
-/// a float addition: the project builds without contracting them into fused multiply-adds); then
-/// ((S0 + S2) + (S4 + S6)) + ((S1 + S3) + (S5 + S7)), the last addition in double. Eight
-/// independent sums keep the processor busy; single precision halves what each step moves. The
-/// rounding error is below (count / 8 + 4) 2^-24 sum_j |c_j Y_j| (tested), ~1e-5 of the mode's
-/// rms far field for the plates above.
-void evaluateFarFields(const AcousticTransfer& transfer, size_t directions, const float* const* weights,
+/// Its arithmetic, the same bits on every machine (F16C with AVX2 where the processor has them,
+/// else the portable loop): each half is turned into its float exactly; for each mode and direction,
+/// eight partial sums S_r in single precision, S_r taking the coefficients j = r, r + 8,
+/// r + 16, ... in that order (a float product q_j y_j, then a float addition: the project builds
+/// without contracting them into fused multiply-adds); then
+/// ((S0 + S2) + (S4 + S6)) + ((S1 + S3) + (S5 + S7)), the last addition in double, times the
+/// mode's scale (exact: a power of two). Eight independent sums keep the processor busy. The
+/// rounding error of the sum is below (count / 8 + 4) 2^-24 sum_j |q_j Y_j| (tested), ~1e-5 of
+/// the mode's rms far field for the plates above.
+void evaluateFarFields(const CompactTransfer& transfer, size_t directions, const float* const* weights,
                        std::complex<double>* const* out);
 
 }  // namespace strike

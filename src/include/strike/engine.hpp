@@ -232,6 +232,7 @@ class Voice {
   bool pressure_ = false;                                 ///< output is pressure (VoiceDesc::pressure_scale > 0)
   std::vector<double> sh_;                                ///< spherical harmonics scratch, (max order + 1)^2
   SphericalHarmonicsTable sh_table_;                      ///< their recurrence's constants to the max order
+  CompactTransfer transfer_;                              ///< the bank's transfer as evaluations read it
   /// Scratch for one pass over the transfer's coefficients, which evaluates up to two directions
   /// (the paths that need it): each one's farFieldWeights of sh_, and its F_i for the #modes.
   std::array<std::vector<float>, 2> weights_;

@@ -17,6 +17,7 @@
 #include <optional>
 
 #include "cache_lock.hpp"
+#include "hull_cache.hpp"
 #include "pieces_cache.hpp"
 #include "playback.hpp"
 #include "strike/atomic_file.hpp"
@@ -619,6 +620,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   }
   sim.progress = settings.progress;
   if (settings.session) sim.hull_memo = settings.session->hullMemo();
+  if (!settings.cache_dir.empty()) sim.hull_memo = cachedHullMemo(settings.cache_dir, sim.hull_memo);
   Result<SimResult> simulated = simulate(sim_bodies, sim);
   if (!simulated) return simulated.error();
   report.simulate_seconds = secondsSince(simulate_start);

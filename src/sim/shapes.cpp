@@ -92,12 +92,12 @@ bool boxHalfExtents(const SimHull& hull, double tolerance_m, btVector3& half_m) 
 
 std::shared_ptr<const SimHull> Simulation::bodyHull(const std::vector<double>& xyz, double shrink_m,
                                                     double shrink_clamp) {
-  if (settings_.hull_memo) return convexHull(xyz, shrink_m, shrink_clamp, settings_.hull_memo);
-  // Without the caller's memory, identical bodies still share one hull within the run (twelve
-  // marbles: a twelfth of the time). The same points give the same hull, to the bit.
+  // Identical bodies share one hull within the run (twelve marbles: a twelfth of the time), then
+  // the caller's memory (a session's, the cache folder's) is asked. The same points give the
+  // same hull, to the bit.
   for (const RunHull& known : run_hulls_)
     if (known.shrink_m == shrink_m && known.shrink_clamp == shrink_clamp && known.points_xyz == xyz) return known.hull;
-  run_hulls_.push_back({xyz, shrink_m, shrink_clamp, convexHull(xyz, shrink_m, shrink_clamp, {})});
+  run_hulls_.push_back({xyz, shrink_m, shrink_clamp, convexHull(xyz, shrink_m, shrink_clamp, settings_.hull_memo)});
   return run_hulls_.back().hull;
 }
 
@@ -383,3 +383,9 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
 }
 
 }  // namespace strike::detail
+
+namespace strike {
+
+uint64_t simHullRecipe() { return uint64_t(BT_BULLET_VERSION) * 100 + sizeof(btScalar); }
+
+}  // namespace strike

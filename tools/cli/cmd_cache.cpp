@@ -89,6 +89,11 @@ int runCache(const std::vector<std::string>& raw_args) {
                       age(e.last_used, now).c_str(), "convex pieces of a concave moving body (docs/contact.md)");
           continue;
         }
+        if (name.size() > 5 && name.compare(name.size() - 5, 5, ".hull") == 0) {
+          std::printf("%-24s %10s  %-14s  %s\n", name.c_str(), megabytes(e.bytes).c_str(),
+                      age(e.last_used, now).c_str(), "convex hull of a body's surface (docs/contact.md)");
+          continue;
+        }
         Result<BankFile> bank = BankFile::open(e.path);  // the header only: shapes are not read
         std::string what = "(unreadable: " + (bank ? std::string() : bank.error().message) + ")";
         const bool transfer = name.size() > 9 && name.compare(name.size() - 9, 9, ".transfer") == 0;

@@ -77,6 +77,9 @@ struct SimHull {
 using SimHullMemo =
     std::function<std::shared_ptr<const SimHull>(const std::vector<double>& points_xyz, double shrink_m,
                                                  double shrink_clamp, const std::function<SimHull()>& compute)>;
+/// What a hull depends on besides its points and shrink: Bullet's version (BT_BULLET_VERSION)
+/// and the size of its scalar, for the keys of hulls kept on disk.
+uint64_t simHullRecipe();
 
 struct SimSettings {
   double duration_s = 3.0;

@@ -396,7 +396,8 @@ struct BankFile::Source {
   uint64_t size = 0;              ///< of the whole file
   const uint8_t* data = nullptr;  ///< its first `resident` bytes
   uint64_t resident = 0;
-  std::string buffer;  ///< owns `data` when read from a file
+  std::string buffer;               ///< owns `data` when a file is read whole
+  std::unique_ptr<uint8_t[]> head;  ///< owns `data` while a file's head is parsed
   int fd = -1;         ///< open while bytes after `resident` may be asked for
   Source() = default;
   Source(const Source&) = delete;
@@ -737,17 +738,25 @@ Result<BankFile> BankFile::open(const std::string& path) {
     if (std::memcmp(header, kMagic, 8) == 0 && version >= 3 && version <= kBankFormatVersionMax &&
         header_size == kHeaderSizeV3 && head_size <= bytes->size - kHeaderSizeV3)
       wanted = kHeaderSizeV3 + head_size;
-    bytes->buffer.resize(wanted);
-    if (bytes->read(0, bytes->buffer.size(), reinterpret_cast<uint8_t*>(bytes->buffer.data()))) {  // from the file
-      bytes->data = reinterpret_cast<const uint8_t*>(bytes->buffer.data());
+    bytes->head.reset(new uint8_t[wanted]);  // not zeroed: the read fills it
+    if (bytes->read(0, wanted, bytes->head.get())) {  // from the file
+      bytes->data = bytes->head.get();
       bytes->resident = wanted;
       if (bytes->resident == bytes->size) {
         close(bytes->fd);
         bytes->fd = -1;
+        return parse(std::move(bytes));
       }
-      return parse(std::move(bytes));
+      // The head is parsed into the bank and the shapes after it are read with pread when asked,
+      // so its bytes (2-3 MB of a plate's bank, most of them the transfer) need not stay.
+      const std::shared_ptr<Source> kept = bytes;
+      Result<BankFile> parsed = parse(std::move(bytes));
+      kept->head.reset();
+      kept->data = nullptr;
+      kept->resident = 0;
+      return parsed;
     }
-    bytes->buffer.clear();  // shorter than fstat said: the buffered path words it
+    bytes->head.reset();  // shorter than fstat said: the buffered path words it
   } else if (fd >= 0) {
     close(fd);
   }

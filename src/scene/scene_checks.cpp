@@ -75,7 +75,10 @@ struct WorldSurface {
   Vec position{};
 };
 
-WorldSurface toWorld(const SimBodyDesc& body) {
+/// The body's boxes in the world and in its own frame; its points stay empty until a pair needs
+/// them (addWorldPoints): most pairs' boxes never meet, and twenty plates of 14,000 vertices
+/// would otherwise be turned into the world for nothing.
+WorldSurface worldBoxes(const SimBodyDesc& body) {
   WorldSurface w;
   const double inf = std::numeric_limits<double>::infinity();
   w.low = w.local_low = {inf, inf, inf};
@@ -89,12 +92,25 @@ WorldSurface toWorld(const SimBodyDesc& body) {
       w.local_low[a] = std::min(w.local_low[a], local[a]);
       w.local_high[a] = std::max(w.local_high[a], local[a]);
       const double x = r[a] + body.position_m[a];
-      w.positions.push_back(x);
       w.low[a] = std::min(w.low[a], x);
       w.high[a] = std::max(w.high[a], x);
     }
   }
+  return w;
+}
+
+/// Its vertices in the world (the same numbers as worldBoxes' bounds), and the probes where
+/// overlap is tested: the vertices and the triangles' centroids.
+void addWorldPoints(const SimBodyDesc& body, WorldSurface& w) {
+  if (!w.positions.empty()) return;
+  w.positions.reserve(body.surface_positions.size());
+  for (size_t v = 0; v + 2 < body.surface_positions.size(); v += 3) {
+    const Vec local{body.surface_positions[v], body.surface_positions[v + 1], body.surface_positions[v + 2]};
+    const Vec r = rotate(body.orientation_wxyz, local);
+    for (int a = 0; a < 3; ++a) w.positions.push_back(r[a] + body.position_m[a]);
+  }
   // Centroids too: two boxes can overlap with every corner of each on the other's faces.
+  w.probes.reserve(w.positions.size() + body.surface_triangles.size());
   w.probes = w.positions;
   for (size_t t = 0; t + 2 < body.surface_triangles.size(); t += 3)
     for (int a = 0; a < 3; ++a) {
@@ -102,7 +118,6 @@ WorldSurface toWorld(const SimBodyDesc& body) {
       for (int k = 0; k < 3; ++k) sum += w.positions[body.surface_triangles[t + k] * size_t(3) + a];
       w.probes.push_back(sum / 3.0);
     }
-  return w;
 }
 
 std::string format(const char* fmt, double a = 0, double b = 0, double c = 0, double d = 0) {
@@ -270,17 +285,19 @@ std::vector<std::string> checkStartingPlacement(const Scene& scene, const std::v
                                                 const PlacementLimits& limits) {
   std::vector<std::string> warnings;
   std::vector<WorldSurface> world;
-  for (const SimBodyDesc& body : bodies) world.push_back(toWorld(body));
+  for (const SimBodyDesc& body : bodies) world.push_back(worldBoxes(body));
   std::vector<std::unique_ptr<InsideTest>> inside_tests(bodies.size());  // built when a pair needs one
   auto insideTest = [&](size_t i) -> const InsideTest& {
+    addWorldPoints(bodies[i], world[i]);
     if (!inside_tests[i]) inside_tests[i] = std::make_unique<InsideTest>(world[i].positions, bodies[i].surface_triangles);
     return *inside_tests[i];
   };
+  auto hasPoints = [&](size_t i) { return bodies[i].surface_positions.size() >= 3; };
   for (size_t i = 0; i < bodies.size() && i < scene.objects.size(); ++i) {
     const SimBodyDesc& body = bodies[i];
     const SceneObject& object = scene.objects[i];
     const WorldSurface& w = world[i];
-    if (w.positions.empty()) continue;
+    if (!hasPoints(i)) continue;
     const std::string who = "objects \"" + body.name + "\": ";
     // Size and mass: a mesh file in millimetres read as metres is 1000x too long, 1e9x too heavy.
     const Vec extent = sub(w.high, w.low);
@@ -317,14 +334,15 @@ std::vector<std::string> checkStartingPlacement(const Scene& scene, const std::v
     for (size_t j = i + 1; j < bodies.size(); ++j) {
       if (bodies[i].is_static && bodies[j].is_static) continue;  // never simulated against each other
       const WorldSurface &a = world[i], &b = world[j];
-      if (a.positions.empty() || b.positions.empty()) continue;
+      if (!hasPoints(i) || !hasPoints(j)) continue;
       bool boxes_meet = true;
       for (int k = 0; k < 3; ++k)
         boxes_meet = boxes_meet && a.low[k] < b.high[k] - limits.overlap_tolerance_m &&
                      b.low[k] < a.high[k] - limits.overlap_tolerance_m;
       if (!boxes_meet) continue;
-      const double depth = std::max(deepestVertexInside(a, b, bodies[j], limits.max_vertices_tested, insideTest(j)),
-                                    deepestVertexInside(b, a, bodies[i], limits.max_vertices_tested, insideTest(i)));
+      const InsideTest &inside_j = insideTest(j), &inside_i = insideTest(i);  // both bodies' points now
+      const double depth = std::max(deepestVertexInside(a, b, bodies[j], limits.max_vertices_tested, inside_j),
+                                    deepestVertexInside(b, a, bodies[i], limits.max_vertices_tested, inside_i));
       if (depth > limits.overlap_tolerance_m)
         warnings.push_back("objects \"" + bodies[i].name + "\" and \"" + bodies[j].name +
                            format("\" start inside each other (a surface point %.3g mm deep); ", depth * 1e3) +
@@ -335,7 +353,7 @@ std::vector<std::string> checkStartingPlacement(const Scene& scene, const std::v
 }
 
 std::string neverStruckWarning(const Scene& scene, const SimBodyDesc& body, double duration_s) {
-  const WorldSurface w = toWorld(body);
+  const WorldSurface w = worldBoxes(body);
   std::string text = "objects \"" + body.name + "\": never struck (it starts at " +
                      format("(%.4g, %.4g, %.4g) m", body.position_m[0], body.position_m[1], body.position_m[2]);
   const double g = -scene.gravity_m_s2[2];
@@ -344,7 +362,7 @@ std::string neverStruckWarning(const Scene& scene, const SimBodyDesc& body, doub
     return text + format("; its path ends at (%.4g, %.4g, %.4g) m at %.4g s without touching anything)",
                          last.position_m[0], last.position_m[1], last.position_m[2], last.t_s);
   }
-  if (scene.has_ground && !w.positions.empty()) {
+  if (scene.has_ground && body.surface_positions.size() >= 3) {
     const double height = w.low[2] - scene.ground_height_m;
     text += format(", its lowest point %.4g m above the ground", height);
     const double v = body.velocity_m_s[2];

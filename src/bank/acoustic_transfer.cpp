@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <array>
 
 #include "far_field_kernels.hpp"
@@ -72,6 +75,7 @@ double stepB(int n, int m) {
 
 // Computes the constants as it goes.
 struct DirectConstants {
+  static constexpr bool kPairs = false;
   double sectoral(int m) const { return sectoralFactor(m); }
   double first(int m) const { return firstFactor(m); }
   double a(int n, int m) const { return stepA(n, m); }
@@ -80,12 +84,71 @@ struct DirectConstants {
 
 // Reads them from a table (SphericalHarmonicsTable's layout).
 struct TableConstants {
+#if defined(__SSE2__)
+  static constexpr bool kPairs = true;  // columnPair
+#else
+  static constexpr bool kPairs = false;
+#endif
   const SphericalHarmonicsTable& t;
   double sectoral(int m) const { return t.sectoral[static_cast<size_t>(m)]; }
   double first(int m) const { return t.first[static_cast<size_t>(m)]; }
   double a(int n, int m) const { return t.a[static_cast<size_t>(n * n + n + m)]; }
   double b(int n, int m) const { return t.b[static_cast<size_t>(n * n + n + m)]; }
 };
+
+/// One order m's column, n = m..n_max: out[n^2 + n + m] = Q_n^m cos_factor and, for m > 0,
+/// out[n^2 + n - m] = Q_n^m sin_factor, from Q_m^m = q_mm up the three-term recurrence.
+template <class Constants>
+void column(const Constants& k, int m, int n_max, double z, double q_mm, double cos_factor, double sin_factor,
+            double* out) {
+  double q_prev = 0.0, q = q_mm;  // Q_{n-1}^m, Q_n^m
+  for (int n = m; n <= n_max; ++n) {
+    if (n == m + 1) {
+      q_prev = q;
+      q = k.first(m) * z * q_mm;
+    } else if (n > m + 1) {
+      const double next = k.a(n, m) * (z * q - k.b(n, m) * q_prev);
+      q_prev = q;
+      q = next;
+    }
+    out[n * n + n + m] = q * cos_factor;
+    if (m > 0) out[n * n + n - m] = q * sin_factor;
+  }
+}
+
+#if defined(__SSE2__)
+/// The columns of m and m + 1 at once (m + 1 <= n_max), one in each lane of a register from
+/// n = m + 3 on, where both take the general step and their table entries sit side by side.
+/// Each lane does the scalar column's operations in its order: the same bits (tested).
+void columnPair(const TableConstants& k, int m, int n_max, double z, const double q_mm[2], const double cos_factor[2],
+                const double sin_factor[2], double* out) {
+  const int last = std::min(n_max, m + 2);  // the beginnings, one lane at a time
+  column(k, m, last, z, q_mm[0], cos_factor[0], sin_factor[0], out);
+  column(k, m + 1, last, z, q_mm[1], cos_factor[1], sin_factor[1], out);
+  if (n_max < m + 3) return;
+  // Q_{m+1}, Q_{m+2} of both lanes, as the scalar column has them (out holds them times a factor).
+  const double q0_prev = k.first(m) * z * q_mm[0];
+  const double q0 = k.a(m + 2, m) * (z * q0_prev - k.b(m + 2, m) * q_mm[0]);
+  const double q1_prev = q_mm[1];
+  const double q1 = k.first(m + 1) * z * q_mm[1];
+  __m128d q_prev = _mm_set_pd(q1_prev, q0_prev), q = _mm_set_pd(q1, q0);  // (lane 0, lane 1) = (m, m + 1)
+  const __m128d zz = _mm_set1_pd(z);
+  const __m128d cosines = _mm_set_pd(cos_factor[1], cos_factor[0]), sines = _mm_set_pd(sin_factor[1], sin_factor[0]);
+  for (int n = m + 3; n <= n_max; ++n) {
+    const size_t at = static_cast<size_t>(n * n + n + m);
+    const __m128d next = _mm_mul_pd(_mm_loadu_pd(&k.t.a[at]),
+                                    _mm_sub_pd(_mm_mul_pd(zz, q), _mm_mul_pd(_mm_loadu_pd(&k.t.b[at]), q_prev)));
+    q_prev = q;
+    q = next;
+    _mm_storeu_pd(out + at, _mm_mul_pd(q, cosines));
+    const __m128d s = _mm_mul_pd(q, sines);  // m + 1's goes to n^2 + n - m - 1, m's to n^2 + n - m
+    if (m > 0)
+      _mm_storeu_pd(out + (at - static_cast<size_t>(2 * m + 1)), _mm_shuffle_pd(s, s, 1));
+    else
+      _mm_storeh_pd(out + (at - 1), s);
+  }
+}
+#endif
 
 template <class Constants>
 void sphericalHarmonics(int n_max, const double direction[3], const Constants& k, double* out) {
@@ -105,28 +168,32 @@ void sphericalHarmonics(int n_max, const double direction[3], const Constants& k
   // (so Y_11 = +sqrt(3/4pi) x). Q_n^m = N_n^m P_n^m / sin^m; stable to high order.
   double q_mm = 1.0 / std::sqrt(4.0 * M_PI);  // Q_0^0
   double c_m = 1.0, s_m = 0.0;                // Re, Im of (x + i y)^m
-  for (int m = 0; m <= n_max; ++m) {
-    if (m > 0) {
-      q_mm *= k.sectoral(m);
-      const double c = x * c_m - y * s_m;
-      s_m = x * s_m + y * c_m;
-      c_m = c;
-    }
-    const double cos_factor = m == 0 ? 1.0 : M_SQRT2 * c_m;
-    const double sin_factor = M_SQRT2 * s_m;
-    double q_prev = 0.0, q = q_mm;  // Q_{n-1}^m, Q_n^m
-    for (int n = m; n <= n_max; ++n) {
-      if (n == m + 1) {
-        q_prev = q;
-        q = k.first(m) * z * q_mm;
-      } else if (n > m + 1) {
-        const double next = k.a(n, m) * (z * q - k.b(n, m) * q_prev);
-        q_prev = q;
-        q = next;
+  double column_q[2], column_cos[2], column_sin[2];
+  for (int m = 0; m <= n_max;) {
+    // Columns two at a time where the table and SSE2 allow (columnPair), else one.
+    const int count = Constants::kPairs && m + 1 <= n_max ? 2 : 1;
+    for (int l = 0; l < count; ++l) {
+      if (m + l > 0) {
+        q_mm *= k.sectoral(m + l);
+        const double c = x * c_m - y * s_m;
+        s_m = x * s_m + y * c_m;
+        c_m = c;
       }
-      out[n * n + n + m] = q * cos_factor;
-      if (m > 0) out[n * n + n - m] = q * sin_factor;
+      column_q[l] = q_mm;
+      column_cos[l] = m + l == 0 ? 1.0 : M_SQRT2 * c_m;
+      column_sin[l] = M_SQRT2 * s_m;
     }
+#if defined(__SSE2__)
+    if constexpr (Constants::kPairs) {
+      if (count == 2) {
+        columnPair(k, m, n_max, z, column_q, column_cos, column_sin, out);
+        m += 2;
+        continue;
+      }
+    }
+#endif
+    column(k, m, n_max, z, column_q[0], column_cos[0], column_sin[0], out);
+    m += 1;
   }
 }
 

@@ -2,6 +2,7 @@
 // Contact: where an impulse lands on the surface (modal projection, O'Brien et al. 2002;
 // van den Doel & Pai 1998) and how long it lasts (Hertz theory, Johnson 1985).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -145,27 +146,32 @@ SurfaceLocator::SurfaceLocator(const ModeBank& bank) : bank_(&bank) {
       to[k] = std::clamp(static_cast<int>((b - origin_[k]) / cell_m_), 0, dims_[k] - 1);
     }
   };
+  // Count, then fill (CSR). Each triangle's range of cells (dims_ <= 256: a byte an axis) is
+  // computed once, in the count, and kept for the fill.
   cell_start_.assign(cells + 1, 0);
-  for (int pass = 0; pass < 2; ++pass) {  // count, then fill (CSR)
-    std::vector<uint32_t> fill(pass == 1 ? cell_start_.begin() : cell_start_.end(), cell_start_.end());
-    if (pass == 1) cell_tris_.resize(cell_start_[cells]);
-    for (size_t t = 0; t < nt; ++t) {
-      const uint32_t* tri = &bank.surface_triangles[3 * t];
-      if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) continue;
-      int from[3], to[3];
-      cellRange(tri, from, to);
-      for (int x = from[0]; x <= to[0]; ++x)
-        for (int y = from[1]; y <= to[1]; ++y)
-          for (int z = from[2]; z <= to[2]; ++z) {
-            const size_t c = (static_cast<size_t>(x) * dims_[1] + y) * dims_[2] + z;
-            if (pass == 0)
-              ++cell_start_[c + 1];
-            else
-              cell_tris_[fill[c]++] = static_cast<uint32_t>(t);
-          }
+  std::vector<std::array<uint8_t, 6>> ranges(nt);
+  for (size_t t = 0; t < nt; ++t) {
+    const uint32_t* tri = &bank.surface_triangles[3 * t];
+    if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) {
+      ranges[t] = {1, 1, 1, 0, 0, 0};  // an empty range: from > to
+      continue;
     }
-    if (pass == 0)
-      for (size_t c = 0; c < cells; ++c) cell_start_[c + 1] += cell_start_[c];
+    int from[3], to[3];
+    cellRange(tri, from, to);
+    for (int k = 0; k < 3; ++k) ranges[t][k] = static_cast<uint8_t>(from[k]), ranges[t][3 + k] = static_cast<uint8_t>(to[k]);
+    for (int x = from[0]; x <= to[0]; ++x)
+      for (int y = from[1]; y <= to[1]; ++y)
+        for (int z = from[2]; z <= to[2]; ++z) ++cell_start_[(static_cast<size_t>(x) * dims_[1] + y) * dims_[2] + z + 1];
+  }
+  for (size_t c = 0; c < cells; ++c) cell_start_[c + 1] += cell_start_[c];
+  std::vector<uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+  cell_tris_.resize(cell_start_[cells]);
+  for (size_t t = 0; t < nt; ++t) {
+    const std::array<uint8_t, 6>& r = ranges[t];
+    for (int x = r[0]; x <= r[3]; ++x)
+      for (int y = r[1]; y <= r[4]; ++y)
+        for (int z = r[2]; z <= r[5]; ++z)
+          cell_tris_[fill[(static_cast<size_t>(x) * dims_[1] + y) * dims_[2] + z]++] = static_cast<uint32_t>(t);
   }
 }
 

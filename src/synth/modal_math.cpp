@@ -5,27 +5,47 @@
 
 namespace strike::detail {
 
-Complex expDividedDifference(Complex a, Complex p, double u_s) {
-  const Complex z = (a - p) * u_s;
-  if (std::abs(z) < 0.5) {
-    // phi1(z) = (e^z - 1) / z = sum z^k / (k+1)!; |z| < 1/2 so 20 terms reach double precision.
-    Complex term(1.0, 0.0), sum(1.0, 0.0);
-    for (int k = 1; k < 20; ++k) {
-      term *= z / static_cast<double>(k + 1);
-      sum += term;
-    }
-    return u_s * std::exp(p * u_s) * sum;
+namespace {
+
+/// U e^{pU} phi1(z), phi1(z) = (e^z - 1) / z = sum z^k / (k+1)!; |z| < 1/2 so 20 terms reach
+/// double precision.
+Complex seriesForm(Complex z, double u_s, Complex exp_pu) {
+  Complex term(1.0, 0.0), sum(1.0, 0.0);
+  for (int k = 1; k < 20; ++k) {
+    term *= z / static_cast<double>(k + 1);
+    sum += term;
   }
+  return u_s * exp_pu * sum;
+}
+
+/// E(a, p, U) given e^{pU}, and e^{aU} when the caller has it (else computed here if needed).
+Complex expDividedDifference(Complex a, Complex p, double u_s, Complex exp_pu, const Complex* exp_au) {
+  const Complex z = (a - p) * u_s;
+  if (std::abs(z) < 0.5) return seriesForm(z, u_s, exp_pu);
   // |a - p| U >= 1/2: the difference loses at most a bounded factor, no catastrophic cancellation.
-  return (std::exp(a * u_s) - std::exp(p * u_s)) / (a - p);
+  return ((exp_au ? *exp_au : std::exp(a * u_s)) - exp_pu) / (a - p);
+}
+
+}  // namespace
+
+Complex expDividedDifference(Complex a, Complex p, double u_s) {
+  return expDividedDifference(a, p, u_s, std::exp(p * u_s), nullptr);
+}
+
+ExpPair expDividedDifferencePair(Complex a_plus, Complex a_minus, Complex p, double u_s) {
+  const Complex exp_pu = std::exp(p * u_s);
+  ExpPair out;
+  out.exp_plus = std::exp(a_plus * u_s);
+  out.plus = expDividedDifference(a_plus, p, u_s, exp_pu, &out.exp_plus);
+  out.minus = expDividedDifference(a_minus, p, u_s, exp_pu, nullptr);
+  return out;
 }
 
 Complex halfSineResponse(Complex pole, double tau_s, double u_s) {
   // f(u) = (pi/(2 tau)) (e^{i Om u} - e^{-i Om u}) / (2i): two geometric sequences in u.
   const double omega = M_PI / tau_s;
-  const Complex e_plus = expDividedDifference(Complex(0.0, omega), pole, u_s);
-  const Complex e_minus = expDividedDifference(Complex(0.0, -omega), pole, u_s);
-  return (M_PI / (2.0 * tau_s)) * (e_plus - e_minus) / Complex(0.0, 2.0);
+  const ExpPair e = expDividedDifferencePair(Complex(0.0, omega), Complex(0.0, -omega), pole, u_s);
+  return (M_PI / (2.0 * tau_s)) * (e.plus - e.minus) / Complex(0.0, 2.0);
 }
 
 Mat4 expm4(const Mat4& a, double t_s) {

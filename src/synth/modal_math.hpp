@@ -16,6 +16,15 @@ using Complex = std::complex<double>;
 /// Requires Re(p) <= 0, Re(a) <= 0 (no overflow); U may be slightly negative.
 Complex expDividedDifference(Complex a, Complex p, double u_s);
 
+/// E(a_plus, p, U) and E(a_minus, p, U) (a_minus = -a_plus, as the caller writes it) sharing
+/// e^{pU}, and e^{a_plus U} itself: each the very bits expDividedDifference and std::exp give,
+/// with three complex exponentials instead of five. The half-sine pulse needs all three.
+struct ExpPair {
+  Complex plus, minus;  ///< E(a_plus, p, U), E(a_minus, p, U)
+  Complex exp_plus;     ///< e^{a_plus U}
+};
+ExpPair expDividedDifferencePair(Complex a_plus, Complex a_minus, Complex p, double u_s);
+
 /// y(U) = integral_0^U e^{p (U - u)} f(u) du for the unit-area half-sine pulse
 /// f(u) = (pi / (2 tau)) sin(pi u / tau) on [0, tau], at 0 <= U <= tau (Re p <= 0).
 /// y(tau) -> 1 as tau -> 0 (the ideal impulse).

@@ -442,12 +442,12 @@ struct OscillatorBank::Impl {
         // Transient: y(U) = K (E(i Om, p, U) - E(-i Om, p, U)) / 2i at U = first_u + n h, with
         // E(a, p, U + h) = e^{ph} E(a, p, U) + e^{aU} E(a, p, h): exact, stable recurrences.
         const Complex ia(0.0, pulse_omega);
-        Complex ep = detail::expDividedDifference(ia, pole, first_u_s);
-        Complex em = detail::expDividedDifference(-ia, pole, first_u_s);
-        const Complex hp = detail::expDividedDifference(ia, pole, h);
-        const Complex hm = detail::expDividedDifference(-ia, pole, h);
-        Complex rot_p = std::exp(ia * first_u_s), rot_m = std::conj(rot_p);
-        const Complex turn_p = std::exp(ia * h), turn_m = std::conj(turn_p);
+        const detail::ExpPair first = detail::expDividedDifferencePair(ia, -ia, pole, first_u_s);
+        const detail::ExpPair one_step = detail::expDividedDifferencePair(ia, -ia, pole, h);
+        Complex ep = first.plus, em = first.minus;
+        const Complex hp = one_step.plus, hm = one_step.minus;
+        Complex rot_p = first.exp_plus, rot_m = std::conj(rot_p);  // e^{i Om U}
+        const Complex turn_p = one_step.exp_plus, turn_m = std::conj(turn_p);
         const Complex k = bg * (M_PI / (2.0 * tau_s)) / Complex(0.0, 2.0);
         for (double& out : im.transient) {
           out += (k * (ep - em)).real();

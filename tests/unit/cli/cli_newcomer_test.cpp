@@ -44,6 +44,15 @@ size_t filesIn(const std::string& dir) {
   return static_cast<size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
 }
 
+/// The banks (.modes) in a cache folder, which also holds the bodies' hulls (.hull).
+std::vector<fs::path> banksIn(const std::string& dir) {
+  std::vector<fs::path> banks;
+  if (fs::exists(dir))
+    for (const auto& entry : fs::directory_iterator(dir))
+      if (entry.path().extension() == ".modes") banks.push_back(entry.path());
+  return banks;
+}
+
 /// A number printed after `prefix` in `text`, or NaN.
 double numberAfter(const std::string& text, const std::string& prefix) {
   const size_t at = text.find(prefix);
@@ -334,15 +343,15 @@ std::string folderWithOneCachedBank(const std::string& name) {
   write(dir + "/drop.json", kDrop);
   EXPECT_EQ(runCli("render '" + dir + "/drop.json' -o '" + dir + "/a.wav' --cache '" + dir + "/cache' --quiet").exit_code,
             0);
-  EXPECT_EQ(filesIn(dir + "/cache"), 1u);
+  EXPECT_EQ(banksIn(dir + "/cache").size(), 1u);
   return dir;
 }
 
 TEST(NewcomerCache, ARenderKeepsTheCacheUnderItsCapRemovingTheLeastRecentlyUsed) {
   const std::string dir = folderWithOneCachedBank("cap");
   const std::string cache = dir + "/cache";
-  ASSERT_EQ(filesIn(cache), 1u);
-  const uintmax_t bank_bytes = fs::directory_iterator(cache)->file_size();
+  ASSERT_EQ(banksIn(cache).size(), 1u);
+  const uintmax_t bank_bytes = fs::file_size(banksIn(cache)[0]);
   makeEntry(cache + "/00000000000000aa.modes", 5000, 30 * 86400.0);  // an old bank of another scene
   // Cap: this render's bank fits, the old one does not.
   CliResult r = runCli("render '" + dir + "/drop.json' -o '" + dir + "/b.wav' --cache '" + cache +
@@ -351,7 +360,7 @@ TEST(NewcomerCache, ARenderKeepsTheCacheUnderItsCapRemovingTheLeastRecentlyUsed)
   EXPECT_NE(r.err.find("1 from the cache"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("cache       removed 1 least recently used banks"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(cache + "/00000000000000aa.modes"));
-  EXPECT_EQ(filesIn(cache), 1u);
+  EXPECT_EQ(banksIn(cache).size(), 1u);
 }
 
 // A render that reads a bank from the cache marks it as used (its modification time), so the size
@@ -360,8 +369,8 @@ TEST(NewcomerCache, ARenderKeepsTheCacheUnderItsCapRemovingTheLeastRecentlyUsed)
 TEST(NewcomerCache, ARenderThatReadsABankMarksItUsed) {
   const std::string dir = folderWithOneCachedBank("touch");
   const std::string cache = dir + "/cache";
-  ASSERT_EQ(filesIn(cache), 1u);
-  const fs::path bank = fs::directory_iterator(cache)->path();
+  ASSERT_EQ(banksIn(cache).size(), 1u);
+  const fs::path bank = banksIn(cache)[0];
   const auto long_ago = fs::file_time_type::clock::now() - std::chrono::hours(24 * 60);
   fs::last_write_time(bank, long_ago);
   CliResult r = runCli("render '" + dir + "/drop.json' -o '" + dir + "/b.wav' --cache '" + cache + "'");

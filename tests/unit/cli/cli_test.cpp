@@ -360,7 +360,8 @@ std::string BarDrop::cache_, BarDrop::wav_, BarDrop::events_;
 TEST_F(BarDrop, SpectrumHasTheBarsBendingModesFromItsBank) {
   // The cache holds the bar's bank: its first two bending frequencies must be in the render.
   std::string bank;
-  for (const auto& entry : std::filesystem::directory_iterator(cache_)) bank = entry.path().string();
+  for (const auto& entry : std::filesystem::directory_iterator(cache_))
+    if (entry.path().extension() == ".modes") bank = entry.path().string();  // beside it: the bar's hull
   ASSERT_FALSE(bank.empty());
   const nlohmann::json info = jsonOf(runCli("info --json '" + bank + "'"));
   const nlohmann::json a = jsonOf(runCli("analyze --json --peaks 20 '" + wav_ + "'"));
@@ -497,8 +498,9 @@ TEST_F(BarDrop, DamagedShapesInTheCacheAreRecomputedNotTrusted) {
   std::filesystem::create_directories(cache);
   std::string bank;
   for (const auto& entry : std::filesystem::directory_iterator(cache_)) {
-    bank = cache + "/" + entry.path().filename().string();
-    std::filesystem::copy_file(entry.path(), bank);
+    const std::string copy = cache + "/" + entry.path().filename().string();
+    std::filesystem::copy_file(entry.path(), copy);
+    if (entry.path().extension() == ".modes") bank = copy;
   }
   ASSERT_FALSE(bank.empty());
   std::string bytes = test::slurp(bank);
@@ -528,7 +530,8 @@ TEST_F(BarDrop, DamagedGivenBankFailsNamingItAndWritesNothing) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   std::string bytes;
-  for (const auto& entry : std::filesystem::directory_iterator(cache_)) bytes = test::slurp(entry.path().string());
+  for (const auto& entry : std::filesystem::directory_iterator(cache_))
+    if (entry.path().extension() == ".modes") bytes = test::slurp(entry.path().string());
   ASSERT_GT(bytes.size(), 40u);
   uint64_t head_size = 0;
   std::memcpy(&head_size, bytes.data() + 32, 8);

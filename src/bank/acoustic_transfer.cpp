@@ -13,6 +13,10 @@
 
 #include "far_field_kernels.hpp"
 
+#if defined(STRIKE_BANK_X86)
+#include <cpuid.h>
+#endif
+
 namespace strike {
 
 uint32_t AcousticTransfer::maxOrder() const {
@@ -270,7 +274,10 @@ namespace {
 
 bool cpuHasF16c() {
 #if defined(STRIKE_BANK_X86)
-  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
+  // AVX2 (whose check includes the system's saving of the 256-bit registers) and F16C, read from
+  // CPUID leaf 1 (ECX bit 29): clang's __builtin_cpu_supports has no "f16c".
+  unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+  return __builtin_cpu_supports("avx2") && __get_cpuid(1, &eax, &ebx, &ecx, &edx) && (ecx & bit_F16C) != 0;
 #else
   return false;
 #endif

@@ -82,8 +82,10 @@ def test_two_worker_local_cluster_renders_the_manifest_solving_each_bank_once(se
     metas = [json.loads(p.read_text()) for p in (tmp_path / "out").glob("*.json")]
     assert len({m["worker"]["pid"] for m in metas}) == 2, "both workers rendered"
     assert sum(m["report"]["banks_computed"] for m in metas) == len(SHAPES)
-    assert sorted(p.name for p in (tmp_path / "cache").iterdir()) == sorted(
+    # The banks, one per shape (beside them each body's convex hull, .hull).
+    assert sorted(p.name for p in (tmp_path / "cache").glob("*.modes")) == sorted(
         {m["banks"][0]["cache_key"] + ".modes" for m in metas})
+    assert all(p.suffix in (".modes", ".hull") for p in (tmp_path / "cache").iterdir())
 
 
 def test_a_killed_worker_loses_nothing_and_a_rerun_completes_the_set(serial, manifest, tmp_path):

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 # The shared bank cache: renders that need the same missing bank at the same time solve it once
-# (src/scene/cache_lock.hpp), and the cache holds bank files only afterwards.
+# (src/scene/cache_lock.hpp), and the cache holds whole files only afterwards: one bank, and its body's hull.
 import subprocess
 
 from conftest import run
@@ -18,5 +18,6 @@ def test_concurrent_renders_solve_a_shared_bank_once(repo, cli, tmp_path):
     assert (computed, cached) == (1, 2), summaries
     assert len({(tmp_path / f"{k}.wav").read_bytes() for k in range(3)}) == 1
     entries = sorted(p.name for p in cache.iterdir())
-    assert len(entries) == 1 and entries[0].endswith(".modes"), entries
-    assert run([cli, "info", cache / entries[0]]).returncode == 0
+    banks = [e for e in entries if e.endswith(".modes")]
+    assert len(banks) == 1 and all(e.endswith(".hull") for e in entries if e not in banks), entries  # and the bar's hull
+    assert run([cli, "info", cache / banks[0]]).returncode == 0

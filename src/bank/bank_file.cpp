@@ -434,7 +434,7 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
     return corrupt(source, "wrong magic number (expected a file written by `strike modes`)");
   }
   BankFile file;
-  ModeBank& bank = file.bank_;
+  ModeBank bank;
   ByteReader header(data + 8, src.resident - 8);
   bank.format_version = header.get<uint32_t>();
   const uint32_t header_size = header.get<uint32_t>();
@@ -595,12 +595,13 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
                                std::to_string(surface_vertices));
   const std::string problem = bank.checkConsistency(/*shapes_loaded=*/false);
   if (!problem.empty()) return corrupt(source, problem);
+  file.bank_ = std::make_shared<const ModeBank>(std::move(bank));
   file.source_ = std::move(source_ptr);
   return file;
 }
 
 void BankFile::decodeRows(const uint8_t* bytes, size_t count, float* out) const {
-  const size_t values = count * bank_.modeCount() * 3;
+  const size_t values = count * bank_->modeCount() * 3;
   if (values == 0) return;  // a bank with no modes: nothing to copy (and out may be null)
   if (!int16_shapes_) {
     std::memcpy(out, bytes, values * sizeof(float));
@@ -610,12 +611,12 @@ void BankFile::decodeRows(const uint8_t* bytes, size_t count, float* out) const 
   for (size_t k = 0; k < values; ++k) {
     int16_t q;
     std::memcpy(&q, bytes + 2 * k, 2);
-    out[k] = static_cast<float>(q) * shape_scale_[(k / 3) % bank_.modeCount()];
+    out[k] = static_cast<float>(q) * shape_scale_[(k / 3) % bank_->modeCount()];
   }
 }
 
 Status BankFile::readShapeBytes(size_t first, size_t count, std::vector<uint8_t>& to) const {
-  const size_t row_bytes = bank_.modeCount() * 3 * shapeValueBytes();
+  const size_t row_bytes = bank_->modeCount() * 3 * shapeValueBytes();
   to.resize(count * row_bytes);
   if (!source_->read(shapes_offset_ + first * row_bytes, to.size(), to.data()))
     return corrupt(source_->name, "the file ended inside its mode shapes (was it truncated while open?)");
@@ -625,14 +626,14 @@ Status BankFile::readShapeBytes(size_t first, size_t count, std::vector<uint8_t>
 Status BankFile::verifyBlock(size_t block, const uint8_t* bytes, size_t size) const {
   if (shapeBlockChecksum(bytes, size, block) == block_checksums_[block]) return {};
   const size_t first = block * vertices_per_block_;
-  const size_t last = std::min<size_t>(first + vertices_per_block_, bank_.surfaceVertexCount()) - 1;
+  const size_t last = std::min<size_t>(first + vertices_per_block_, bank_->surfaceVertexCount()) - 1;
   return corrupt(source_->name, "checksum mismatch in the shapes of surface vertices " + std::to_string(first) +
                                     " to " + std::to_string(last) + " (the file is damaged)");
 }
 
 Result<ShapeRows> BankFile::readShapeRows(std::vector<uint32_t> vertices) const {
-  const size_t modes = bank_.modeCount();
-  const size_t nv = bank_.surfaceVertexCount();
+  const size_t modes = bank_->modeCount();
+  const size_t nv = bank_->surfaceVertexCount();
   const size_t row_floats = modes * 3;
   std::sort(vertices.begin(), vertices.end());
   vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
@@ -674,7 +675,7 @@ Result<ShapeRows> BankFile::readShapeRows(std::vector<uint32_t> vertices) const 
 }
 
 Result<ModeBank> BankFile::readAll() const {
-  ModeBank bank = bank_;
+  ModeBank bank = *bank_;
   const size_t modes = bank.modeCount();
   const size_t nv = bank.surfaceVertexCount();
   bank.shapes.resize(modes * nv * 3);

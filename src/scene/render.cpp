@@ -50,7 +50,10 @@ struct Body {
   PrecomputeSettings precompute;
   uint64_t cache_key = 0;
   uint64_t mesh_hash = 0;
-  ModeBank bank;  ///< full bank, or mass and surface only until phase 2
+  /// Full bank, or mass and surface only until phase 2. Shared, never copied: with its bank file
+  /// (a plate's transfer is 2 MB), with identical objects and with the voice.
+  std::shared_ptr<const ModeBank> bank = std::make_shared<const ModeBank>();
+  ModeBank similar_bank;  ///< with similar_reuse, phase 2: the scaled bank until its transfer is attached
   bool has_modes = false;
   std::optional<BankFile> file;    ///< a cached or given bank: its shapes are read in phase 2
                                    ///< at the vertices the contacts touch
@@ -99,12 +102,12 @@ bool openCached(const std::string& cache_dir, Body& body, RenderReport& report) 
   // A damaged cache entry is recomputed, not trusted (damaged shapes are found in phase 2).
   if (!cached || cached->bank().mesh_hash != body.mesh_hash) return false;
   touchCacheEntry(path);  // read by this render: the size cap removes it last (least recently used)
-  body.bank = cached->bank();
+  body.bank = cached->sharedBank();
   body.file = std::move(*cached);
   body.has_modes = true;
   body.from_cache = true;
   ++report.banks_cached;
-  report.precompute_saved_seconds += body.bank.factorize_seconds + body.bank.lanczos_seconds;
+  report.precompute_saved_seconds += body.bank->factorize_seconds + body.bank->lanczos_seconds;
   return true;
 }
 
@@ -138,7 +141,7 @@ Status scaleGeometry(Body& body) {
   geometry.frequency_error_estimate.clear();
   Result<ModeBank> scaled = scaleNormalizedBank(geometry, body.normal, body.precompute, body.mesh_hash);
   if (!scaled) return badInput("objects \"" + body.object->name + "\": " + scaled.error().message);
-  body.bank = std::move(*scaled);
+  body.bank = std::make_shared<const ModeBank>(std::move(*scaled));
   return {};
 }
 
@@ -199,7 +202,7 @@ void forgetCachedSolve(Body& body, RenderReport& report) {
 Status scaleSolve(Body& body, size_t index, std::map<uint64_t, size_t>& solved_by_key) {
   Result<ModeBank> scaled = scaleNormalizedBank(body.normal_bank, body.normal, body.precompute, body.mesh_hash);
   if (!scaled) return badInput("objects \"" + body.object->name + "\": " + scaled.error().message);
-  body.bank = std::move(*scaled);
+  body.similar_bank = std::move(*scaled);
   body.has_modes = true;
   body.mesh.reset();
   solved_by_key[body.cache_key] = index;
@@ -217,7 +220,7 @@ Status similarModes(std::vector<Body>& bodies, size_t i, const RenderSettings& s
     ++(holder.identity_key == body.identity_key ? report.banks_shared : report.banks_scaled);
     Result<ModeBank> scaled = scaleNormalizedBank(holder.normal_bank, body.normal, body.precompute, body.mesh_hash);
     if (!scaled) return badInput("objects \"" + body.object->name + "\": " + scaled.error().message);
-    body.bank = std::move(*scaled);
+    body.similar_bank = std::move(*scaled);
     body.file.reset();
     body.mesh.reset();
     return {};
@@ -272,10 +275,10 @@ Status similarTransfer(std::vector<Body>& bodies, size_t i, const RenderSettings
                        RenderReport& report) {
   Body& body = bodies[i];
   const ModeBank& normal = bodies[solved_by_key.at(body.cache_key)].normal_bank;  // whole: shapes loaded
-  const size_t kept = body.bank.modeCount();
+  const size_t kept = body.similar_bank.modeCount();
   body.transfer_key = unitTransferCacheKey(body.cache_key, body.precompute, kept);
   auto attach = [&](const ModeBank& unit) -> Status {
-    Status attached = attachUnitTransfer(body.bank, unit, body.normal, body.precompute);
+    Status attached = attachUnitTransfer(body.similar_bank, unit, body.normal, body.precompute);
     if (!attached) return badInput("objects \"" + body.object->name + "\": " + attached.error().message);
     return {};
   };
@@ -317,9 +320,13 @@ template <class Warn>
 Status similarPhase2(std::vector<Body>& bodies, size_t i, const RenderSettings& settings,
                      std::map<uint64_t, size_t>& solved_by_key, std::map<uint64_t, ModeBank>& unit_by_key,
                      RenderReport& report, Warn& warn) {
+  Body& body = bodies[i];
   if (Status made = similarModes(bodies, i, settings, solved_by_key, report, warn); !made) return made;
-  if (!settings.acoustic_transfer) return {};
-  return similarTransfer(bodies, i, settings, solved_by_key, unit_by_key, report);
+  if (settings.acoustic_transfer)
+    if (Status made = similarTransfer(bodies, i, settings, solved_by_key, unit_by_key, report); !made) return made;
+  body.bank = std::make_shared<const ModeBank>(std::move(body.similar_bank));
+  body.similar_bank = ModeBank();
+  return {};
 }
 
 /// Phase 1 for one object: a bank with at least mass properties and surface.
@@ -329,7 +336,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   if (!object.bank.empty()) {
     Result<BankFile> file = BankFile::open(object.bank);
     if (!file) return file.error();
-    body.bank = file->bank();
+    body.bank = file->sharedBank();
     body.file = std::move(*file);
     body.has_modes = true;
     ++report.banks_given;
@@ -360,7 +367,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   if (!settings.cache_dir.empty() && openCached(settings.cache_dir, body, report)) return {};
   Result<LoadedMesh> loaded = loadTetMesh(object.mesh, meshOptionsFor(body.precompute));
   if (!loaded) return badInput("objects \"" + object.name + "\": " + loaded.error().message);
-  body.bank = massAndSurfaceBank(*loaded, body.precompute);
+  body.bank = std::make_shared<const ModeBank>(massAndSurfaceBank(*loaded, body.precompute));
   body.mesh = std::move(*loaded);
   return {};
 }
@@ -374,29 +381,30 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   body.rows.reset();
   body.locator.reset();
   body.located_bank.reset();
-  const bool has_radiation = body.bank.radiation_m2.size() == body.bank.modeCount();
+  const ModeBank& bank = *body.bank;
+  const bool has_radiation = bank.radiation_m2.size() == bank.modeCount();
   // With a session, the locator of this file's content built by an earlier render (and the copy
   // of the header it points into): the same grid, so the same vertices and bytes.
   RenderSession::BankSurface surface;
   if (session) surface = session->bankSurface(*body.file);
   std::shared_ptr<const SurfaceLocator> shared_locator =
-      session ? surface.locator : std::make_shared<const SurfaceLocator>(body.bank);
+      session ? surface.locator : std::make_shared<const SurfaceLocator>(bank);
   const SurfaceLocator& locator = *shared_locator;
   if (!has_radiation || !locator.hasTriangles() || whole) {
     // Radiation strengths computed from every shape (banks written before the RADI chunk), no
     // triangles to locate on, or a library that loads whole bank files: the whole bank.
     Result<ModeBank> all = body.file->readAll();
     if (!all) return all.error();
-    body.bank = std::move(*all);
+    body.bank = std::make_shared<const ModeBank>(std::move(*all));
     body.file.reset();
-    report.shape_vertices_read += body.bank.surfaceVertexCount();
-    report.shape_vertices_total += body.bank.surfaceVertexCount();
+    report.shape_vertices_read += body.bank->surfaceVertexCount();
+    report.shape_vertices_total += body.bank->surfaceVertexCount();
     return {};
   }
   // The points where the body was struck; a bank with no mode in the band (a marble) needs no
   // shape anywhere, so none.
   std::vector<std::array<double, 3>> points;
-  if (body.bank.modeCount() > 0)
+  if (bank.modeCount() > 0)
     for (const ContactEvent& event : events) {
       if (event.body_a == index) points.push_back(event.point_a_mesh);
       if (event.body_b == index) points.push_back(event.point_b_mesh);
@@ -413,7 +421,7 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   Result<ShapeRows> rows = body.file->readShapeRows(std::move(vertices));
   if (!rows) return rows.error();
   report.shape_vertices_read += rows->vertices.size();
-  report.shape_vertices_total += body.bank.surfaceVertexCount();
+  report.shape_vertices_total += bank.surfaceVertexCount();
   body.rows = std::move(*rows);
   body.locator = std::move(shared_locator);  // the voice projects with it (the same bank object)
   body.located_bank = std::move(surface.bank);
@@ -429,11 +437,11 @@ SimBodyDesc simBody(const Body& body) {
   SimBodyDesc desc;
   desc.name = object.name;
   desc.is_static = object.is_static;
-  desc.surface_positions = body.bank.surface_positions;
-  desc.surface_triangles = body.bank.surface_triangles;
-  desc.mass_kg = body.bank.mass_kg;
-  desc.centre_m = body.bank.centre_m;
-  desc.inertia_kg_m2 = body.bank.inertia_kg_m2;
+  desc.surface_positions = body.bank->surface_positions;
+  desc.surface_triangles = body.bank->surface_triangles;
+  desc.mass_kg = body.bank->mass_kg;
+  desc.centre_m = body.bank->centre_m;
+  desc.inertia_kg_m2 = body.bank->inertia_kg_m2;
   desc.position_m = object.position_m;
   desc.orientation_wxyz = object.orientation_wxyz;
   desc.path = object.path;
@@ -444,12 +452,12 @@ SimBodyDesc simBody(const Body& body) {
   }
   desc.velocity_m_s = object.velocity_m_s;
   desc.angular_velocity_rad_s = object.angular_velocity_rad_s;
-  const ContactProperties contact = table.contactProperties(body.bank.material.name);
+  const ContactProperties contact = table.contactProperties(body.bank->material.name);
   desc.restitution = std::isnan(object.restitution) ? contact.restitution : object.restitution;
   desc.friction = std::isnan(object.friction) ? contact.friction : object.friction;
   desc.rolling_resistance =
       std::isnan(object.rolling_resistance) ? contact.rolling_resistance : object.rolling_resistance;
-  desc.compliance_per_pa = compliance(body.bank.material);
+  desc.compliance_per_pa = compliance(body.bank->material);
   desc.contact_radius_m = body.contact_radius_m;
   desc.shape = object.shape == "convex"    ? SimBodyDesc::Shape::ConvexHull
                : object.shape == "concave" ? SimBodyDesc::Shape::Concave
@@ -553,7 +561,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     Status prepared = prepareBody(scene, settings, max_freq_hz, bodies[i], loaded_by_key, report);
     if (!prepared) return prepared.error();
     if (bodies[i].object->bank.empty()) loaded_by_key.emplace(bodies[i].cache_key, &bodies[i]);
-    bodies[i].contact_radius_m = std::cbrt(3.0 * bodies[i].bank.volume_m3 / (4.0 * M_PI));
+    bodies[i].contact_radius_m = std::cbrt(3.0 * bodies[i].bank->volume_m3 / (4.0 * M_PI));
     result.body_names.push_back(scene.objects[i].name);
   }
   if (!settings.cache_dir.empty()) {
@@ -575,7 +583,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   // with --no-transfer) is heard with the direction-averaged model (radiation.cpp). Say so once.
   if (settings.acoustic_transfer)
     for (const Body& body : bodies)
-      if (!body.object->bank.empty() && body.bank.transfer.empty() && body.bank.modeCount() > 0)
+      if (!body.object->bank.empty() && body.bank->transfer.empty() && body.bank->modeCount() > 0)
         warn("objects \"" + body.object->name + "\": bank " + body.object->bank +
              " has no acoustic transfer: heard at each mode's direction-averaged level, with no direction "
              "(solve it again with `strike modes` for the transfer; docs/listener.md)");
@@ -657,8 +665,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     for (uint32_t index : {event.body_a, event.body_b}) {
       if (index == kGroundBody) continue;
       Body& body = bodies[index];
-      if (body.bank.mass_kg > 0)
-        body.max_velocity_change_m_s = std::max(body.max_velocity_change_m_s, impulse / body.bank.mass_kg);
+      if (body.bank->mass_kg > 0)
+        body.max_velocity_change_m_s = std::max(body.max_velocity_change_m_s, impulse / body.bank->mass_kg);
     }
   }
   for (size_t i = 0; i < bodies.size(); ++i)
@@ -693,7 +701,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       body.has_modes = false;
       if (body.from_cache) {
         --report.banks_cached;
-        report.precompute_saved_seconds -= body.bank.factorize_seconds + body.bank.lanczos_seconds;
+        report.precompute_saved_seconds -= body.bank->factorize_seconds + body.bank->lanczos_seconds;
       }
       Result<LoadedMesh> loaded = loadTetMesh(body.object->mesh, meshOptionsFor(body.precompute));
       if (!loaded) return badInput("objects \"" + body.object->name + "\": " + loaded.error().message);
@@ -718,7 +726,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
           continue;
         }
         --report.banks_cached;
-        report.precompute_saved_seconds -= body.bank.factorize_seconds + body.bank.lanczos_seconds;
+        report.precompute_saved_seconds -= body.bank->factorize_seconds + body.bank->lanczos_seconds;
         body.file.reset();
         body.rows.reset();
         body.has_modes = false;
@@ -729,14 +737,14 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     Result<PrecomputeResult> computed = computeModeBankForMesh(*body.mesh, body.precompute);
     if (!computed) return badInput("objects \"" + body.object->name + "\": " + computed.error().message);
     for (const MeshWarning& w : computed->report.warnings) warn("objects \"" + body.object->name + "\": " + w.message);
-    body.bank = std::move(computed->bank);
+    body.bank = std::make_shared<const ModeBank>(std::move(computed->bank));
     body.has_modes = true;
     body.mesh.reset();
     computed_by_key[body.cache_key] = i;
     ++report.banks_computed;
     if (!settings.cache_dir.empty()) {
       // A failed cache write costs the next render time, never this one its result.
-      (void)writeBank(cachePath(settings.cache_dir, body.cache_key, ".modes"), body.bank);
+      (void)writeBank(cachePath(settings.cache_dir, body.cache_key, ".modes"), *body.bank);
     }
   }
   report.precompute_seconds = secondsSince(precompute_start);
@@ -761,8 +769,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   for (size_t index = 0; index < bodies.size(); ++index) {
     Body& body = bodies[index];
     if (!body.sounded) continue;
-    if (Status audible = hasAudibleMode(body.bank, engine_settings.synth, rate); !audible) {
-      if (body.object->is_static || !(body.bank.mass_kg > 0.0)) {
+    if (Status audible = hasAudibleMode(*body.bank, engine_settings.synth, rate); !audible) {
+      if (body.object->is_static || !(body.bank->mass_kg > 0.0)) {
         ++report.objects_silent;
         body.silent = true;
         warn("objects \"" + body.object->name + "\": " + audible.error().message);
@@ -773,17 +781,16 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     }
     ++report.objects_sounded;
     VoiceDesc voice;
-    voice.bank = body.located_bank ? body.located_bank  // the session's, equal to body.bank
-                                   : std::shared_ptr<const ModeBank>(std::shared_ptr<const ModeBank>(), &body.bank);
+    voice.bank = body.located_bank ? body.located_bank : body.bank;  // the session's, equal to body.bank
     if (body.rows) voice.rows = std::move(*body.rows), voice.use_rows = true;
     voice.locator = body.locator;
-    voice.weights = radiationWeights(body.bank, engine_settings.reference_distance_m);
+    voice.weights = radiationWeights(*body.bank, engine_settings.reference_distance_m);
     for (double& w : voice.weights) w *= settings.gain / kFullScalePascal;
     voice.pressure_scale = settings.gain / kFullScalePascal;
     voice.is_static = body.object->is_static;
     voice.contact_radius_m = body.contact_radius_m;
-    voice.roughness = surfaceRoughness(*body.object, body.bank.material.name);
-    voice.restitution = bodyRestitution(*body.object, body.bank.material.name);
+    voice.roughness = surfaceRoughness(*body.object, body.bank->material.name);
+    voice.restitution = bodyRestitution(*body.object, body.bank->material.name);
     if (Status added = output->addVoice(static_cast<uint32_t>(index), voice, sim_bodies[index].position_m,
                                         sim_bodies[index].orientation_wxyz, body.object->name);
         !added)
@@ -801,12 +808,12 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       partner.voice = static_cast<uint32_t>(i);  // its material from its bank; its sleep keeps a static body's load
       continue;
     }
-    partner.youngs_pa = bodies[i].bank.material.youngs_pa;
-    partner.poisson = bodies[i].bank.material.poisson;
+    partner.youngs_pa = bodies[i].bank->material.youngs_pa;
+    partner.poisson = bodies[i].bank->material.poisson;
     partner.radius_m = bodies[i].contact_radius_m;
-    partner.mass_kg = bodies[i].object->is_static ? 0.0 : bodies[i].bank.mass_kg;
-    partner.roughness = surfaceRoughness(*bodies[i].object, bodies[i].bank.material.name);
-    partner.restitution = bodyRestitution(*bodies[i].object, bodies[i].bank.material.name);
+    partner.mass_kg = bodies[i].object->is_static ? 0.0 : bodies[i].bank->mass_kg;
+    partner.roughness = surfaceRoughness(*bodies[i].object, bodies[i].bank->material.name);
+    partner.restitution = bodyRestitution(*bodies[i].object, bodies[i].bank->material.name);
   }
   ContactPartner ground;
   ground.youngs_pa = scene.ground_material.youngs_pa;

@@ -147,7 +147,7 @@ RenderSession::BankSurface RenderSession::bankSurface(const BankFile& file) {
   };
   auto build = [&] {
     Impl::Entry entry;
-    auto bank = std::make_shared<const ModeBank>(header);
+    auto bank = file.sharedBank();  // the file's own bank object: no copy
     entry.surface.locator = std::make_shared<const SurfaceLocator>(*bank);
     entry.surface.bank = std::move(bank);
     entry.bytes = headerBytes(*entry.surface.bank) + locatorBytes(*entry.surface.bank);

@@ -122,7 +122,10 @@ class BankFile {
   static Result<BankFile> openBytes(const uint8_t* data, size_t size, const std::string& source);
 
   /// Everything but the shapes (`shapes` is empty).
-  const ModeBank& bank() const { return bank_; }
+  const ModeBank& bank() const { return *bank_; }
+  /// The same bank, shared rather than copied: a render keeps it for the body and its voice
+  /// (a plate's transfer is 2 MB) while the file reads the shapes.
+  std::shared_ptr<const ModeBank> sharedBank() const { return bank_; }
   /// A key of the file's content: its format version, sizes and the checksum of its head (which,
   /// from format 3, holds the checksums of the shape blocks). Equal keys: the same bank.
   uint64_t contentKey() const { return content_key_; }
@@ -136,7 +139,7 @@ class BankFile {
   struct Source;
   BankFile() = default;
   std::shared_ptr<const Source> source_;  ///< the file (or bytes) and its name
-  ModeBank bank_;
+  std::shared_ptr<const ModeBank> bank_;  ///< never null once parsed
   bool vertex_major_ = false;       ///< format 3-4 (MODV, MODQ) or 1-2 (MODE, [mode][vertex][xyz])
   bool int16_shapes_ = false;       ///< format 4 (MODQ): values are int16 times shape_scale_[mode]
   std::vector<float> shape_scale_;  ///< format 4: per mode

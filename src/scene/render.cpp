@@ -383,8 +383,8 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   body.located_bank.reset();
   const ModeBank& bank = *body.bank;
   const bool has_radiation = bank.radiation_m2.size() == bank.modeCount();
-  // With a session, the locator of this file's content built by an earlier render (and the copy
-  // of the header it points into): the same grid, so the same vertices and bytes.
+  // With a session, the locator of this file's content built by an earlier render (and the bank
+  // object it points into, that render's file's): the same grid, so the same vertices and bytes.
   RenderSession::BankSurface surface;
   if (session) surface = session->bankSurface(*body.file);
   std::shared_ptr<const SurfaceLocator> shared_locator =

@@ -31,7 +31,7 @@ class RenderSession {
   RenderSession(const RenderSession&) = delete;
   RenderSession& operator=(const RenderSession&) = delete;
 
-  /// A bank file's header (its bank() without shapes) as one shared object, and the surface
+  /// A bank file's header (its sharedBank(): everything but the shapes, not copied), and the surface
   /// locator built for that object (SurfaceLocator keeps a pointer to its bank: a voice given this
   /// locator must be given this bank). Built on first use of the file's content.
   struct BankSurface {

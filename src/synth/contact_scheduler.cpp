@@ -136,11 +136,27 @@ void SoundEngine::endStepFor(Voice& v) {
   const double step_start_s = step_.end_s - step_.length_s;
   const double change_at_s = step_start_s - 0.5 * step_.length_s;
   const std::array<double, 3> centre = v.pose_.toWorld(v.centre_m_);
-  continuousEndStep(v);  // issue 18 (contact_sources.cpp)
+  // Whether the step ends in a load change: the body was pressed this step and its load moved
+  // (steady: no), or a held load is let go (keep: no).
+  bool steady = false, keep = false;
   if (v.in_step_) {
     std::array<double, 6> change{};
     for (int k = 0; k < 6; ++k) change[k] = v.step_load_[k] - v.held_load_[k];
-    const bool steady = v.holding_ && norm6(change) <= kSteadyLoadTolerance * norm6(v.held_load_);
+    steady = v.holding_ && norm6(change) <= kSteadyLoadTolerance * norm6(v.held_load_);
+  } else if (v.holding_) {
+    if (v.asleep_) {
+      keep = true;
+    } else if (v.is_static_ && v.partner_count_ > 0 && !v.partners_overflow_) {
+      keep = true;
+      for (uint32_t k = 0; k < v.partner_count_; ++k) {
+        const Voice* p = voice(v.partners_[k]);
+        keep = keep && p && p->asleep_;
+      }
+    }
+  }
+  const bool load_change = v.in_step_ ? !steady : v.holding_ && !keep;
+  continuousEndStep(v, load_change);  // issue 18 (contact_sources.cpp)
+  if (v.in_step_) {
     if (!steady) {
       for (size_t i = 0; i < v.modal_.size(); ++i) v.modal_[i] = v.step_force_[i] - v.held_force_[i];
       scheduleForceStep(v, v.modal_.data(), change_at_s, step_.length_s, centre);
@@ -153,17 +169,7 @@ void SoundEngine::endStepFor(Voice& v) {
     v.in_step_ = false;
     return;
   }
-  bool keep = false;
   if (v.holding_) {
-    if (v.asleep_) {
-      keep = true;
-    } else if (v.is_static_ && v.partner_count_ > 0 && !v.partners_overflow_) {
-      keep = true;
-      for (uint32_t k = 0; k < v.partner_count_; ++k) {
-        const Voice* p = voice(v.partners_[k]);
-        keep = keep && p && p->asleep_;
-      }
-    }
     if (keep) {
       ++stats_.load_holds;
     } else {

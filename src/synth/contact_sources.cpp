@@ -106,7 +106,7 @@ void SoundEngine::continuousContact(Voice& v, const EngineContact& c, const std:
   for (size_t i = 0; i < s.modal.size(); ++i) s.modal[i] += v.modal_[i];
 }
 
-void SoundEngine::continuousEndStep(Voice& v) {
+void SoundEngine::continuousEndStep(Voice& v, bool load_change_follows) {
   for (uint32_t ch = 0; ch < kForceChannels; ++ch) {
     Voice::Source& s = v.sources_[ch];
     if (!s.used || !s.stepped) continue;
@@ -141,9 +141,12 @@ void SoundEngine::continuousEndStep(Voice& v) {
     if (v.pressure_) {
       Arrival paths[2];
       const std::array<double, 3> world = {s.world_n[0] / n, s.world_n[1] / n, s.world_n[2] / n};
-      arrivals(v, world, paths);
       const std::complex<double>* transfer[2];
-      radiationToward(v, paths, 1, transfer, Reuse::WithinTolerance);
+      // A load change later in this step (endStepFor) hears the same two directions (a
+      // directional voice's sound leaves from its transfer's centre, whatever the point): when
+      // the direct path is evaluated here, the ground's image rides along in the same pass.
+      const int count = arrivals(v, world, paths);
+      radiationToward(v, paths, 1, transfer, Reuse::WithinTolerance, load_change_follows ? count : 0);
       w.modal_transfer = transfer[0];
     }
     (void)v.synth_.setForceWeights(w);  // a full queue keeps the weights in force

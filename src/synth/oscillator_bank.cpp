@@ -543,8 +543,10 @@ struct OscillatorBank::Impl {
         const Complex bg = g * m.out_weight * (desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0));
         const Complex pole = m.base_pole - extra_damping;
         const Complex step_amplitude = ramped ? bg / (pole * pole * tau_s * ramp_s) : bg / (pole * tau_s);
-        // Audible when the net ringing after the box, |b g (e^{p tau} - 1) / (p tau)|, is.
-        if (edge == 0 && std::abs(bg * (std::exp(pole * tau_s) - 1.0) / (pole * tau_s)) >= threshold) audible = true;
+        // Audible when the net ringing after the box, |b g (e^{p tau} - 1) / (p tau)|, is (one
+        // audible mode is enough: the rest are not asked).
+        if (edge == 0 && !audible && std::abs(bg * (std::exp(pole * tau_s) - 1.0) / (pole * tau_s)) >= threshold)
+          audible = true;
         im.hits.push_back({mi, sign * step_amplitude * std::exp(pole * after_s)});
       }
       auto at = std::upper_bound(pending.begin(), pending.end(), im.start_sample,
@@ -621,9 +623,12 @@ struct OscillatorBank::Impl {
         const Complex bg = g * m.out_weight * (desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0));
         const Complex pole = m.base_pole - extra_damping;
         const Complex amplitude = ramped ? bg / (pole * pole * ramp_s) : bg / pole;
-        // Audible when the net ringing after the ramp, |b g (e^{p r} - 1) / (p^2 r)|, is.
-        const Complex net = ramped ? amplitude * (std::exp(pole * ramp_s) - 1.0) : amplitude;
-        if (edge == 0 && std::abs(net) >= threshold) audible = true;
+        // Audible when the net ringing after the ramp, |b g (e^{p r} - 1) / (p^2 r)|, is (one
+        // audible mode is enough: the rest are not asked).
+        if (edge == 0 && !audible) {
+          const Complex net = ramped ? amplitude * (std::exp(pole * ramp_s) - 1.0) : amplitude;
+          audible = std::abs(net) >= threshold;
+        }
         im.hits.push_back({mi, sign * amplitude * std::exp(pole * after_s)});
       }
       schedule(im, record);

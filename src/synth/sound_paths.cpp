@@ -83,16 +83,19 @@ double sinAngleBetween(const std::array<double, 3>& a, const std::array<double, 
 }  // namespace
 
 void SoundEngine::radiationToward(Voice& v, const Arrival paths[], int count, const std::complex<double>* factors[2],
-                                  Reuse reuse) {
+                                  Reuse reuse, int also_to) {
   const bool directional = !v.far_field_[0].empty();
   int evaluate[2];  // the paths whose factors are evaluated now
   int evaluations = 0;
   for (int k = 0; k < 2; ++k) factors[k] = nullptr;
-  for (int k = 0; k < count && v.pressure_; ++k) {
+  const int last = std::min(std::max(count, also_to), 2);
+  for (int k = 0; k < last && v.pressure_; ++k) {
     const Arrival& a = paths[k];
+    const bool wanted = k < count;
+    if (!wanted && (evaluations == 0 || !directional)) break;  // no pass to ride along with
     if (!directional && a.gain == 1.0) continue;
     Voice::PathTransfer& p = v.path_transfer_[static_cast<size_t>(k)];
-    factors[k] = p.factor.data();
+    if (wanted) factors[k] = p.factor.data();
     if (p.valid && std::memcmp(&p.gain, &a.gain, sizeof a.gain) == 0) {
       // The same bits (not ==, which equates -0 and +0): a reuse gives exactly what an evaluation would.
       if (std::memcmp(p.direction.data(), a.direction.data(), sizeof a.direction) == 0) continue;
@@ -101,7 +104,7 @@ void SoundEngine::radiationToward(Voice& v, const Arrival paths[], int count, co
       // circle F_i is a trigonometric polynomial of degree <= N, so by Bernstein's inequality
       // |F_i(d') - F_i(d)| <= N theta max|F_i|: the kept factor is within that fraction of the mode's
       // loudest direction. The per-step evaluation it saves was already a hold of one step.
-      if (reuse == Reuse::WithinTolerance && directional) {
+      if (reuse == Reuse::WithinTolerance && wanted && directional) {
         const double order = std::max(1.0, static_cast<double>(v.sh_table_.order));
         if (order * sinAngleBetween(p.direction, a.direction) <= kContinuousTransferTolerance) continue;
       }

@@ -348,7 +348,7 @@ class SoundEngine {
   double hertzDuration(const Voice& v, const ContactPartner& p, double speed) const;
   // Continuous contacts (contact_sources.cpp).
   void continuousContact(Voice& v, const EngineContact& c, const std::array<double, 3>& world);
-  void continuousEndStep(Voice& v);
+  void continuousEndStep(Voice& v, bool load_change_follows);
   bool renderContactForces(Voice& v, size_t frames);
   void resetContinuous(Voice& v);
   double delayTo(const std::array<double, 3>& world_point) const;
@@ -365,11 +365,13 @@ class SoundEngine {
   /// into factors[path]; nullptr when the factor is 1 for every mode. Impacts and load changes
   /// reuse a path's last factors only for the same direction to the bit; a continuous (rolling,
   /// sliding) source also within a bounded angle. The paths that need an evaluation share one
-  /// pass over the transfer's coefficients (sound_paths.cpp).
+  /// pass over the transfer's coefficients (sound_paths.cpp). Paths [count, also_to) are
+  /// evaluated (same-direction rule) only when that pass happens anyway, and kept for a load
+  /// change later in the step: the pass reads memory, so a second direction is nearly free.
   enum class Reuse { SameDirection, WithinTolerance };
   static constexpr double kContinuousTransferTolerance = 1e-3;  ///< of a mode's loudest far field
   void radiationToward(Voice& v, const Arrival paths[], int count, const std::complex<double>* factors[2],
-                       Reuse reuse = Reuse::SameDirection);
+                       Reuse reuse = Reuse::SameDirection, int also_to = 0);
   void scheduleClick(Voice& v, const Arrival& a, double time_s, double duration_s,
                      const std::array<double, 3>& impulse_local);
   void updateGains(Voice& v);

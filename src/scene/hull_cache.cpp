@@ -18,7 +18,10 @@ constexpr uint64_t kMaxFileBytes = uint64_t(1) << 26;  // 64 MiB: a hull of two 
 uint64_t hullKey(const std::vector<double>& points_xyz, double shrink_m, double shrink_clamp) {
   const double recipe[3] = {double(simHullRecipe()), shrink_m, shrink_clamp};
   const uint64_t h = fnv1a64(recipe, sizeof recipe);
-  return fnv1a64(points_xyz.data(), points_xyz.size() * sizeof(double), h);
+  // The points' bits, a word at a time (fnv1a64 byte by byte was ~1% of a cached render of
+  // 20 plates).
+  static_assert(sizeof(double) == sizeof(uint64_t));
+  return hashWords64(points_xyz.data(), points_xyz.size(), h);
 }
 
 std::string hullPath(const std::string& cache_dir, uint64_t key) { return cache_file::path(cache_dir, key, ".hull"); }

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -67,6 +68,40 @@ std::vector<fs::path> hullFiles(const std::string& dir) {
   for (const fs::directory_entry& e : fs::directory_iterator(dir))
     if (e.path().extension() == ".hull") out.push_back(e.path());
   return out;
+}
+
+// The key must tell apart any two point sets that differ: every single bit flipped anywhere gives
+// another key, and so do mirror images (sign bits flipped in pairs, which a hash that only
+// multiplies would cancel), reordered points and one point more or less.
+TEST(HullCache, KeyChangesWithAnyBitOfThePoints) {
+  std::vector<double> points;
+  for (int i = 0; i < 40; ++i) points.push_back(0.01 * i - 0.13 + 1e-5 * i * i);
+  const uint64_t key = hullKey(points, 0.001, 0.25);
+  std::vector<uint64_t> keys{key};
+  for (size_t i = 0; i < points.size(); ++i)
+    for (int bit = 0; bit < 64; ++bit) {
+      std::vector<double> changed = points;
+      uint64_t word;
+      std::memcpy(&word, &changed[i], sizeof word);
+      word ^= uint64_t(1) << bit;
+      std::memcpy(&changed[i], &word, sizeof word);
+      keys.push_back(hullKey(changed, 0.001, 0.25));
+    }
+  std::vector<double> mirrored = points;
+  for (size_t i = 0; i < mirrored.size(); i += 3) mirrored[i] = -mirrored[i];  // x -> -x
+  keys.push_back(hullKey(mirrored, 0.001, 0.25));
+  std::vector<double> two_signs = points;
+  two_signs[3] = -two_signs[3], two_signs[7] = -two_signs[7];
+  keys.push_back(hullKey(two_signs, 0.001, 0.25));
+  std::vector<double> swapped = points;
+  std::swap(swapped[0], swapped[3]);
+  keys.push_back(hullKey(swapped, 0.001, 0.25));
+  keys.push_back(hullKey(std::vector<double>(points.begin(), points.end() - 3), 0.001, 0.25));
+  std::vector<double> more = points;
+  more.insert(more.end(), {0.0, 0.0, 0.0});
+  keys.push_back(hullKey(more, 0.001, 0.25));
+  std::sort(keys.begin(), keys.end());
+  EXPECT_EQ(std::adjacent_find(keys.begin(), keys.end()), keys.end()) << "two point sets share a key";
 }
 
 TEST(HullCache, ARenderReadsTheCachedHullsAndGivesTheSameSamples) {

@@ -121,6 +121,13 @@ struct ModeInfo {
   // Damped: 2x2 per-sample transition in scaled coordinates, row-major.
   double phi[4] = {0, 0, 0, 0};
   int32_t slot = -1;  // index in the active set of its kind, -1 when asleep
+  // A ringing mode's responses to its object's last pulse that depend only on the pole and the
+  // pulse (addImpact): the state at the pulse's end, and the transient's one-sample step. An
+  // impact heard along two paths (direct and the ground's image) asks for them twice with the
+  // same pulse; each stamp says for which pulse (ObjectInfo::pulse_stamp) it holds, 0: none.
+  uint64_t end_stamp = 0, step_stamp = 0;
+  Complex pulse_end;
+  detail::ExpPair pulse_step;
 };
 
 struct ObjectInfo {
@@ -129,6 +136,11 @@ struct ObjectInfo {
   double delay_s = 0.0;
   // This object's scheduled contact damping: (sample, extra decay per s), sorted by sample.
   std::vector<std::pair<uint64_t, double>> damping_schedule;
+  // The pulse its modes' pulse_end and pulse_step belong to: duration, contact damping (bits)
+  // and shape; a new one takes a new stamp.
+  double pulse_tau_s = -1.0, pulse_extra_damping = 0.0;
+  bool pulse_box = false;
+  uint64_t pulse_stamp = 0;
 };
 
 struct ModeHit {
@@ -405,19 +417,27 @@ struct OscillatorBank::Impl {
     // Contact damping scheduled for this object at the pulse's start (setExtraDamping is called
     // before the impacts it covers), so pulses and the oscillators they feed use the same pole.
     const double extra_damping = extraDampingAt(obj, start_sample);
+    ObjectInfo& pulse = objects[desc.object];
+    if (std::memcmp(&pulse.pulse_tau_s, &tau_s, sizeof tau_s) != 0 ||
+        std::memcmp(&pulse.pulse_extra_damping, &extra_damping, sizeof extra_damping) != 0 || pulse.pulse_box != box) {
+      pulse.pulse_tau_s = tau_s, pulse.pulse_extra_damping = extra_damping, pulse.pulse_box = box;
+      ++pulse.pulse_stamp;
+    }
     for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
       const Complex factor = desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0);
       const double g = desc.modal_impulse[j];
       if (g == 0.0 || !std::isfinite(g) || !(std::isfinite(factor.real()) && std::isfinite(factor.imag()))) continue;
       const uint32_t mi = obj.first_mode + j;
-      const ModeInfo& m = modes[mi];
+      ModeInfo& m = modes[mi];
       if (m.kind == ModeKind::Ringing) {
         // The pole in force when the pulse starts (contact damping may have moved it).
         const Complex pole = m.base_pole - extra_damping;
         const Complex step = extra_damping == 0.0 ? m.base_step : std::exp(pole * h);
-        const Complex y_end = ideal ? Complex(1.0, 0.0)
-                              : box ? detail::boxResponse(pole, tau_s, tau_s)
-                                    : detail::halfSineResponse(pole, tau_s, tau_s);
+        if (!ideal && m.end_stamp != pulse.pulse_stamp) {
+          m.pulse_end = box ? detail::boxResponse(pole, tau_s, tau_s) : detail::halfSineResponse(pole, tau_s, tau_s);
+          m.end_stamp = pulse.pulse_stamp;
+        }
+        const Complex y_end = ideal ? Complex(1.0, 0.0) : m.pulse_end;
         const Complex bg = g * m.out_weight * factor;
         const Complex v = bg * std::exp(pole * after_end_s) * y_end;
         if (!(std::abs(v) >= threshold)) continue;
@@ -443,7 +463,11 @@ struct OscillatorBank::Impl {
         // E(a, p, U + h) = e^{ph} E(a, p, U) + e^{aU} E(a, p, h): exact, stable recurrences.
         const Complex ia(0.0, pulse_omega);
         const detail::ExpPair first = detail::expDividedDifferencePair(ia, -ia, pole, first_u_s);
-        const detail::ExpPair one_step = detail::expDividedDifferencePair(ia, -ia, pole, h);
+        if (m.step_stamp != pulse.pulse_stamp) {
+          m.pulse_step = detail::expDividedDifferencePair(ia, -ia, pole, h);
+          m.step_stamp = pulse.pulse_stamp;
+        }
+        const detail::ExpPair& one_step = m.pulse_step;
         Complex ep = first.plus, em = first.minus;
         const Complex hp = one_step.plus, hm = one_step.minus;
         Complex rot_p = first.exp_plus, rot_m = std::conj(rot_p);  // e^{i Om U}

@@ -632,31 +632,40 @@ struct OscillatorBank::Impl {
       im.transient.clear();
       return record;
     };
+    // The ramp's two edges share each mode's amplitude, and their sub-sample offsets are usually
+    // the same bits (the edges a whole number of samples apart): one division per mode, and one
+    // exponential where the offsets agree.
+    uint32_t edge_record[2] = {0, 0};
+    double edge_after_s[2] = {0.0, 0.0};
     for (int edge = 0; edge < ringing_edges; ++edge) {
       const double te = t0 + (edge == 1 ? ramp : 0.0);
-      const uint32_t record = take(te);
-      Impact& im = pool[record];
-      const double after_s = (static_cast<double>(im.start_sample) - te) * h;
-      const double sign = edge == 0 ? 1.0 : -1.0;
-      for (uint32_t j = 0; j < obj.mode_count && desc.modal_force_change; ++j) {
-        const double g = desc.modal_force_change[j];
-        if (g == 0.0 || !std::isfinite(g)) continue;
-        const uint32_t mi = obj.first_mode + j;
-        const ModeInfo& m = modes[mi];
-        if (m.kind != ModeKind::Ringing) continue;
-        const Complex bg = g * m.out_weight * (desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0));
-        const Complex pole = m.base_pole - extra_damping;
-        const Complex amplitude = ramped ? bg / (pole * pole * ramp_s) : bg / pole;
-        // Audible when the net ringing after the ramp, |b g (e^{p r} - 1) / (p^2 r)|, is (one
-        // audible mode is enough: the rest are not asked).
-        if (edge == 0 && !audible) {
-          const Complex net = ramped ? amplitude * (std::exp(pole * ramp_s) - 1.0) : amplitude;
-          audible = std::abs(net) >= threshold;
-        }
-        im.hits.push_back({mi, sign * amplitude * std::exp(pole * after_s)});
-      }
-      schedule(im, record);
+      edge_record[edge] = take(te);
+      edge_after_s[edge] = (static_cast<double>(pool[edge_record[edge]].start_sample) - te) * h;
     }
+    const bool same_offset = std::memcmp(&edge_after_s[0], &edge_after_s[1], sizeof(double)) == 0;
+    for (uint32_t j = 0; j < obj.mode_count && desc.modal_force_change; ++j) {
+      const double g = desc.modal_force_change[j];
+      if (g == 0.0 || !std::isfinite(g)) continue;
+      const uint32_t mi = obj.first_mode + j;
+      const ModeInfo& m = modes[mi];
+      if (m.kind != ModeKind::Ringing) continue;
+      const Complex bg = g * m.out_weight * (desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0));
+      const Complex pole = m.base_pole - extra_damping;
+      const Complex amplitude = ramped ? bg / (pole * pole * ramp_s) : bg / pole;
+      // Audible when the net ringing after the ramp, |b g (e^{p r} - 1) / (p^2 r)|, is (one
+      // audible mode is enough: the rest are not asked).
+      if (!audible) {
+        const Complex net = ramped ? amplitude * (std::exp(pole * ramp_s) - 1.0) : amplitude;
+        audible = std::abs(net) >= threshold;
+      }
+      const Complex rise = std::exp(pole * edge_after_s[0]);
+      pool[edge_record[0]].hits.push_back({mi, 1.0 * amplitude * rise});
+      if (ringing_edges == 2) {
+        const Complex fall = same_offset ? rise : std::exp(pole * edge_after_s[1]);
+        pool[edge_record[1]].hits.push_back({mi, -1.0 * amplitude * fall});
+      }
+    }
+    for (int edge = 0; edge < ringing_edges; ++edge) schedule(pool[edge_record[edge]], edge_record[edge]);
     if (has_damped) {
       const double centroid = t0 + 0.5 * (ramped ? ramp : 0.0);
       // Injected at the ramp's end or later, evolved from the centroid.

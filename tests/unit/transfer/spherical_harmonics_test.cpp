@@ -12,6 +12,8 @@
 #include <random>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "strike/acoustic_transfer.hpp"
 
 namespace strike {
@@ -75,20 +77,24 @@ TEST(SphericalHarmonics, AreOrthonormalOverTheSphereUpToHighOrder) {
   std::vector<double> gx, gw;
   gaussLegendre(order + 2, gx, gw);
   const int nphi = 2 * order + 4;
-  std::vector<double> gram(static_cast<size_t>(count) * count, 0.0), Y(count);
+  // Row p of A: the harmonics at node p times the square root of its weight, so the quadrature
+  // of every product Y_a Y_b is (A^T A)_ab: the Gram matrix as one symmetric rank-k update
+  // (blocked, as BLAS's dsyrk), not a rank-1 update per node over all count^2 / 2 entries.
+  Eigen::MatrixXd A(gx.size() * nphi, count);
+  std::vector<double> Y(count);
   for (size_t i = 0; i < gx.size(); ++i)
     for (int j = 0; j < nphi; ++j) {
       const double phi = 2 * M_PI * j / nphi, s = std::sqrt(1 - gx[i] * gx[i]);
       const double d[3] = {s * std::cos(phi), s * std::sin(phi), gx[i]};
       realSphericalHarmonics(order, d, Y.data());
-      const double w = gw[i] * 2 * M_PI / nphi;
-      for (int a = 0; a < count; ++a)
-        for (int b = a; b < count; ++b) gram[static_cast<size_t>(a) * count + b] += w * Y[a] * Y[b];
+      const double root_w = std::sqrt(gw[i] * 2 * M_PI / nphi);
+      for (int a = 0; a < count; ++a) A(Eigen::Index(i * nphi + j), a) = root_w * Y[a];
     }
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(count, count);
+  gram.selfadjointView<Eigen::Upper>().rankUpdate(A.transpose());
   double worst = 0.0;
   for (int a = 0; a < count; ++a)
-    for (int b = a; b < count; ++b)
-      worst = std::max(worst, std::abs(gram[static_cast<size_t>(a) * count + b] - (a == b ? 1.0 : 0.0)));
+    for (int b = a; b < count; ++b) worst = std::max(worst, std::abs(gram(a, b) - (a == b ? 1.0 : 0.0)));
   EXPECT_LT(worst, 1e-12);
 }
 

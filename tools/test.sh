@@ -46,10 +46,10 @@ stage "install dependencies" bash tools/install-deps.sh
 stage "runtime-only build + tests" runtime_only_build_and_tests
 stage "ci build (-Werror)" ci_build
 # Fuzz smoke (issue 7): every parser's libFuzzer target, built with clang + ASan + UBSan (build-fuzz/),
-# runs 10 s over its seed corpus; a crash, leak, UB, >10 s input or >2 GB RSS fails CI.
-# STRIKE_FUZZ_SMOKE=0 skips it.
+# runs 10 s over its seed corpus, two targets at a time (one process each: CI's 2 cores);
+# a crash, leak, UB, >10 s input or >2 GB RSS fails CI. STRIKE_FUZZ_SMOKE=0 skips it.
 if [ "${STRIKE_FUZZ_SMOKE:-1}" = 1 ]; then
-  stage "fuzz smoke" bash tools/fuzz.sh "${STRIKE_FUZZ_SECONDS:-10}"
+  stage "fuzz smoke" env STRIKE_FUZZ_JOBS="${STRIKE_FUZZ_JOBS:-2}" bash tools/fuzz.sh "${STRIKE_FUZZ_SECONDS:-10}"
 fi
 # Sanitizers (issue 7). STRIKE_SANITIZERS=0 skips both.
 #  asan: the CLI and every test program at -O1 -g with assertions, ASan + UBSan; UB aborts

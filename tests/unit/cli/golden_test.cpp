@@ -78,19 +78,23 @@ class Golden : public testing::Test {
  protected:
   static void SetUpTestSuite() {
     // ctest runs every test in its own process: bar-drop is rendered (its bar solved) once per
-    // build of the tool, keyed by the binary's size and time as BarDrop and SteelBar do in
-    // cli_test.cpp, and the other processes compare that render. A rebuilt tool renders afresh;
-    // two processes that start together share the cache, whose lock has the second read the
-    // first one's solve, and each writes the same bytes atomically.
+    // build of the tool and version of the scene, keyed by the binary's size and time as BarDrop
+    // and SteelBar do in cli_test.cpp (and by the scene file's), and the other processes compare
+    // that render. A rebuilt tool or an edited scene renders afresh; two processes that start
+    // together share the cache, whose lock has the second read the first one's solve, and each
+    // writes the same bytes atomically.
+    const std::string scene = std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/bar-drop.json";
     struct stat tool {};
+    struct stat scene_file {};
     stat(STRIKE_CLI, &tool);
-    dir_ = testing::TempDir() + "/golden-" + std::to_string(tool.st_size) + "-" + std::to_string(tool.st_mtime);
+    stat(scene.c_str(), &scene_file);
+    dir_ = testing::TempDir() + "/golden-" + std::to_string(tool.st_size) + "-" + std::to_string(tool.st_mtime) + "-" +
+           std::to_string(scene_file.st_size) + "-" + std::to_string(scene_file.st_mtime);
     fs::create_directories(dir_ + "/cache");
     // bar-drop for 1.5 s (the drop, the first bounces and their rings), banks cached in dir_.
     if (!fs::exists(dir_ + "/bar-drop.wav")) {
-      const auto render = runCli(
-          "render " + shellQuoted(std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/bar-drop.json") + " -o " +
-          shellQuoted(dir_ + "/bar-drop.wav") + " --duration 1.5 --cache " + shellQuoted(dir_ + "/cache") + " --quiet");
+      const auto render = runCli("render " + shellQuoted(scene) + " -o " + shellQuoted(dir_ + "/bar-drop.wav") +
+                                 " --duration 1.5 --cache " + shellQuoted(dir_ + "/cache") + " --quiet");
       ASSERT_EQ(render.exit_code, 0) << render.err;
     }
     // The bar's bank, as the render solved it: the only bank in the cache.

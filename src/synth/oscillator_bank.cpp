@@ -374,7 +374,7 @@ struct OscillatorBank::Impl {
   // no_alloc: fail with NoCapacity rather than grow a record or the pool.
   ImpactResult addImpact(const ImpactDesc& desc, bool no_alloc) {
     if (desc.object >= objects.size()) return ImpactResult::BadObject;
-    const ObjectInfo& obj = objects[desc.object];
+    ObjectInfo& obj = objects[desc.object];  // its pulse stamp may move
     const double now = static_cast<double>(pos);
     double t0 = (desc.time_s + obj.delay_s) * fs;  // in samples
     if (!(t0 >= now)) t0 = now;                    // late (or NaN): start now
@@ -417,11 +417,10 @@ struct OscillatorBank::Impl {
     // Contact damping scheduled for this object at the pulse's start (setExtraDamping is called
     // before the impacts it covers), so pulses and the oscillators they feed use the same pole.
     const double extra_damping = extraDampingAt(obj, start_sample);
-    ObjectInfo& pulse = objects[desc.object];
-    if (std::memcmp(&pulse.pulse_tau_s, &tau_s, sizeof tau_s) != 0 ||
-        std::memcmp(&pulse.pulse_extra_damping, &extra_damping, sizeof extra_damping) != 0 || pulse.pulse_box != box) {
-      pulse.pulse_tau_s = tau_s, pulse.pulse_extra_damping = extra_damping, pulse.pulse_box = box;
-      ++pulse.pulse_stamp;
+    if (std::memcmp(&obj.pulse_tau_s, &tau_s, sizeof tau_s) != 0 ||
+        std::memcmp(&obj.pulse_extra_damping, &extra_damping, sizeof extra_damping) != 0 || obj.pulse_box != box) {
+      obj.pulse_tau_s = tau_s, obj.pulse_extra_damping = extra_damping, obj.pulse_box = box;
+      ++obj.pulse_stamp;
     }
     for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
       const Complex factor = desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0);
@@ -433,9 +432,9 @@ struct OscillatorBank::Impl {
         // The pole in force when the pulse starts (contact damping may have moved it).
         const Complex pole = m.base_pole - extra_damping;
         const Complex step = extra_damping == 0.0 ? m.base_step : std::exp(pole * h);
-        if (!ideal && m.end_stamp != pulse.pulse_stamp) {
+        if (!ideal && m.end_stamp != obj.pulse_stamp) {
           m.pulse_end = box ? detail::boxResponse(pole, tau_s, tau_s) : detail::halfSineResponse(pole, tau_s, tau_s);
-          m.end_stamp = pulse.pulse_stamp;
+          m.end_stamp = obj.pulse_stamp;
         }
         const Complex y_end = ideal ? Complex(1.0, 0.0) : m.pulse_end;
         const Complex bg = g * m.out_weight * factor;
@@ -463,9 +462,9 @@ struct OscillatorBank::Impl {
         // E(a, p, U + h) = e^{ph} E(a, p, U) + e^{aU} E(a, p, h): exact, stable recurrences.
         const Complex ia(0.0, pulse_omega);
         const detail::ExpPair first = detail::expDividedDifferencePair(ia, -ia, pole, first_u_s);
-        if (m.step_stamp != pulse.pulse_stamp) {
+        if (m.step_stamp != obj.pulse_stamp) {
           m.pulse_step = detail::expDividedDifferencePair(ia, -ia, pole, h);
-          m.step_stamp = pulse.pulse_stamp;
+          m.step_stamp = obj.pulse_stamp;
         }
         const detail::ExpPair& one_step = m.pulse_step;
         Complex ep = first.plus, em = first.minus;
@@ -517,6 +516,24 @@ struct OscillatorBank::Impl {
     return ImpactResult::Scheduled;
   }
 
+  // Mode j of `obj`'s share of a box or a force change whose modal input is `modal` (impulse or
+  // force change) and per-mode factor `transfer`: the mode's index, b g times the factor, and its
+  // pole under the contact damping. False for a zero or non-finite input or a mode that does not ring.
+  struct RingingInput {
+    uint32_t mode;
+    Complex bg, pole;
+  };
+  bool ringingInput(const ObjectInfo& obj, uint32_t j, const double* modal, const Complex* transfer,
+                    double extra_damping, RingingInput& out) const {
+    const double g = modal[j];
+    if (g == 0.0 || !std::isfinite(g)) return false;
+    const uint32_t mi = obj.first_mode + j;
+    const ModeInfo& m = modes[mi];
+    if (m.kind != ModeKind::Ringing) return false;
+    out = {mi, g * m.out_weight * (transfer ? transfer[j] : Complex(1.0, 0.0)), m.base_pole - extra_damping};
+    return true;
+  }
+
   // True when every mode the impact touches rings (no over- or critically damped ones).
   bool onlyRinging(const ImpactDesc& desc) const {
     const ObjectInfo& obj = objects[desc.object];
@@ -559,19 +576,15 @@ struct OscillatorBank::Impl {
       const double after_s = (static_cast<double>(im.start_sample) - te) * h;
       const double sign = (edge == 0 || edge == 3) ? 1.0 : -1.0;
       for (uint32_t j = 0; j < obj.mode_count && desc.modal_impulse; ++j) {
-        const double g = desc.modal_impulse[j];
-        if (g == 0.0 || !std::isfinite(g)) continue;
-        const uint32_t mi = obj.first_mode + j;
-        const ModeInfo& m = modes[mi];
-        if (m.kind != ModeKind::Ringing) continue;
-        const Complex bg = g * m.out_weight * (desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0));
-        const Complex pole = m.base_pole - extra_damping;
+        RingingInput in;
+        if (!ringingInput(obj, j, desc.modal_impulse, desc.modal_transfer, extra_damping, in)) continue;
+        const Complex bg = in.bg, pole = in.pole;
         const Complex step_amplitude = ramped ? bg / (pole * pole * tau_s * ramp_s) : bg / (pole * tau_s);
         // Audible when the net ringing after the box, |b g (e^{p tau} - 1) / (p tau)|, is (one
         // audible mode is enough: the rest are not asked).
         if (edge == 0 && !audible && std::abs(bg * (std::exp(pole * tau_s) - 1.0) / (pole * tau_s)) >= threshold)
           audible = true;
-        im.hits.push_back({mi, sign * step_amplitude * std::exp(pole * after_s)});
+        im.hits.push_back({in.mode, sign * step_amplitude * std::exp(pole * after_s)});
       }
       auto at = std::upper_bound(pending.begin(), pending.end(), im.start_sample,
                                  [this](uint64_t s0, uint32_t other) { return s0 < pool[other].start_sample; });
@@ -644,13 +657,9 @@ struct OscillatorBank::Impl {
     }
     const bool same_offset = std::memcmp(&edge_after_s[0], &edge_after_s[1], sizeof(double)) == 0;
     for (uint32_t j = 0; j < obj.mode_count && desc.modal_force_change; ++j) {
-      const double g = desc.modal_force_change[j];
-      if (g == 0.0 || !std::isfinite(g)) continue;
-      const uint32_t mi = obj.first_mode + j;
-      const ModeInfo& m = modes[mi];
-      if (m.kind != ModeKind::Ringing) continue;
-      const Complex bg = g * m.out_weight * (desc.modal_transfer ? desc.modal_transfer[j] : Complex(1.0, 0.0));
-      const Complex pole = m.base_pole - extra_damping;
+      RingingInput in;
+      if (!ringingInput(obj, j, desc.modal_force_change, desc.modal_transfer, extra_damping, in)) continue;
+      const Complex bg = in.bg, pole = in.pole;
       const Complex amplitude = ramped ? bg / (pole * pole * ramp_s) : bg / pole;
       // Audible when the net ringing after the ramp, |b g (e^{p r} - 1) / (p^2 r)|, is (one
       // audible mode is enough: the rest are not asked).
@@ -659,10 +668,10 @@ struct OscillatorBank::Impl {
         audible = std::abs(net) >= threshold;
       }
       const Complex rise = std::exp(pole * edge_after_s[0]);
-      pool[edge_record[0]].hits.push_back({mi, 1.0 * amplitude * rise});
+      pool[edge_record[0]].hits.push_back({in.mode, amplitude * rise});
       if (ringing_edges == 2) {
         const Complex fall = same_offset ? rise : std::exp(pole * edge_after_s[1]);
-        pool[edge_record[1]].hits.push_back({mi, -1.0 * amplitude * fall});
+        pool[edge_record[1]].hits.push_back({in.mode, -amplitude * fall});
       }
     }
     for (int edge = 0; edge < ringing_edges; ++edge) schedule(pool[edge_record[edge]], edge_record[edge]);

@@ -12,6 +12,8 @@
 namespace strike::detail {
 namespace {
 
+constexpr size_t kPrefetchAhead_bytes = 8192;
+
 // A 256-bit register holds four coefficients (re, im, ...): two registers are the eight partial
 // sums S_0..S_3 and S_4..S_7, each lane the same float product and addition, in the same order,
 // as the portable loop's.
@@ -20,6 +22,11 @@ void sums(const uint16_t* halves, size_t whole, const float* const* weights, flo
   __m256 low[Directions], high[Directions];
   for (size_t d = 0; d < Directions; ++d) low[d] = high[d] = _mm256_setzero_ps();
   for (size_t j = 0; j < whole; j += 8) {
+    // Ask for the coefficients 8 KB ahead into L2 (a hint: no fault past the end). The hardware's
+    // own prefetch stops at each 4 KB page, and a pass reads a body's whole transfer (0.9 MB for a
+    // bench plate) that other bodies' passes have pushed out of the caches since: from memory,
+    // 65 us a pass without the hint, 33 us with it, 17 us from L2 (20 plates taking turns, one core).
+    _mm_prefetch(reinterpret_cast<const char*>(halves + 2 * j) + kPrefetchAhead_bytes, _MM_HINT_T1);
     const __m256 c0 = _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(halves + 2 * j)));
     const __m256 c1 = _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(halves + 2 * j + 8)));
     for (size_t d = 0; d < Directions; ++d) {  // every coefficient read once for all directions

@@ -138,12 +138,18 @@ SurfaceLocator::SurfaceLocator(const ModeBank& bank) : bank_(&bank) {
     dims_[k] = std::clamp(static_cast<int>(ext[k] / cell_m_) + 1, 1, 256);
   }
   const size_t cells = static_cast<size_t>(dims_[0]) * dims_[1] * dims_[2];
+  // Each vertex's cell, once: a triangle's range of cells is then the least and the greatest of
+  // its corners' cells, the same cells as from its bounding box ((x - origin) / cell, the
+  // truncation and the clamp are all non-decreasing in x), for a third of the divisions.
+  std::vector<std::array<uint8_t, 3>> vertex_cell(nv);
+  for (size_t v = 0; v < nv; ++v)
+    for (int k = 0; k < 3; ++k)
+      vertex_cell[v][k] = static_cast<uint8_t>(std::clamp(static_cast<int>((pos[3 * v + k] - origin_[k]) / cell_m_), 0, dims_[k] - 1));
   auto cellRange = [&](const uint32_t* tri, int from[3], int to[3]) {
     for (int k = 0; k < 3; ++k) {
-      double a = INFINITY, b = -INFINITY;
-      for (int c = 0; c < 3; ++c) a = std::min(a, pos[3 * tri[c] + k]), b = std::max(b, pos[3 * tri[c] + k]);
-      from[k] = std::clamp(static_cast<int>((a - origin_[k]) / cell_m_), 0, dims_[k] - 1);
-      to[k] = std::clamp(static_cast<int>((b - origin_[k]) / cell_m_), 0, dims_[k] - 1);
+      const int a = vertex_cell[tri[0]][k], b = vertex_cell[tri[1]][k], c = vertex_cell[tri[2]][k];
+      from[k] = std::min({a, b, c});
+      to[k] = std::max({a, b, c});
     }
   };
   // Count, then fill (CSR). Each triangle's range of cells (dims_ <= 256: a byte an axis) is

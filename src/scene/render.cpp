@@ -64,6 +64,7 @@ struct Body {
   bool silent = false;            ///< ...but no mode in the synthesized band
   std::optional<ShapeRows> rows;  ///< shapes read at the struck vertices only (readStruckShapes)
   std::shared_ptr<const SurfaceLocator> locator;  ///< built for `bank` by readStruckShapes, for its voice
+  LocatedPoints located;  ///< the contact points readStruckShapes located with `locator`, for its voice
   /// With a RenderSession: the session's copy of `bank` (the same header) that `locator` points
   /// into, for the voice (a locator projects only for the bank object it was built for).
   std::shared_ptr<const ModeBank> located_bank;
@@ -380,6 +381,7 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
                         RenderSession* session, RenderReport& report) {
   body.rows.reset();
   body.locator.reset();
+  body.located = {};
   body.located_bank.reset();
   const ModeBank& bank = *body.bank;
   const bool has_radiation = bank.radiation_m2.size() == bank.modeCount();
@@ -412,18 +414,21 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   std::sort(points.begin(), points.end());
   points.erase(std::unique(points.begin(), points.end()), points.end());
   std::vector<uint32_t> vertices;
-  for (const std::array<double, 3>& point : points) {
-    uint32_t v[3];
-    double w[3];
-    locator.nearest(point.data(), v, w);
-    vertices.insert(vertices.end(), v, v + 3);
+  LocatedPoints located;
+  located.vertices.resize(points.size());
+  located.weights.resize(points.size());
+  for (size_t p = 0; p < points.size(); ++p) {
+    locator.nearest(points[p].data(), located.vertices[p].data(), located.weights[p].data());
+    vertices.insert(vertices.end(), located.vertices[p].begin(), located.vertices[p].end());
   }
+  located.points = std::move(points);
   Result<ShapeRows> rows = body.file->readShapeRows(std::move(vertices));
   if (!rows) return rows.error();
   report.shape_vertices_read += rows->vertices.size();
   report.shape_vertices_total += bank.surfaceVertexCount();
   body.rows = std::move(*rows);
   body.locator = std::move(shared_locator);  // the voice projects with it (the same bank object)
+  body.located = std::move(located);          // and looks these points up instead of locating them again
   body.located_bank = std::move(surface.bank);
   return {};
 }
@@ -784,6 +789,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     voice.bank = body.located_bank ? body.located_bank : body.bank;  // the session's, equal to body.bank
     if (body.rows) voice.rows = std::move(*body.rows), voice.use_rows = true;
     voice.locator = body.locator;
+    voice.located = std::move(body.located);
     voice.weights = radiationWeights(*body.bank, engine_settings.reference_distance_m);
     for (double& w : voice.weights) w *= settings.gain / kFullScalePascal;
     voice.pressure_scale = settings.gain / kFullScalePascal;

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "strike/synth.hpp"
 
@@ -149,6 +150,63 @@ TEST(ModalProjection, ContactProjectorWithShapeRowsMatchesTheWholeBank) {
   for (double value : g) EXPECT_EQ(value, 0.0);
   partial.projectOnce(inside, j, g);
   for (double value : g) EXPECT_EQ(value, 0.0);
+}
+
+// A render locates every contact point once, to read the shapes there, and hands the points it
+// located to the voice (LocatedPoints): looked up, they give the bits the grid search gives, and
+// a point not among them is searched as before. An entry altered on purpose shows the lookup is
+// what answered.
+TEST(ModalProjection, ContactProjectorLooksUpPointsLocatedBefore) {
+  const ModeBank mb = linearShapeBank();
+  const auto locator = std::make_shared<const SurfaceLocator>(mb);
+  std::vector<std::array<double, 3>> points = {{0.7, 0.8, 0.05}, {0.2, 0.3, 0.0}, {0.5, 0.1, -0.3}};
+  std::sort(points.begin(), points.end());
+  LocatedPoints located;
+  for (const auto& p : points) {
+    std::array<uint32_t, 3> v;
+    std::array<double, 3> w;
+    locator->nearest(p.data(), v.data(), w.data());
+    located.vertices.push_back(v);
+    located.weights.push_back(w);
+  }
+  located.points = points;
+  ContactProjector searching(mb, locator, 2), looking_up(mb, locator, 2);
+  looking_up.useLocated(located);
+  const double j[3] = {0.1, -0.2, 0.3};
+  const std::array<double, 3> asked[] = {{0.2, 0.3, 0.0}, {0.6, 0.2, 0.0}, {0.7, 0.8, 0.05}, {0.5, 0.1, -0.3}};
+  for (const auto& p : asked) {
+    double a[3], b[3], once_a[3], once_b[3];
+    searching.projectImpulseInto(p.data(), j, a);
+    looking_up.projectImpulseInto(p.data(), j, b);
+    searching.projectOnce(p.data(), j, once_a);
+    looking_up.projectOnce(p.data(), j, once_b);
+    for (int m = 0; m < 3; ++m) {
+      EXPECT_EQ(a[m], b[m]) << p[0] << "," << p[1] << " mode " << m;
+      EXPECT_EQ(once_a[m], once_b[m]) << p[0] << "," << p[1] << " mode " << m;
+    }
+  }
+  // The entry of (0.2, 0.3, 0) now says "vertex 1 alone"; a -0 in place of its 0 is not the same
+  // point (the lookup compares bits) and is searched.
+  const size_t at = static_cast<size_t>(std::find(points.begin(), points.end(), std::array<double, 3>{0.2, 0.3, 0.0}) -
+                                        points.begin());
+  ASSERT_LT(at, points.size());
+  located.vertices[at] = {1, 1, 1};
+  located.weights[at] = {1.0, 0.0, 0.0};
+  ContactProjector altered(mb, locator, 2);
+  altered.useLocated(located);
+  double vertex1[3], g[3], searched[3], from_altered[3];
+  projectImpulseAtVertexInto(mb, 1, j, vertex1);
+  altered.projectImpulseInto(points[at].data(), j, g);
+  const double negative_zero[3] = {0.2, 0.3, -0.0};
+  searching.projectImpulseInto(negative_zero, j, searched);
+  ContactProjector altered_fresh(mb, locator, 2);  // nothing remembered (its memory equates -0 and +0)
+  altered_fresh.useLocated(located);
+  altered_fresh.projectImpulseInto(negative_zero, j, from_altered);
+  for (int m = 0; m < 3; ++m) {
+    EXPECT_EQ(g[m], vertex1[m]) << "mode " << m;
+    EXPECT_EQ(from_altered[m], searched[m]) << "mode " << m;
+  }
+  EXPECT_NE(g[0], searched[0]);
 }
 
 }  // namespace

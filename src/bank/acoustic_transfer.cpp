@@ -168,7 +168,7 @@ class ColumnPair {
 
 /// Columns m .. m + 5 (m + 5 <= n_max) as three pairs stepped in one loop: each pair's step waits
 /// on its own previous one (a multiply, a subtraction, a multiply), so three independent chains
-/// keep the processor busy where one pair at a time waited (4.3 -> 2.5 us for order 76). The
+/// keep the processor busy where one pair at a time waited (4.3 -> 2.4 us for order 76). The
 /// same operations as each pair alone: the same bits.
 void columnSix(const TableConstants& k, int m, int n_max, double z, const double q_mm[6], const double cos_factor[6],
                const double sin_factor[6], double* out) {

@@ -428,7 +428,7 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   report.shape_vertices_total += bank.surfaceVertexCount();
   body.rows = std::move(*rows);
   body.locator = std::move(shared_locator);  // the voice projects with it (the same bank object)
-  body.located = std::move(located);          // and looks these points up instead of locating them again
+  body.located = std::move(located);         // and looks these points up instead of locating them again
   body.located_bank = std::move(surface.bank);
   return {};
 }

@@ -145,7 +145,8 @@ SurfaceLocator::SurfaceLocator(const ModeBank& bank) : bank_(&bank) {
   std::vector<std::array<uint8_t, 3>> vertex_cell(nv);
   for (size_t v = 0; v < nv; ++v)
     for (int k = 0; k < 3; ++k)
-      vertex_cell[v][k] = static_cast<uint8_t>(std::clamp(static_cast<int>((pos[3 * v + k] - origin_[k]) / cell_m_), 0, dims_[k] - 1));
+      vertex_cell[v][k] =
+          static_cast<uint8_t>(std::clamp(static_cast<int>((pos[3 * v + k] - origin_[k]) / cell_m_), 0, dims_[k] - 1));
   auto cellRange = [&](const uint32_t* tri, int from[3], int to[3]) {
     for (int k = 0; k < 3; ++k) {
       const int a = vertex_cell[tri[0]][k], b = vertex_cell[tri[1]][k], c = vertex_cell[tri[2]][k];

@@ -9,11 +9,11 @@
 // under-damped modes), so there is no step-size limit and any damping is stable.
 #pragma once
 
+#include <array>
 #include <complex>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
-#include <array>
 #include <vector>
 
 #include "strike/bank.hpp"

@@ -288,7 +288,7 @@ void evaluateFarField(const AcousticTransfer& transfer, const double* sh, std::c
 }
 
 void farFieldWeights(const double* sh, size_t count, float* weights) {
-  for (size_t j = 0; j < count; ++j) weights[2 * j] = weights[2 * j + 1] = static_cast<float>(sh[j]);
+  for (size_t j = 0; j < count; ++j) weights[j] = static_cast<float>(sh[j]);
 }
 
 uint16_t floatToHalf(float x) {
@@ -368,8 +368,8 @@ using PartialSums = std::array<float, 2 * kPartialSums>;
 std::complex<double> finishSum(PartialSums& s, const uint16_t* h, const float* w, size_t from, size_t count) {
   for (size_t j = from; j < count; ++j) {
     const size_t r = j % kPartialSums;
-    s[2 * r] += halfToFloat(h[2 * j]) * w[2 * j];
-    s[2 * r + 1] += halfToFloat(h[2 * j + 1]) * w[2 * j + 1];
+    s[2 * r] += halfToFloat(h[2 * j]) * w[j];
+    s[2 * r + 1] += halfToFloat(h[2 * j + 1]) * w[j];
   }
   double part[2][2];  // [even or odd sums][re, im]
   for (int odd = 0; odd < 2; ++odd)
@@ -395,7 +395,7 @@ void evaluateMode(const uint16_t* h, size_t count, double scale, bool f16c, cons
     for (size_t j = 0; j < whole; j += kPartialSums)
       for (size_t r = 0; r < 2 * kPartialSums; ++r) {
         const float c = halfToFloat(h[2 * j + r]);
-        for (size_t d = 0; d < Directions; ++d) s[d][r] += c * w[d][2 * j + r];
+        for (size_t d = 0; d < Directions; ++d) s[d][r] += c * w[d][j + r / 2];
       }
   }
   for (size_t d = 0; d < Directions; ++d) out[d][i] = finishSum(s[d], h, w[d], whole, count) * scale;

@@ -21,6 +21,7 @@ template <size_t Directions>
 void sums(const uint16_t* halves, size_t whole, const float* const* weights, float* out) {
   __m256 low[Directions], high[Directions];
   for (size_t d = 0; d < Directions; ++d) low[d] = high[d] = _mm256_setzero_ps();
+  const __m256i first_four = _mm256_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3), last_four = _mm256_setr_epi32(4, 4, 5, 5, 6, 6, 7, 7);
   for (size_t j = 0; j < whole; j += 8) {
     // Ask for the coefficients 8 KB ahead into L2 (a hint: no fault past the end). The hardware's
     // own prefetch stops at each 4 KB page, and a pass reads a body's whole transfer (0.9 MB for a
@@ -30,8 +31,10 @@ void sums(const uint16_t* halves, size_t whole, const float* const* weights, flo
     const __m256 c0 = _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(halves + 2 * j)));
     const __m256 c1 = _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(halves + 2 * j + 8)));
     for (size_t d = 0; d < Directions; ++d) {  // every coefficient read once for all directions
-      low[d] = _mm256_add_ps(low[d], _mm256_mul_ps(c0, _mm256_loadu_ps(weights[d] + 2 * j)));
-      high[d] = _mm256_add_ps(high[d], _mm256_mul_ps(c1, _mm256_loadu_ps(weights[d] + 2 * j + 8)));
+      // Y_j .. Y_j+7, each put beside itself for a coefficient's real and imaginary parts.
+      const __m256 y = _mm256_loadu_ps(weights[d] + j);
+      low[d] = _mm256_add_ps(low[d], _mm256_mul_ps(c0, _mm256_permutevar8x32_ps(y, first_four)));
+      high[d] = _mm256_add_ps(high[d], _mm256_mul_ps(c1, _mm256_permutevar8x32_ps(y, last_four)));
     }
   }
   for (size_t d = 0; d < Directions; ++d) {

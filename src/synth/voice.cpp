@@ -106,7 +106,7 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
     sh_.assign((order + 1) * (order + 1), 0.0);
     sh_table_ = sphericalHarmonicsTable(static_cast<uint32_t>(order));
     transfer_ = compactTransfer(t);
-    for (std::vector<float>& w : weights_) w.assign(2 * sh_.size(), 0.0f);
+    for (std::vector<float>& w : weights_) w.assign(sh_.size(), 0.0f);
     for (std::vector<std::complex<double>>& f : far_field_) f.assign(modes, 0.0);
     inv_rms_.assign(modes, 0.0);
     for (size_t i = 0; i < modes; ++i) {

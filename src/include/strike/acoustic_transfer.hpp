@@ -75,8 +75,8 @@ void realSphericalHarmonics(const SphericalHarmonicsTable& table, const double d
 void evaluateFarField(const AcousticTransfer& transfer, const double* sh, std::complex<double>* out);
 
 /// The fast evaluation's weights: Y_j (count values from realSphericalHarmonics()) rounded to
-/// float, each written twice (2 count floats: y0 y0 y1 y1 ...), so that one multiplication
-/// scales a coefficient's real and imaginary parts. No allocation.
+/// float, count floats. Each scales a coefficient's real and imaginary parts alike (the F16C
+/// kernel puts each beside itself in its register). No allocation.
 void farFieldWeights(const double* sh, size_t count, float* weights);
 
 /// IEEE binary16 ("half precision"): 1 sign, 5 exponent and 10 fraction bits.

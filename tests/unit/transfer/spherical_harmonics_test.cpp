@@ -286,7 +286,7 @@ void expectTheDocumentedSum(const CompactTransfer& t) {
   std::vector<float> weights[2];
   for (int k = 0; k < 2; ++k) {
     Y[k].resize(count);
-    weights[k].resize(2 * count);
+    weights[k].resize(count);
     realSphericalHarmonics(order, directions[k], Y[k].data());
     farFieldWeights(Y[k].data(), count, weights[k].data());
   }
@@ -332,7 +332,7 @@ TEST(AcousticTransfer, TheFastEvaluationIsWithinItsBoundOfTheExactSum) {
   const uint32_t order = t.maxOrder();
   const size_t count = size_t(order + 1) * (order + 1);
   std::vector<double> Y(count);
-  std::vector<float> weights(2 * count);
+  std::vector<float> weights(count);
   std::vector<std::complex<double>> exact(t.modeCount()), fast(t.modeCount());
   std::mt19937 random(3);
   std::normal_distribution<double> normal;

@@ -21,7 +21,8 @@ template <size_t Directions>
 void sums(const uint16_t* halves, size_t whole, const float* const* weights, float* out) {
   __m256 low[Directions], high[Directions];
   for (size_t d = 0; d < Directions; ++d) low[d] = high[d] = _mm256_setzero_ps();
-  const __m256i first_four = _mm256_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3), last_four = _mm256_setr_epi32(4, 4, 5, 5, 6, 6, 7, 7);
+  const __m256i first_four = _mm256_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3),
+                last_four = _mm256_setr_epi32(4, 4, 5, 5, 6, 6, 7, 7);
   for (size_t j = 0; j < whole; j += 8) {
     // Ask for the coefficients 8 KB ahead into L2 (a hint: no fault past the end). The hardware's
     // own prefetch stops at each 4 KB page, and a pass reads a body's whole transfer (0.9 MB for a

@@ -147,7 +147,7 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
     : bank_(desc.bank), synth_(settings.synth), click_synth_(settings.synth), projector_(*desc.bank, desc.locator) {
   const ModeBank& bank = *bank_;
   if (desc.use_rows) projector_.useRows(desc.rows);
-  if (desc.locator && desc.locator->builtFor(*desc.bank)) projector_.useLocated(desc.located);
+  if (desc.locator.get() == &projector_.locator()) projector_.useLocated(desc.located);  // found by it
   ModalObjectDesc modal;
   modal.eigenvalues = bank.eigenvalues;
   modal.rayleigh_stiffness = bank.material.rayleigh_stiffness;

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Acoustic transfer: what each vibration mode of a body radiates, as a function of direction.
-// The data lives in a ModeBank (bank chunk ACTF, format 5); the solver is in strike_precompute
-// (src/precompute/acoustic_transfer.cpp), the evaluation in strike_bank (C++ standard library
-// only, so libstrike evaluates it at each impact).
+// The data lives in a ModeBank (bank chunk ACTF, format 5); the solver is strike_transfer
+// (src/transfer/), the evaluation (src/transfer/far_field.cpp, spherical_harmonics.cpp) is in
+// strike_bank (C++ standard library only, so libstrike evaluates it at each impact).
 //
 // Conventions. Time dependence e^{-i omega t} (acoustics' usual one). For mode i with modal
 // acceleration q_i''(t) = Re(Q e^{-i omega_i t}), the pressure far from the body is

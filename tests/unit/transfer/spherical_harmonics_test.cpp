@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The evaluation side of the acoustic transfer (src/bank/acoustic_transfer.cpp): real spherical
+// The evaluation side of the acoustic transfer (src/transfer/spherical_harmonics.cpp, far_field.cpp): real spherical
 // harmonics against their closed forms and their orthonormality by quadrature over the sphere,
 // and the far-field sum.
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The acoustic transfer solver (src/precompute/acoustic_transfer.cpp) against closed forms:
+// The acoustic transfer solver (src/transfer/) against closed forms:
 // a sphere's surface acceleration Y_nm radiates A h_n(kr) Y_nm exactly, a rigid sphere's
 // translation has the dipole tensor 2 pi a^3 I, and the transfer is linear in the mode shape.
 #include <gtest/gtest.h>

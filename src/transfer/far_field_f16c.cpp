@@ -68,7 +68,8 @@ void halvesF16c(const float* values, size_t count, float up, uint16_t* halves) {
     const __m128 x = _mm_mul_ss(_mm_set_ss(values[k]), _mm_set_ss(up));
     const __m128 keep = _mm_cmpge_ss(_mm_andnot_ps(_mm_set_ss(-0.0f), x), _mm_set_ss(0x1p-14f));
     const __m128 kept = _mm_or_ps(_mm_and_ps(x, keep), _mm_and_ps(x, _mm_set_ss(-0.0f)));
-    halves[k] = static_cast<uint16_t>(_mm_extract_epi16(_mm_cvtps_ph(kept, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC), 0));
+    halves[k] =
+        static_cast<uint16_t>(_mm_extract_epi16(_mm_cvtps_ph(kept, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC), 0));
   }
 }
 

@@ -1,0 +1,33 @@
+// SPDX-License-Identifier: MIT
+// One solve: assemble the collocation system of a cut at a wavenumber, solve it and its
+// coarse version (the error estimate).
+#pragma once
+
+#include <map>
+#include <vector>
+
+#include "../modal/two_parts.hpp"
+#include "clusters.hpp"
+#include "near_quadrature.hpp"
+#include "pieces.hpp"
+#include "surface.hpp"
+
+namespace strike::transfer {
+
+struct ModeSolve {
+  std::vector<Eigen::VectorXcd> p;       // per right-hand side, per cluster
+  std::vector<Eigen::VectorXcd> p_diff;  // p minus the coarse solve's, per cluster
+  size_t elements = 0, chief = 0;
+  Cut cut;
+  Pieces pieces;
+  PieceData piece_data;
+  double assembly_seconds = 0.0, factor_seconds = 0.0;
+};
+
+/// Solves the exterior Neumann problem for the boundary data `data` (one right-hand side each:
+/// modes of one frequency share the matrix and its factorization) at wavenumber k with
+/// `elements` unknowns (about) and `chief` interior points.
+ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, double k, size_t elements, size_t chief,
+                      double k_ref, std::map<size_t, NearCache>& near_caches, TwoParts& parts);
+
+}  // namespace strike::transfer

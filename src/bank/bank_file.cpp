@@ -12,6 +12,8 @@
 //   the shapes as i16 (value = q * scale), half the bytes (`strike modes --compact`).
 //   format 5: format 3 or 4 (MODV or MODQ) plus ACTF, the acoustic transfer of every mode
 //   (acoustic_transfer.hpp), and the transfer's seconds at the end of PROV.
+//   format 6: format 5 whose ACTF may hold the first modes only (the heard ones), or none (the
+//   dipole alone).
 //
 // Unknown chunks are skipped, so a reader of the same major format can read files that carry
 // more. Every read is bounds-checked: a hostile file can make decoding fail, never overrun.
@@ -223,7 +225,7 @@ std::vector<float> int16ShapeScales(const ModeBank& bank) {
 
 std::vector<uint8_t> encodeBank(const ModeBank& bank, ShapeEncoding encoding) {
   const bool int16 = encoding == ShapeEncoding::Int16;
-  const uint32_t version = kBankFormatVersion;  // 5: MODV or MODQ, plus ACTF
+  const uint32_t version = kBankFormatVersion;  // 6: MODV or MODQ, plus ACTF of a prefix of the modes
   ByteWriter w;
   w.data().insert(w.data().end(), kMagic, kMagic + 8);
   w.put<uint32_t>(version);
@@ -284,7 +286,7 @@ std::vector<uint8_t> encodeBank(const ModeBank& bank, ShapeEncoding encoding) {
     w.endChunk(at);
   }
 
-  if (!bank.transfer.empty()) {
+  if (!bank.transfer.offset.empty()) {  // solved, if only its dipole (format 6: no mode heard)
     const AcousticTransfer& t = bank.transfer;
     at = w.beginChunk("ACTF");
     w.put<uint32_t>(static_cast<uint32_t>(t.modeCount()));
@@ -593,6 +595,10 @@ Result<BankFile> BankFile::parse(std::shared_ptr<const Source> source_ptr) {
   if (mode_vertices != surface_vertices)
     return corrupt(source, "modes are sampled on " + std::to_string(mode_vertices) + " vertices, the surface has " +
                                std::to_string(surface_vertices));
+  // Format 5 solved every mode; format 6 a prefix (ModeBank::checkConsistency: not more).
+  if (bank.format_version == 5 && !bank.transfer.offset.empty() && bank.transfer.modeCount() != bank.modeCount())
+    return corrupt(source, "chunk 'ACTF' has " + std::to_string(bank.transfer.modeCount()) + " modes, the bank " +
+                               std::to_string(bank.modeCount()) + " (format 5 has the transfer of every mode)");
   const std::string problem = bank.checkConsistency(/*shapes_loaded=*/false);
   if (!problem.empty()) return corrupt(source, problem);
   file.bank_ = std::make_shared<const ModeBank>(std::move(bank));

@@ -45,6 +45,9 @@ std::string ModeBank::checkConsistency(bool shapes_loaded) const {
            std::to_string(modes);
   for (double v : radiation_m2)
     if (!std::isfinite(v) || v < 0) return "a radiation strength is negative or not finite";
+  if (transfer.modeCount() > modes)
+    return "the acoustic transfer has " + std::to_string(transfer.modeCount()) + " modes, the bank " +
+           std::to_string(modes);
   for (size_t i = 0; i < modes; ++i) {
     if (!std::isfinite(eigenvalues[i]) || eigenvalues[i] < 0.0)
       return "eigenvalue " + std::to_string(i) + " is " + std::to_string(eigenvalues[i]) + " (must be finite, >= 0)";

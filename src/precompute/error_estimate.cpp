@@ -483,7 +483,9 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     next_mesh = std::move(finer->loaded);
   }
   if (settings.acoustic_transfer && !out.trials.empty()) {
-    if (Status solved = solveTransferInto(out.chosen.bank, settings.transfer, settings.progress); !solved)
+    if (Status solved =
+            solveTransferInto(out.chosen.bank, settings.transfer, settings.transfer_max_freq_hz, settings.progress);
+        !solved)
       return solved.error();
     out.chosen.bank.total_seconds += out.chosen.bank.transfer_seconds;
   }

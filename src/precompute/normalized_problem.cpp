@@ -133,7 +133,9 @@ ModeBank unitTransferBank(const ModeBank& normalized, const PrecomputeSettings& 
 
 Result<ModeBank> solveUnitTransfer(const ModeBank& normalized, const PrecomputeSettings& actual, size_t kept_modes) {
   ModeBank unit = unitTransferBank(normalized, actual, kept_modes);
-  if (Status solved = solveTransferInto(unit, actual.transfer, actual.progress); !solved) return solved.error();
+  // Every mode of the unit bank: its eigenvalues are the kept ones already.
+  if (Status solved = solveTransferInto(unit, actual.transfer, INFINITY, actual.progress); !solved)
+    return solved.error();
   // What the cache keeps: the transfer with its eigenvalues (which identify it), not the surface.
   unit.shapes.clear();
   unit.surface_positions.clear();
@@ -154,14 +156,14 @@ bool isUnitTransferOf(const ModeBank& cached, const ModeBank& normalized, const 
 
 Status attachUnitTransfer(ModeBank& scaled, const ModeBank& unit, const NormalizedProblem& problem,
                           const PrecomputeSettings& actual) {
-  if (unit.transfer.modeCount() != scaled.modeCount())
+  if (unit.transfer.modeCount() > scaled.modeCount())
     return badInput("the unit transfer has " + std::to_string(unit.transfer.modeCount()) + " modes, the bank " +
                     std::to_string(scaled.modeCount()));
   // The shape factor of similarBank(), from the unit bank's (the reference) density.
   const double s = problem.scale;
   const double density_ratio = actual.material.density_kg_m3 / unit.material.density_kg_m3;
   const double shape_factor = 1.0 / std::sqrt(density_ratio * s * s * s);
-  scaled.transfer = scaledTransfer(unit.transfer, scaled.modeCount(), s, shape_factor);
+  scaled.transfer = scaledTransfer(unit.transfer, unit.transfer.modeCount(), s, shape_factor);
   scaled.transfer_seconds = unit.transfer_seconds;  // what it cost, when it was solved
   return {};
 }
@@ -181,7 +183,8 @@ Result<PrecomputeResult> computeSimilarModeBank(const PrecomputeSettings& actual
   Result<ModeBank> scaled = scaleNormalizedBank(solved->bank, problem, actual, mesh_hash);
   if (!scaled) return scaled.error();
   if (actual.acoustic_transfer) {
-    Result<ModeBank> unit = solveUnitTransfer(solved->bank, actual, scaled->modeCount());
+    Result<ModeBank> unit =
+        solveUnitTransfer(solved->bank, actual, modesAtOrBelow(*scaled, actual.transfer_max_freq_hz));
     if (!unit) return unit.error();
     if (Status attached = attachUnitTransfer(*scaled, *unit, problem, actual); !attached) return attached.error();
   }

@@ -104,13 +104,64 @@ void fillProvenance(const LoadedMesh& loaded, const PrecomputeSettings& settings
 
 }  // namespace
 
-Status solveTransferInto(ModeBank& bank, const TransferSettings& settings, const ProgressFn& progress) {
+size_t modesAtOrBelow(const ModeBank& bank, double max_freq_hz) {
+  size_t count = 0;
+  while (count < bank.modeCount() && bank.frequencyHz(count) <= max_freq_hz) ++count;
+  return count;
+}
+
+Status solveTransferInto(ModeBank& bank, const TransferSettings& settings, double max_freq_hz,
+                         const ProgressFn& progress) {
+  bank.transfer = AcousticTransfer{};
+  bank.transfer_seconds = 0.0;
+  return extendTransfer(bank, modesAtOrBelow(bank, max_freq_hz), settings, progress);
+}
+
+Status extendTransfer(ModeBank& bank, size_t modes, const TransferSettings& settings, const ProgressFn& progress) {
+  const size_t first = bank.transfer.modeCount();
+  const bool none = bank.transfer.offset.empty();  // not even the dipole: never solved
+  if (modes > bank.modeCount()) return internalError("a transfer asked for more modes than the bank has");
+  if (first >= modes && !none) return {};
   const auto start = std::chrono::steady_clock::now();
   if (progress) progress("transfer", 0.0);
-  Result<AcousticTransfer> transfer = solveAcousticTransfer(bank, settings, progress);
-  if (!transfer) return transfer.error();
-  bank.transfer = std::move(*transfer);
-  bank.transfer_seconds = secondsSince(start);
+  Result<AcousticTransfer> solved = internalError("no transfer solved");
+  if (first == 0 && modes == bank.modeCount()) {
+    solved = solveAcousticTransfer(bank, settings, progress);
+  } else {
+    // The solver takes a bank: this one's surface with the modes [first, modes) only. The shapes
+    // are [mode][vertex][xyz], so theirs are one contiguous range.
+    std::vector<float> shapes = std::move(bank.shapes);
+    AcousticTransfer transfer = std::move(bank.transfer);
+    ModeBank part = bank;
+    bank.shapes = std::move(shapes);
+    bank.transfer = std::move(transfer);
+    const size_t row = bank.surfaceVertexCount() * 3;
+    if (bank.shapes.size() < modes * row)
+      return internalError("a transfer asked for modes whose shapes are not loaded");
+    part.eigenvalues.assign(bank.eigenvalues.begin() + first, bank.eigenvalues.begin() + modes);
+    part.shapes.assign(bank.shapes.begin() + first * row, bank.shapes.begin() + modes * row);
+    part.radiation_m2.clear();
+    part.frequency_error_estimate.clear();
+    solved = solveAcousticTransfer(part, settings, progress);
+  }
+  if (!solved) return solved.error();
+  AcousticTransfer& t = bank.transfer;
+  if (none) {
+    t = std::move(*solved);
+  } else {
+    // The new modes' coefficients after the others', about the same centre (the dipole, the air
+    // and the method are the first solve's).
+    if (solved->centre_m != t.centre_m) return internalError("a transfer extension about another centre");
+    const uint64_t base = t.offset.back();
+    for (size_t i = 0; i < solved->modeCount(); ++i) {
+      t.order.push_back(solved->order[i]);
+      t.relative_error.push_back(solved->relative_error[i]);
+      t.offset.push_back(base + solved->offset[i + 1]);
+    }
+    t.coefficients.insert(t.coefficients.end(), solved->coefficients.begin(), solved->coefficients.end());
+    t.solve_seconds += solved->solve_seconds;
+  }
+  bank.transfer_seconds += secondsSince(start);
   return {};
 }
 
@@ -206,7 +257,9 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
   result.report.operator_applications = modes->operator_applications;
   if (settings.acoustic_transfer) {
     // The acoustic transfer: a phase of its own, part of the bank's cost (total_seconds).
-    if (Status solved = solveTransferInto(bank, settings.transfer, settings.progress); !solved) return solved.error();
+    if (Status solved = solveTransferInto(bank, settings.transfer, settings.transfer_max_freq_hz, settings.progress);
+        !solved)
+      return solved.error();
   }
   bank.total_seconds = loaded.meshing_seconds + secondsSince(start);
 

@@ -84,11 +84,12 @@ Result<ModeBank> similarBank(const ModeBank& solved, double scale, const Materia
   // the scaled bank (so does a normalized solve, which has none).
   const double ka_factor = std::sqrt(lambda_factor) * scale;  // omega' / omega times s
   out.transfer = AcousticTransfer{};
-  if (solved.transfer.modeCount() == solved.modeCount() && std::abs(ka_factor - 1.0) <= 1e-12) {
-    out.transfer = scaledTransfer(solved.transfer, keep, scale, shape_factor);
+  if (!solved.transfer.offset.empty() && std::abs(ka_factor - 1.0) <= 1e-12) {
+    // The kept modes that have a transfer (format 6: the heard ones of the solved bank).
+    out.transfer = scaledTransfer(solved.transfer, std::min(keep, solved.transfer.modeCount()), scale, shape_factor);
     out.transfer_seconds = 0.0;
   } else if (transfer_settings) {
-    if (Status transfer = solveTransferInto(out, *transfer_settings); !transfer) return transfer.error();
+    if (Status transfer = solveTransferInto(out, *transfer_settings, max_freq_hz); !transfer) return transfer.error();
   }
   return out;
 }

@@ -276,7 +276,7 @@ Status similarTransfer(std::vector<Body>& bodies, size_t i, const RenderSettings
                        RenderReport& report) {
   Body& body = bodies[i];
   const ModeBank& normal = bodies[solved_by_key.at(body.cache_key)].normal_bank;  // whole: shapes loaded
-  const size_t kept = body.similar_bank.modeCount();
+  const size_t kept = modesAtOrBelow(body.similar_bank, body.precompute.transfer_max_freq_hz);  // the heard modes
   body.transfer_key = unitTransferCacheKey(body.cache_key, body.precompute, kept);
   auto attach = [&](const ModeBank& unit) -> Status {
     Status attached = attachUnitTransfer(body.similar_bank, unit, body.normal, body.precompute);
@@ -330,8 +330,9 @@ Status similarPhase2(std::vector<Body>& bodies, size_t i, const RenderSettings& 
   return {};
 }
 
-/// Phase 1 for one object: a bank with at least mass properties and surface.
-Status prepareBody(const Scene& scene, const RenderSettings& settings, double max_freq_hz, Body& body,
+/// Phase 1 for one object: a bank with at least mass properties and surface. Its modes up to
+/// `max_freq_hz`; the acoustic transfer of those up to `heard_hz`, the band the engine plays.
+Status prepareBody(const Scene& scene, const RenderSettings& settings, double max_freq_hz, double heard_hz, Body& body,
                    std::map<uint64_t, const Body*>& loaded_by_key, RenderReport& report) {
   const SceneObject& object = *body.object;
   if (!object.bank.empty()) {
@@ -353,6 +354,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   body.precompute.max_tets = settings.max_tets;
   body.precompute.progress = settings.progress;
   body.precompute.acoustic_transfer = settings.acoustic_transfer;
+  body.precompute.transfer_max_freq_hz = heard_hz;
   Result<uint64_t> hash = meshHash(object.mesh);
   if (!hash) return hash.error();
   if (settings.similar_reuse) return prepareSimilarBody(settings, *hash, body, loaded_by_key, report);
@@ -370,6 +372,42 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   if (!loaded) return badInput("objects \"" + object.name + "\": " + loaded.error().message);
   body.bank = std::make_shared<const ModeBank>(massAndSurfaceBank(*loaded, body.precompute));
   body.mesh = std::move(*loaded);
+  return {};
+}
+
+/// Whether the body's cached bank lacks the transfer of modes this render plays (it was solved
+/// for a lower band: another sample rate, or a bank for fewer uses).
+bool lacksHeardTransfer(const Body& body, const RenderSettings& settings) {
+  const AcousticTransfer& t = body.bank->transfer;
+  return settings.acoustic_transfer && body.object->bank.empty() &&
+         (t.offset.empty() || t.modeCount() < modesAtOrBelow(*body.bank, body.precompute.transfer_max_freq_hz));
+}
+
+/// A cached bank that lacks the transfer of modes this render plays: read whole, those modes'
+/// transfer solved and appended (the bits of a cold solve), and the cache entry written again
+/// with it, so that the next render at this rate finds them. An identical object takes the bank
+/// extended for the first (`extended`, by cache key).
+Status extendCachedTransfer(Body& body, const RenderSettings& settings,
+                            std::map<uint64_t, std::shared_ptr<const ModeBank>>& extended, RenderReport& report) {
+  if (auto done = extended.find(body.cache_key); done != extended.end()) {
+    body.bank = done->second;
+    body.file.reset();
+    return {};
+  }
+  Result<ModeBank> all = body.file->readAll();
+  if (!all) return all.error();
+  report.shape_vertices_read += all->surfaceVertexCount();
+  report.shape_vertices_total += all->surfaceVertexCount();
+  if (settings.progress) settings.progress("transfer " + body.object->name, -1.0);
+  const size_t heard = modesAtOrBelow(*all, body.precompute.transfer_max_freq_hz);
+  if (Status solved = extendTransfer(*all, heard, body.precompute.transfer, settings.progress); !solved)
+    return badInput("objects \"" + body.object->name + "\": " + solved.error().message);
+  ++report.transfers_extended;
+  body.bank = std::make_shared<const ModeBank>(std::move(*all));
+  body.file.reset();
+  extended[body.cache_key] = body.bank;
+  // A failed cache write costs the next render time, never this one its result.
+  (void)writeBank(cachePath(settings.cache_dir, body.cache_key, ".modes"), *body.bank);
   return {};
 }
 
@@ -497,7 +535,7 @@ double norm(const std::array<double, 3>& a) { return std::sqrt(dot(a, a)); }
 /// Whether a struck body can be heard at all: some mode in the band the oscillator bank
 /// synthesizes (the band test of OscillatorBank::addObject). The error says why not.
 Status hasAudibleMode(const ModeBank& bank, const SynthSettings& synth, double rate) {
-  const double low = synth.min_freq_hz, high = std::min(synth.max_freq_hz, 0.45 * rate);
+  const double low = synth.min_freq_hz, high = synthesizedTopHz(synth.max_freq_hz, rate);
   for (size_t i = 0; i < bank.modeCount(); ++i) {
     const double f = bank.frequencyHz(i);
     if (f >= low && f <= high) return {};
@@ -553,7 +591,10 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   const double duration = settings.duration_s > 0 ? settings.duration_s : scene.duration_s;
   const double substep = settings.substep_s;  // simulate() refuses steps outside (0, 1 ms]
   // No mode above the audible band or what the sample rate can carry is ever computed.
-  const double max_freq_hz = std::min(scene.max_freq_hz, 0.45 * rate);
+  const double max_freq_hz = synthesizedTopHz(scene.max_freq_hz, rate);
+  // ...and only the modes the engine plays get an acoustic transfer.
+  const double heard_hz =
+      synthesizedTopHz(renderEngineSettings(scene, settings, rate, max_freq_hz).synth.max_freq_hz, rate);
   RenderResult result;
   RenderReport& report = result.report;
   report.objects = scene.objects.size();
@@ -563,7 +604,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   std::map<uint64_t, const Body*> loaded_by_key;  // identical objects are read or meshed once
   for (size_t i = 0; i < bodies.size(); ++i) {
     bodies[i].object = &scene.objects[i];
-    Status prepared = prepareBody(scene, settings, max_freq_hz, bodies[i], loaded_by_key, report);
+    Status prepared = prepareBody(scene, settings, max_freq_hz, heard_hz, bodies[i], loaded_by_key, report);
     if (!prepared) return prepared.error();
     if (bodies[i].object->bank.empty()) loaded_by_key.emplace(bodies[i].cache_key, &bodies[i]);
     bodies[i].contact_radius_m = std::cbrt(3.0 * bodies[i].bank->volume_m3 / (4.0 * M_PI));
@@ -681,6 +722,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   std::map<uint64_t, size_t> computed_by_key;  // identical objects share one eigen-solve
   std::map<uint64_t, size_t> solved_by_key;    // similar_reuse: objects of one shape share one solve
   std::map<uint64_t, ModeBank> unit_by_key;    // ...and one transfer per wave speed and modes kept
+  std::map<uint64_t, std::shared_ptr<const ModeBank>> extended_by_key;  // cached banks given more transfer
   for (size_t i = 0; i < bodies.size(); ++i) {
     Body& body = bodies[i];
     if (body.max_velocity_change_m_s == 0.0 && !settings.leave_nothing_out) continue;
@@ -696,8 +738,10 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       continue;
     }
     if (body.file) {
-      Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output),
-                                     settings.session, report);
+      Status read = lacksHeardTransfer(body, settings)
+                        ? extendCachedTransfer(body, settings, extended_by_key, report)
+                        : readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output),
+                                           settings.session, report);
       if (read) continue;
       if (!body.object->bank.empty()) return read.error();  // the user's bank file is damaged
       // A cache entry whose shapes are damaged is recomputed, not trusted.
@@ -725,8 +769,9 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       lock = CacheEntryLock(cachePath(settings.cache_dir, body.cache_key, ".lock"));
       if (lock.held() && !body.from_cache && openCached(settings.cache_dir, body, report)) {
         // Solved by whoever held the lock while this render simulated or waited.
-        if (readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output), settings.session,
-                             report)) {
+        if (lacksHeardTransfer(body, settings) ? extendCachedTransfer(body, settings, extended_by_key, report)
+                                               : readStruckShapes(body, static_cast<uint32_t>(i), result.events,
+                                                                  bool(settings.output), settings.session, report)) {
           body.mesh.reset();
           continue;
         }

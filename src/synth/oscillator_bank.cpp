@@ -284,7 +284,7 @@ struct OscillatorBank::Impl {
     obj.first_mode = static_cast<uint32_t>(modes.size());
     obj.mode_count = static_cast<uint32_t>(desc.eigenvalues.size());
     obj.delay_s = (desc.delay_s >= 0.0 && std::isfinite(desc.delay_s)) ? desc.delay_s : 0.0;
-    const double f_max = std::min(settings.max_freq_hz, 0.45 * fs);
+    const double f_max = synthesizedTopHz(settings.max_freq_hz, fs);
     for (size_t i = 0; i < desc.eigenvalues.size(); ++i) {
       ModeInfo m;
       const double r = desc.radiation_weight.empty()      ? 1.0

@@ -104,16 +104,18 @@ int64_t cellIndex(double offset_m, double cell_m) {
 std::vector<double> radiationWeights(const ModeBank& bank, double distance_m) {
   const size_t modes = bank.modeCount();
   if (!(distance_m > 0.0) || !std::isfinite(distance_m)) return std::vector<double>(modes, 0.0);
-  if (bank.transfer.modeCount() == modes && modes > 0) {
-    // The acoustic transfer's direction average; the engine turns it toward the listener per
-    // impact (sound_paths.cpp).
-    std::vector<double> weights(modes);
-    for (size_t i = 0; i < modes; ++i) weights[i] = bank.transfer.rmsFarField(i) / distance_m;
-    return weights;
-  }
-  std::vector<double> weights = bank.radiation_m2.size() == modes ? bank.radiation_m2 : radiationStrengths(bank);
+  // A mode with an acoustic transfer: its direction average, which the engine turns toward the
+  // listener per impact (sound_paths.cpp). The others (every mode of a bank without one, the
+  // modes above the heard ones in format 6): the listener model's strength.
+  const size_t with_transfer = std::min(bank.transfer.modeCount(), modes);
+  std::vector<double> weights;
+  if (with_transfer < modes)
+    weights = bank.radiation_m2.size() == modes ? bank.radiation_m2 : radiationStrengths(bank);
+  else
+    weights.assign(modes, 0.0);
   const double gain = kAirDensity_kg_m3 / (4.0 * M_PI * distance_m);
-  for (double& w : weights) w *= gain;
+  for (size_t i = 0; i < modes; ++i)
+    weights[i] = i < with_transfer ? bank.transfer.rmsFarField(i) / distance_m : weights[i] * gain;
   return weights;
 }
 
@@ -218,9 +220,9 @@ std::vector<double> radiationEfficiency(const ModeBank& bank) {
   const size_t modes = bank.modeCount();
   const size_t nv = bank.surfaceVertexCount();
   std::vector<double> efficiency(modes, 0.0);
-  if (bank.transfer.modeCount() != modes || bank.shapes.size() < modes * nv * 3) return efficiency;
+  if (bank.shapes.size() < modes * nv * 3) return efficiency;
   const double rho_c = kAirDensity_kg_m3 * kSpeedOfSoundAir_m_s;
-  for (size_t m = 0; m < modes; ++m) {
+  for (size_t m = 0; m < std::min(bank.transfer.modeCount(), modes); ++m) {
     const double omega = std::sqrt(std::max(bank.eigenvalues[m], 0.0));
     // int |a_n|^2 dS over the surface, a_n the normal component of the shape (triangle midpoint rule
     // on the vertex average).

@@ -127,7 +127,10 @@ void SoundEngine::radiationToward(Voice& v, const Arrival paths[], int count, co
   for (int e = 0; e < evaluations; ++e) {
     Voice::PathTransfer& p = v.path_transfer_[static_cast<size_t>(evaluate[e])];
     const std::complex<double>* f = far_field[e];
-    for (size_t i = 0; i < p.factor.size(); ++i) p.factor[i] = std::conj(f[i]) * (v.inv_rms_[i] * p.gain);
+    // The modes with a transfer, then the others as a voice without one hears them (its gain).
+    const size_t heard = v.inv_rms_.size();
+    for (size_t i = 0; i < heard; ++i) p.factor[i] = std::conj(f[i]) * (v.inv_rms_[i] * p.gain);
+    for (size_t i = heard; i < p.factor.size(); ++i) p.factor[i] = std::complex<double>(p.gain, 0.0);
   }
 }
 

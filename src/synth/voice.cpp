@@ -100,16 +100,31 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
   pressure_ = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
   if (!pressure_) return;
   for (PathTransfer& p : path_transfer_) p.factor.assign(modes, std::complex<double>(1.0, 0.0));
-  const AcousticTransfer& t = bank.transfer;
-  if (t.modeCount() == modes && modes > 0) {
+  // The transfer of the modes this engine plays: a prefix, as the modes are ascending and the
+  // band ends at synthesizedTopHz. A mode without one (above what its bank was solved for) is
+  // heard at its direction-averaged level (radiationWeights), as every mode of a bank without a
+  // transfer is; the transfer of modes above the band (solved for a render at a higher rate) is
+  // left out, so that what is heard does not depend on it.
+  const AcousticTransfer& full = bank.transfer;
+  const double top_hz = synthesizedTopHz(settings.synth.max_freq_hz, settings.synth.sample_rate_hz);
+  size_t heard = 0;
+  while (heard < full.modeCount() && bank.frequencyHz(heard) <= top_hz) ++heard;
+  AcousticTransfer prefix;
+  if (heard < full.modeCount()) {
+    prefix.order.assign(full.order.begin(), full.order.begin() + heard);
+    prefix.offset.assign(full.offset.begin(), full.offset.begin() + heard + 1);
+    prefix.coefficients.assign(full.coefficients.begin(), full.coefficients.begin() + full.offset[heard]);
+  }
+  const AcousticTransfer& t = heard < full.modeCount() ? prefix : full;
+  if (heard > 0) {
     const size_t order = t.maxOrder();
     sh_.assign((order + 1) * (order + 1), 0.0);
     sh_table_ = sphericalHarmonicsTable(static_cast<uint32_t>(order));
     transfer_ = compactTransfer(t);
     for (std::vector<float>& w : weights_) w.assign(sh_.size(), 0.0f);
-    for (std::vector<std::complex<double>>& f : far_field_) f.assign(modes, 0.0);
-    inv_rms_.assign(modes, 0.0);
-    for (size_t i = 0; i < modes; ++i) {
+    for (std::vector<std::complex<double>>& f : far_field_) f.assign(heard, 0.0);
+    inv_rms_.assign(heard, 0.0);
+    for (size_t i = 0; i < heard; ++i) {
       const double rms = t.rmsFarField(i);
       inv_rms_[i] = rms > 0.0 ? 1.0 / rms : 0.0;
     }
@@ -126,7 +141,7 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
   const double rate = settings.synth.sample_rate_hz;
   // The filter's cut-off stays in the synthesized band (0.98 of its top): a body smaller than
   // about 4 mm has its click low-passed there instead of at sqrt(2) c / a above the band.
-  const double top_rad_s = 0.98 * 2.0 * M_PI * std::min(settings.synth.max_freq_hz, 0.45 * rate);
+  const double top_rad_s = 0.98 * 2.0 * M_PI * synthesizedTopHz(settings.synth.max_freq_hz, rate);
   ModalObjectDesc click;
   click.radiation_weight.assign(3, desc.pressure_scale / settings.reference_distance_m);
   for (int j = 0; j < 3; ++j) {

@@ -77,15 +77,20 @@ nlohmann::json bankJson(const ModeBank& bank) {
                              {"lanczos", bank.lanczos_seconds},
                              {"total", bank.total_seconds}};
   j["tool_version"] = bank.tool_version;
-  if (bank.transfer.modeCount() == bank.modeCount() && bank.modeCount() > 0) {
+  // Format 6: the first transfer.modeCount() modes have one (those heard at the band the bank was
+  // solved for); the others are heard direction-averaged until a render that plays them solves theirs.
+  if (!bank.transfer.offset.empty() && bank.modeCount() > 0) {
     std::vector<uint32_t> orders(bank.transfer.order.begin(), bank.transfer.order.end());
     std::vector<double> errors(bank.transfer.relative_error.begin(), bank.transfer.relative_error.end());
+    const std::vector<double> efficiency = radiationEfficiency(bank);
+    const size_t with = bank.transfer.modeCount();
     j["transfer"] = {{"method", bank.transfer.method},
+                     {"modes", with},
                      {"seconds", bank.transfer_seconds},
                      {"centre_m", bank.transfer.centre_m},
                      {"order", orders},
                      {"relative_error", errors},
-                     {"radiation_efficiency", radiationEfficiency(bank)},
+                     {"radiation_efficiency", std::vector<double>(efficiency.begin(), efficiency.begin() + with)},
                      {"translation_dipole_m3", bank.transfer.translation_dipole_m3}};
     j["precompute_seconds"]["transfer"] = bank.transfer_seconds;
   } else {
@@ -106,9 +111,16 @@ void printTable(const std::string& path, const ModeBank& bank) {
   std::printf("modes     %zu up to %.0f Hz (max %u); dropped %u rigid, %u above the cut-off; computed in %.2f s\n\n",
               bank.modeCount(), bank.max_freq_hz, bank.max_modes, bank.rigid_modes_dropped, bank.above_cutoff_dropped,
               bank.total_seconds);
-  const bool has_transfer = bank.transfer.modeCount() == bank.modeCount() && bank.modeCount() > 0;
-  if (has_transfer)
+  const size_t with_transfer = bank.transfer.modeCount();
+  const bool has_transfer = !bank.transfer.offset.empty() && bank.modeCount() > 0;
+  if (has_transfer && with_transfer == bank.modeCount())
     std::printf("sound     acoustic transfer (%s) in %.2f s\n\n", bank.transfer.method.c_str(), bank.transfer_seconds);
+  else if (has_transfer)
+    std::printf(
+        "sound     acoustic transfer (%s) in %.2f s for the first %zu modes (the heard ones, to %.0f Hz); a mode "
+        "without one (-) is heard direction-averaged until a render that plays it solves its own\n\n",
+        bank.transfer.method.c_str(), bank.transfer_seconds, with_transfer,
+        with_transfer > 0 ? bank.frequencyHz(with_transfer - 1) : 0.0);
   else
     std::printf(
         "sound     no acoustic transfer (format %u): heard through the direction average of the older "
@@ -122,9 +134,11 @@ void printTable(const std::string& path, const ModeBank& bank) {
     const double t60 = t60Seconds(bank.decayPerS(i));
     std::printf("%5zu %14.3f %12.4g %10.4g", i, bank.frequencyHz(i), bank.decayPerS(i), t60);
     if (has_error) std::printf("  %9.3g%%", 100.0 * bank.frequency_error_estimate[i]);
-    if (has_transfer)
+    if (has_transfer && i < with_transfer)
       std::printf("  %5u %12.3g%% %11.3g", bank.transfer.order[i], 100.0 * bank.transfer.relative_error[i],
                   efficiency[i]);
+    else if (has_transfer)
+      std::printf("  %5s %13s %11s", "-", "-", "-");
     std::printf("\n");
   }
 }

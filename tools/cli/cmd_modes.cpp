@@ -196,7 +196,13 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
       std::fprintf(stderr,
                    "  note        the transfer of %zu of %zu modes is estimated worse than its target %.3g%%: the "
                    "element budget (%u) stops it short (docs/acoustic-transfer.md)\n",
-                   over, bank.modeCount(), 100.0 * target, settings.transfer.max_elements);
+                   over, bank.transfer.modeCount(), 100.0 * target, settings.transfer.max_elements);
+    if (bank.transfer.modeCount() < bank.modeCount())
+      std::fprintf(stderr,
+                   "  heard       the transfer of the %zu modes up to %.0f Hz, what a render plays; the %zu above "
+                   "keep none (a render that plays them solves theirs)\n",
+                   bank.transfer.modeCount(), settings.transfer_max_freq_hz,
+                   bank.modeCount() - bank.transfer.modeCount());
   }
   const std::vector<double>& error = bank.frequency_error_estimate;
   if (!error.empty()) {

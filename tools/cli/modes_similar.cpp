@@ -25,7 +25,7 @@ Result<uint64_t> specHash(const std::string& spec) {
 /// entry KEY.transfer that `strike render --similar --transfer` uses, or solved and put there.
 Status attachTransfer(ModeBank& scaled, const ModeBank& normalized, const NormalizedProblem& problem,
                       const PrecomputeSettings& settings, const std::string& cache_dir, uint64_t normalized_key) {
-  const size_t kept = scaled.modeCount();
+  const size_t kept = modesAtOrBelow(scaled, settings.transfer_max_freq_hz);  // the heard modes
   char name[32];
   std::snprintf(name, sizeof name, "/%016llx.transfer",
                 static_cast<unsigned long long>(unitTransferCacheKey(normalized_key, settings, kept)));

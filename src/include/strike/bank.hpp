@@ -23,10 +23,12 @@ namespace strike {
 /// (docs/bank-format.md). Version 4 is version 3 with the shapes stored as 16-bit integers and a
 /// scale per mode (ShapeEncoding::Int16, `strike modes --compact`): half the shape bytes, each
 /// value within 1.54e-5 of its mode's largest surface amplitude (half a step, 1/65534, plus float
-/// rounding). Version 5 adds the acoustic transfer (chunk ACTF) to either encoding.
-constexpr uint32_t kBankFormatVersion = 5;
+/// rounding). Version 5 adds the acoustic transfer (chunk ACTF) to either encoding, for every
+/// mode. Version 6 is version 5 with the transfer of a prefix of the modes only (the heard ones:
+/// ACTF's mode count may be below the bank's), and an ACTF of no mode holding the dipole alone.
+constexpr uint32_t kBankFormatVersion = 6;
 /// The newest version this build reads (it reads every older one).
-constexpr uint32_t kBankFormatVersionMax = 5;
+constexpr uint32_t kBankFormatVersionMax = 6;
 
 /// How a bank file stores its mode shapes.
 enum class ShapeEncoding {
@@ -64,8 +66,10 @@ struct ModeBank {
   /// #modes radiation strengths R_i (m^2 / sqrt(kg)) of the listener model (synth radiation.cpp),
   /// computed once with the modes so renders need not; empty in banks that predate it.
   std::vector<double> radiation_m2;
-  /// Per-mode far field as a function of direction (acoustic_transfer.hpp); empty in banks of
-  /// formats 1-4, which the listener hears through radiation_m2 (direction-averaged) instead.
+  /// Per-mode far field as a function of direction (acoustic_transfer.hpp) of the first
+  /// transfer.modeCount() modes: every mode in format 5, the heard ones (at or below the band a
+  /// render plays) in format 6. Empty in banks of formats 1-4 and solved without it; a mode
+  /// without a transfer is heard through radiation_m2 (direction-averaged) instead.
   AcousticTransfer transfer;
 
   // The surface: collision shape and where impacts land.

@@ -98,8 +98,9 @@ Result<ModeBank> solveUnitTransfer(const ModeBank& normalized, const PrecomputeS
 bool isUnitTransferOf(const ModeBank& cached, const ModeBank& normalized, const PrecomputeSettings& actual,
                       size_t kept_modes);
 
-/// Sets `scaled.transfer` (a bank from scaleNormalizedBank, kept_modes modes) to the unit
-/// transfer `unit` scaled to its object: F' = shape_factor s^2 F, the dipole times s^3.
+/// Sets `scaled.transfer` (a bank from scaleNormalizedBank) to the unit transfer `unit` scaled to
+/// its object: F' = shape_factor s^2 F, the dipole times s^3. The unit transfer keeps the heard
+/// modes (modesAtOrBelow the object's transfer_max_freq_hz), a prefix of the bank's.
 Status attachUnitTransfer(ModeBank& scaled, const ModeBank& unit, const NormalizedProblem& problem,
                           const PrecomputeSettings& actual);
 

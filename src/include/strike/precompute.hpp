@@ -10,6 +10,7 @@
 #include "strike/material.hpp"
 #include "strike/mesh.hpp"
 #include "strike/modal.hpp"
+#include "strike/synth.hpp"
 #include "strike/transfer_solver.hpp"
 
 namespace strike {
@@ -39,6 +40,12 @@ struct PrecomputeSettings {
   /// --tolerance trials, which solve it once on the bank they choose). Part of the cache key.
   bool acoustic_transfer = false;
   TransferSettings transfer;  ///< air and resolution of the transfer solve
+  /// The transfer is solved only for the modes at or below this: those a render can play,
+  /// synthesizedTopHz(its max_freq, its sample rate); by default a render's at 48 kHz, 20 kHz.
+  /// The modes above are kept without one (for other uses, at no cost), and a render that plays
+  /// more solves theirs then (extendTransfer). Not part of the cache key: the bank records which
+  /// modes have a transfer (a prefix, AcousticTransfer::modeCount()).
+  double transfer_max_freq_hz = synthesizedTopHz(SynthSettings{}.max_freq_hz, SynthSettings{}.sample_rate_hz);
 };
 
 struct PrecomputeReport {
@@ -71,9 +78,22 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
 /// scene can be simulated before deciding which objects need an eigen-solve.
 ModeBank massAndSurfaceBank(const LoadedMesh& loaded, const PrecomputeSettings& settings);
 
-/// Solves bank.transfer from the bank's modes and surface and sets bank.transfer_seconds (not
-/// total_seconds: callers that time a whole precompute include it there themselves).
-Status solveTransferInto(ModeBank& bank, const TransferSettings& settings, const ProgressFn& progress = {});
+/// How many of the bank's modes lie at or below `max_freq_hz`: its heard modes, a prefix (the
+/// modes are ascending), the ones a render whose band ends there plays.
+size_t modesAtOrBelow(const ModeBank& bank, double max_freq_hz);
+
+/// Solves bank.transfer for the modes at or below `max_freq_hz` (modesAtOrBelow) from the bank's
+/// modes and surface and sets bank.transfer_seconds (not total_seconds: callers that time a whole
+/// precompute include it there themselves). The modes above keep no transfer.
+Status solveTransferInto(ModeBank& bank, const TransferSettings& settings, double max_freq_hz,
+                         const ProgressFn& progress = {});
+
+/// Makes bank.transfer cover its first `modes` modes: solves the modes it lacks, [its modeCount(),
+/// modes), on their own and appends them (a first solve, from none, also solves the rigid
+/// translation's dipole); adds their time to transfer_seconds. A mode's transfer depends on its
+/// own data only, so the extended bank holds the bits of a bank solved to `modes` at once. Nothing
+/// to do when it covers them already. The bank's shapes must be loaded.
+Status extendTransfer(ModeBank& bank, size_t modes, const TransferSettings& settings, const ProgressFn& progress = {});
 
 /// Cache key of the bank that `settings` would compute from a mesh whose source hashes to
 /// mesh_hash: every input that changes the result goes in.

@@ -124,6 +124,9 @@ struct RenderReport {
   /// and number of modes kept; normalized_problem.hpp) solved by this render, read from the cache,
   /// and taken from an earlier object of this render; each body's is its unit transfer, scaled.
   size_t transfers_solved = 0, transfers_cached = 0, transfers_shared = 0;
+  /// Cached banks whose transfer stopped short of the modes this render plays (solved for a lower
+  /// band) and got the rest now, written back to the cache.
+  size_t transfers_extended = 0;
   /// Surface vertices whose mode shapes were read from given or cached bank files, of all theirs
   /// (a render reads shapes only where its contacts land).
   size_t shape_vertices_read = 0, shape_vertices_total = 0;

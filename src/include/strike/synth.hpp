@@ -9,6 +9,7 @@
 // under-damped modes), so there is no step-size limit and any damping is stable.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <complex>
 #include <cstddef>
@@ -24,10 +25,21 @@ namespace strike {
 /// level the CPU lacks falls back to the next narrower one (see OscillatorBank::simdName()).
 enum class SimdLevel { Auto, Scalar, Avx2, Avx512 };
 
+/// The top of the band a render synthesizes, as a fraction of its sample rate (a margin below
+/// Nyquist, 0.5). The one definition of it: the oscillator bank's band, the modes a render
+/// computes, and the modes that get an acoustic transfer all follow it.
+constexpr double kBandTopOfSampleRate = 0.45;
+
+/// The highest frequency a render at `sample_rate_hz` synthesizes with `max_freq_hz` asked for:
+/// min(max_freq_hz, 0.45 fs). A mode at or below it is played (OscillatorBank), above it never.
+inline double synthesizedTopHz(double max_freq_hz, double sample_rate_hz) {
+  return std::min(max_freq_hz, kBandTopOfSampleRate * sample_rate_hz);
+}
+
 struct SynthSettings {
   double sample_rate_hz = 48000.0;
   double min_freq_hz = 20.0;     ///< modes below are not synthesized
-  double max_freq_hz = 20000.0;  ///< modes above min(this, 0.45 * sample rate) are not synthesized
+  double max_freq_hz = 20000.0;  ///< modes above synthesizedTopHz(this, sample rate) are not synthesized
   /// Output amplitude (same units as the output) below which a mode is not started and at which
   /// a ringing mode goes to sleep. Default ~ -120 dB re full scale 1.0.
   double audibility_threshold = 1e-6;
@@ -331,7 +343,7 @@ std::vector<double> radiationWeights(const ModeBank& bank, double distance_m);
 std::vector<double> radiationStrengths(const ModeBank& bank);
 /// Per mode, the radiation efficiency of its acoustic transfer: radiated power over
 /// rho c <|v_n|^2> S / 2, the power of the same surface velocity as a plane wave [Fahy &
-/// Gardonio, Sound and Structural Vibration, 2007, sec. 3.4]. Zeros for a bank without one.
+/// Gardonio, Sound and Structural Vibration, 2007, sec. 3.4]. Zero for a mode without one.
 std::vector<double> radiationEfficiency(const ModeBank& bank);
 
 }  // namespace strike

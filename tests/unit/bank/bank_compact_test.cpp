@@ -45,7 +45,7 @@ TEST(CompactBank, ShapesRoundTripWithinTheStatedErrorAtHalfTheBytes) {
   EXPECT_EQ(saved, 40 * 1000 * 3 * 2 - 40 * 4 + 8 * (blocks_f32 - blocks_i16));
   Result<ModeBank> read = decodeBank(i16.data(), i16.size(), "compact.modes");
   ASSERT_TRUE(read) << read.error().message;
-  EXPECT_EQ(read->format_version, 5u);
+  EXPECT_EQ(read->format_version, kBankFormatVersion);
   EXPECT_EQ(read->shape_encoding, ShapeEncoding::Int16);
   EXPECT_EQ(read->eigenvalues, bank.eigenvalues);
   EXPECT_EQ(read->surface_positions, bank.surface_positions);

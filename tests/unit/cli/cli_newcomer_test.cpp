@@ -253,8 +253,8 @@ TEST(NewcomerCompactBank, ModesCompactWritesInt16ShapesWithTheSameModes) {
   ASSERT_EQ(runCli(common + "/i16.modes' --compact").exit_code, 0);
   const nlohmann::json a = nlohmann::json::parse(runCli("info --json '" + dir + "/f32.modes'").out);
   const nlohmann::json b = nlohmann::json::parse(runCli("info --json '" + dir + "/i16.modes'").out);
-  EXPECT_EQ(a["format_version"], 5);
-  EXPECT_EQ(b["format_version"], 5);
+  EXPECT_EQ(a["format_version"], 6);
+  EXPECT_EQ(b["format_version"], 6);
   EXPECT_EQ(a["shape_encoding"], "float32");
   EXPECT_EQ(b["shape_encoding"], "int16");
   EXPECT_EQ(a["frequencies_hz"], b["frequencies_hz"]);

@@ -6,7 +6,7 @@
  *  - the level: every note at velocity 127 stays under full scale and the loudest peaks at the
  *    plugin's stated -6 dBFS; a medium note (velocity 64) is well under 0 dBFS; the lowest mode's
  *    line grows with velocity as the impulse does (the plugin's velocity map: speed
- *    0.05 * 100^(velocity / 127) m/s, impulse m v); the gain port scales by its dB value.
+ *    0.05 * 100^(velocity / 127) m/s, impulse 2 m* v); the gain port scales by its dB value.
  * Usage: lv2_host_test (LV2_PATH set to the directories holding strike.lv2, absolute or
  * relative to the working directory). Exit 0 on success. */
 #define _XOPEN_SOURCE 700 /* realpath */
@@ -194,7 +194,7 @@ int main(void) {
     ++failures;
   }
   /* The 440 Hz line is far below the contact pulse's corner (< 0.1 ms contacts), so its amplitude
-   * follows the impulse m v: the ratio of the velocity map's speeds, 100^(63/127) = 9.83. */
+   * follows the impulse 2 m* v: the ratio of the velocity map's speeds, 100^(63/127) = 9.83. */
   impulse_ratio = pow(100.0, (127.0 - 64.0) / 127.0);
   line_ratio = dft(hard, FRAMES, 440, 48000) / dft(medium, FRAMES, 440, 48000);
   printf("440 Hz line, velocity 127 / 64: %.3f (impulse ratio %.3f)\n", line_ratio, impulse_ratio);

@@ -4,9 +4,11 @@
  *  - The bank is strike.modes in the bundle (replace it with any `strike modes` output).
  *  - Note number picks the strike point: surface vertex (note * 37) mod V, a fixed scatter
  *    over the surface so neighbouring keys hit different places (nodes and antinodes differ).
- *  - Velocity picks the impact speed v = 0.05 * 100^(velocity / 127) m/s (0.05 .. 5 m/s) of a
- *    10 mm, 50 g steel ball; the impulse is m v along the inward normal and the Hertz contact
- *    time falls as v^(-1/5), so harder notes are louder AND brighter.
+ *  - Velocity picks the impact speed v = 0.05 * 100^(velocity / 127) m/s (0.05 .. 5 m/s) of the
+ *    library's default striker (strike_impact_desc_default(): a steel ball 5 mm in radius, as
+ *    `strike hit`); it rebounds elastically, so the impulse is 2 m* v along the inward normal
+ *    (m* the reduced mass), and the Hertz contact time falls as v^(-1/5): harder notes are
+ *    louder AND brighter.
  *  - Level: the object is normalised when the plugin is instantiated, so that the loudest note
  *    at velocity 127 peaks at -6 dBFS (two such notes struck together cannot clip) whatever the
  *    bank: every note is struck once at velocity 127 in a private probe context and the peak of
@@ -34,7 +36,6 @@
 #define STRIKE_LV2_MAX_BLOCK 4096u
 #define STRIKE_LV2_LOUDEST_NOTE_PEAK 0.5 /* -6 dBFS: the loudest note at velocity 127 */
 #define STRIKE_LV2_NOTES 128
-#define STRIKER_MASS_KG 0.05 /* the striking ball's mass (radius 5 mm, see note_impact) */
 /* How long each probe note is rendered, s: at least 4 periods of the lowest mode (the peak of a
  * struck object comes within its first few periods), within these bounds. */
 #define STRIKE_LV2_PROBE_MIN_S 0.02
@@ -53,6 +54,7 @@ typedef struct {
   strike_bank bank;
   strike_object_id object;
   uint32_t vertices;
+  double mass_kg; /* the object's, for the striker's impulse */
 } StrikeLv2;
 
 static double loudest_note_peak(const strike_context_config* cfg, const char* bank_path,
@@ -106,6 +108,7 @@ static LV2_Handle instantiate(const LV2_Descriptor* descriptor, double rate, con
   info.struct_size = sizeof info; /* libstrike 0.3: writes no more than this */
   if (strike_bank_get_info(self->bank, &info) != STRIKE_OK) info.surface_vertex_count = 0;
   self->vertices = info.surface_vertex_count;
+  self->mass_kg = info.mass_kg;
   ocfg = strike_object_config_default();
   ocfg.bank = self->bank;
   ocfg.position[1] = 1.0; /* 1 m in front of the listener */
@@ -140,12 +143,13 @@ static void connect_port(LV2_Handle instance, uint32_t port, void* data) {
 }
 
 /* The impact of one note: the note picks the vertex, the velocity the speed of the ball. */
-static strike_impact_desc note_impact(strike_bank bank, uint32_t vertices, strike_object_id object, uint8_t note,
-                                      uint8_t velocity, uint32_t frame) {
+static strike_impact_desc note_impact(strike_bank bank, uint32_t vertices, double mass_kg, strike_object_id object,
+                                      uint8_t note, uint8_t velocity, uint32_t frame) {
   strike_impact_desc hit = strike_impact_desc_default();
   double normal[3] = {0, 0, 1};
   const double speed = 0.05 * pow(100.0, (double)velocity / 127.0);
-  const double impulse = STRIKER_MASS_KG * speed;
+  const double striker_kg = hit.striker_mass_kg;
+  const double impulse = 2.0 * striker_kg * mass_kg / (striker_kg + mass_kg) * speed;
   hit.object = object;
   hit.surface_vertex = (int32_t)(((uint32_t)note * 37u) % vertices);
   strike_bank_surface_vertex(bank, (uint32_t)hit.surface_vertex, NULL, normal);
@@ -153,14 +157,13 @@ static strike_impact_desc note_impact(strike_bank bank, uint32_t vertices, strik
   hit.impulse[1] = -impulse * normal[1];
   hit.impulse[2] = -impulse * normal[2];
   hit.normal_speed_m_s = speed;
-  hit.striker_radius_m = 0.005;
-  hit.striker_mass_kg = STRIKER_MASS_KG;
   hit.sample_offset = frame;
   return hit;
 }
 
 static void note_on(StrikeLv2* self, uint8_t note, uint8_t velocity, uint32_t frame) {
-  const strike_impact_desc hit = note_impact(self->bank, self->vertices, self->object, note, velocity, frame);
+  const strike_impact_desc hit =
+      note_impact(self->bank, self->vertices, self->mass_kg, self->object, note, velocity, frame);
   (void)strike_impact(self->ctx, &hit); /* a full queue drops the note; counted in stats */
 }
 
@@ -214,7 +217,7 @@ static double loudest_note_peak(const strike_context_config* cfg, const char* ba
     strike_impact_desc hit;
     uint32_t done = 0, k;
     if (strike_object_add(probe, &ocfg, &id) != STRIKE_OK) break;
-    hit = note_impact(bank, vertices, id, (uint8_t)note, 127, 0);
+    hit = note_impact(bank, vertices, info.mass_kg, id, (uint8_t)note, 127, 0);
     (void)strike_impact(probe, &hit);
     while (done < frames) {
       float* out[2];

@@ -123,7 +123,9 @@ def modes(mesh: Union[str, os.PathLike], material: Union[str, Mapping[str, Any]]
     mesh: a surface mesh (.obj .stl .ply), a tet mesh (.msh, TetGen .node/.ele) or a primitive in
         metres centred at the origin: ``box:LX,LY,LZ``, ``sphere:R``, ``cylinder:R,H``.
     material: a built-in name (:func:`material_names`) or a dict (see :func:`material`).
-    order: 1 (Tet4) or 2 (Tet10); default 1. Not with ``tolerance``.
+    order: 1 (Tet4) or 2 (Tet10); default from the shape, as ``strike modes`` without ``--order``
+        (Tet10 for thin walls, plates and bars, Tet4 for solids; a tet file keeps its own).
+        Not with ``tolerance``.
     tolerance: relative frequency error (0.01 = 1 %); picks the cheapest order and size whose
         estimated error meets it (``--tolerance``).
     size: target tet edge, m; default chosen from the object's size.
@@ -145,9 +147,7 @@ def modes(mesh: Union[str, os.PathLike], material: Union[str, Mapping[str, Any]]
         if error_estimate is False:
             raise _bad("tolerance needs the error estimate; drop error_estimate=False")
         tolerance = _number("tolerance", tolerance, 1e-300, float("inf"), "must be > 0")
-    if order is None:
-        order = 1
-    if order not in (1, 2) or isinstance(order, bool):
+    if order is not None and (order not in (1, 2) or isinstance(order, bool)):
         raise _bad(f"order = {order!r} (must be 1 or 2)")
     size_m = 0.0 if size is None else _number("size", size, 1e-300, float("inf"), "must be > 0 metres")
     max_freq = _number("max_freq", max_freq, 1e-300, float("inf"), "must be > 0 Hz")
@@ -157,7 +157,8 @@ def modes(mesh: Union[str, os.PathLike], material: Union[str, Mapping[str, Any]]
         max_tets = _strike.default_max_tets()
     if not isinstance(max_tets, int) or max_tets < 1:
         raise _bad(f"max_tets = {max_tets!r} (must be >= 1)")
-    return _strike.modes(mesh, mat, int(order), size_m, max_freq, max_modes, max_tets, error_estimate, tolerance,
+    order = 0 if order is None else int(order)  # 0: the library's automatic order
+    return _strike.modes(mesh, mat, order, size_m, max_freq, max_modes, max_tets, error_estimate, tolerance,
                          bool(transfer))
 
 

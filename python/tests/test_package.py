@@ -77,6 +77,26 @@ def test_render_equals_the_cli_byte_for_byte(repo, cli, cache_dir, tmp_path):
     np.testing.assert_allclose(result.events["normal_force_n"], result.events["normal_impulse_n_s"] / 1e-3, rtol=1e-12)
 
 
+def test_default_bank_and_tap_equal_the_clis(cli, tmp_path):
+    """With no order, Python's bank is the CLI's (the library's automatic order: Tet10 for this thin
+    bar, where Tet4 rang 8% sharp; steel named, as the CLI has no default material), and
+    strike.hit()'s default tap is `strike hit`'s."""
+    bank_path = tmp_path / "default.modes"
+    r = run([cli, "modes", BAR, "--material", "steel", "--max-modes", "4", "--size", "0.005", "--no-error-estimate",
+             "--no-transfer", "-o", bank_path])
+    assert r.returncode == 0, r.stderr
+    assert "Tet10 chosen" in r.stderr
+    bank = strike.modes(BAR, max_modes=4, size=0.005, error_estimate=False, transfer=False)
+    cli_bank = strike.Bank.load(bank_path)
+    assert bank.element_order == cli_bank.element_order == 2
+    assert np.array_equal(bank.eigenvalues, cli_bank.eigenvalues)
+    wav = tmp_path / "tap.wav"
+    r = run([cli, "hit", bank_path, "-o", wav, "--duration", "0.2", "--quiet"])
+    assert r.returncode == 0, r.stderr
+    audio = strike.hit(cli_bank, duration=0.2)
+    assert np.array_equal(audio.view(np.uint32), wav_float_samples(wav).view(np.uint32))
+
+
 def test_modes_and_hit_equal_the_cli(cli, tmp_path):
     bank_path = tmp_path / "cli.modes"
     r = run([cli, "modes", BAR, "--material", "steel", "--order", "2", "--max-modes", "8", "--no-error-estimate", "-o", bank_path, "--quiet"])

@@ -165,10 +165,15 @@ STRIKE_API strike_impact_desc STRIKE_CALL strike_impact_desc_default(void) {
   std::memset(&d, 0, sizeof d);
   d.frame = STRIKE_FRAME_OBJECT;
   d.surface_vertex = -1;
-  d.normal_speed_m_s = 1.0;
+  // The library's striker (defaultStriker: a steel ball 5 mm in radius), its speed from the
+  // impulse: the tap `strike hit` and Python's strike.hit() strike by default.
+  const ContactPartner striker = defaultStriker();
+  d.normal_speed_m_s = 0.0;
   d.contact_duration_s = -1.0;
-  d.striker_radius_m = 0.01;
-  d.striker_poisson = 0.3;
+  d.striker_radius_m = striker.radius_m;
+  d.striker_youngs_pa = striker.youngs_pa;
+  d.striker_poisson = striker.poisson;
+  d.striker_mass_kg = striker.mass_kg;
   d.pulse = STRIKE_PULSE_HALF_SINE;
   return d;
 }

@@ -5,7 +5,8 @@
 // requested is promoted (straight mid-edge nodes). A Tet10 file with order 1 requested stays
 // Tet10, with a warning: its mid-edge nodes may be curved (a deliberately made quadratic mesh)
 // and dropping them would throw away geometry and accuracy the user paid for. The returned
-// mesh.order says which order was used, and the bank records it.
+// mesh.order says which order was used, and the bank records it. Order 0 keeps a file's order
+// without a word and builds Tet4 (the precompute's automatic order decides from that mesh).
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -83,9 +84,11 @@ void keepFileOrder(TetMesh& mesh, const MeshOptions& options, const std::string&
 
 Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  if (options.order != 1 && options.order != 2) {
+  if (options.order != 0 && options.order != 1 && options.order != 2) {
     return badInput("element order " + std::to_string(options.order) + " (must be 1 or 2)");
   }
+  MeshOptions built = options;  // what a mesh built here (primitive, surface file) is made with
+  if (built.order == 0) built.order = 1;
   if (!std::isfinite(options.target_edge_m) || options.target_edge_m < 0.0) {
     std::ostringstream s;
     s << "mesh size " << options.target_edge_m << " m (must be >= 0; 0 picks one automatically)";
@@ -114,7 +117,7 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
     loaded.source_hash = fnv1a64(spec.data(), spec.size());
     const std::vector<double>& v = *values;
     if (kind == "box") {
-      Result<TetMesh> mesh = makeBox(v[0], v[1], v[2], options);
+      Result<TetMesh> mesh = makeBox(v[0], v[1], v[2], built);
       if (!mesh) return mesh.error();
       loaded.mesh = std::move(*mesh);
       return finish();
@@ -123,7 +126,7 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
     Result<SurfaceMesh> surface = kind == "sphere" ? makeSphereSurface(v[0], options.target_edge_m)
                                                    : makeCylinderSurface(v[0], v[1], options.target_edge_m);
     if (!surface) return surface.error();
-    Result<TetMesh> mesh = tetrahedralize(*surface, options, spec);
+    Result<TetMesh> mesh = tetrahedralize(*surface, built, spec);
     if (!mesh) return mesh.error();
     loaded.mesh = std::move(*mesh);
     return finish();
@@ -146,7 +149,7 @@ Result<LoadedMesh> loadTetMesh(const std::string& spec, const MeshOptions& optio
     Result<SurfaceMesh> surface = readSurfaceMesh(spec, &loaded.warnings);
     if (!surface) return surface.error();
     if (options.scale != 1.0) surface->V *= options.scale;  // to metres before TetGen sizes anything
-    Result<TetMesh> mesh = tetrahedralize(*surface, options, spec);
+    Result<TetMesh> mesh = tetrahedralize(*surface, built, spec);
     if (!mesh) return mesh.error();
     loaded.mesh = std::move(*mesh);
     return finish();

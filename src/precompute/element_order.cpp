@@ -6,6 +6,9 @@
 #include <cmath>
 #include <cstdio>
 
+#include "strike/error_estimate.hpp"
+#include "strike/precompute.hpp"
+
 namespace strike {
 
 OrderChoice chooseElementOrder(const TetMesh& mesh) {
@@ -32,6 +35,14 @@ OrderChoice chooseElementOrder(const TetMesh& mesh) {
                 thin ? "thin, Tet4 would lock in bending" : "a solid, Tet4 does not lock");
   choice.reason = text;
   return choice;
+}
+
+Result<LoadedMesh> loadMeshFor(const PrecomputeSettings& settings) {
+  Result<LoadedMesh> loaded = loadTetMesh(settings.mesh_spec, meshOptionsFor(settings));
+  if (!loaded || settings.order != kAutoOrder || !canRemesh(settings.mesh_spec)) return loaded;
+  // Same tets (the cap loadTetMesh checked still holds), mid-edge nodes added.
+  if (chooseElementOrder(loaded->mesh).order == 2) loaded->mesh = promoteToTet10(loaded->mesh);
+  return loaded;
 }
 
 }  // namespace strike

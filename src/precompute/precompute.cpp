@@ -70,7 +70,7 @@ namespace {
 Status checkSettings(const PrecomputeSettings& settings) {
   Status valid = validateMaterial(settings.material, "material");
   if (!valid) return valid;
-  if (settings.order != 1 && settings.order != 2)
+  if (settings.order != kAutoOrder && settings.order != 1 && settings.order != 2)
     return badInput("--order = " + std::to_string(settings.order) + " (must be 1 or 2)");
   if (!(settings.max_freq_hz > 0))
     return badInput("--max-freq = " + std::to_string(settings.max_freq_hz) + " (must be > 0)");
@@ -175,6 +175,8 @@ uint64_t bankCacheKey(uint64_t mesh_hash, const PrecomputeSettings& settings) {
                                static_cast<uint64_t>(settings.max_modes), kBankFormatVersion};
   uint64_t key = fnv1a64(numbers, sizeof numbers);
   key = fnv1a64(integers, sizeof integers, key);
+  // The automatic order is the rule's answer: another rule, another bank.
+  if (settings.order == kAutoOrder) key = fnv1a64(&kThinWallFraction, sizeof kThinWallFraction, key);
   // Only a scaled mesh hashes its scale, so banks cached before "units" existed keep their keys.
   if (settings.mesh_scale != 1.0) key = fnv1a64(&settings.mesh_scale, sizeof settings.mesh_scale, key);
   // A bank with an acoustic transfer is another bank than one without, and so is one solved to
@@ -215,7 +217,7 @@ MeshOptions meshOptionsFor(const PrecomputeSettings& settings) {
 Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings) {
   Status valid = checkSettings(settings);
   if (!valid) return valid.error();
-  Result<LoadedMesh> loaded = loadTetMesh(settings.mesh_spec, meshOptionsFor(settings));
+  Result<LoadedMesh> loaded = loadMeshFor(settings);
   if (!loaded) return loaded.error();
   return computeModeBankForMesh(*loaded, settings);
 }
@@ -278,14 +280,16 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
   if (const std::string locking = lockingWarning(mesh.order, settings.material); !locking.empty())
     result.report.warnings.push_back({locking});
   // Tet4 on a thin shape locks in bending: its frequencies come out far too high (a mug 108%).
-  // `strike modes` picks Tet10 there by itself; a scene object asked for (or defaulted to) Tet4.
-  if (mesh.order == 1) {
-    const OrderChoice choice = chooseElementOrder(mesh);
-    if (choice.order == 2)
-      result.report.warnings.push_back({"thin shape (" + choice.reason +
-                                        "): Tet4 frequencies come out far too high (a mug with 4 mm walls: 108%); "
-                                        "use order 2 (scene \"order\": 2, strike modes --order 2)"});
-  }
+  // The automatic order picks Tet10 there; an explicit order 1 (or a Tet4 tet file) is warned.
+  const OrderChoice choice = chooseElementOrder(mesh);
+  if (mesh.order == 1 && choice.order == 2)
+    result.report.warnings.push_back({"thin shape (" + choice.reason +
+                                      "): Tet4 frequencies come out far too high (a mug with 4 mm walls: 108%); "
+                                      "use order 2 (scene \"order\": 2, strike modes --order 2), or leave the "
+                                      "order out (automatic)"});
+  if (settings.order == kAutoOrder)
+    result.report.order_reason = "Tet" + std::string(mesh.order == 2 ? "10" : "4") + " chosen: " +
+                                 (canRemesh(settings.mesh_spec) ? choice.reason : "the tet file's own order");
 
   const std::string problem = bank.checkConsistency();
   if (!problem.empty()) return internalError("the computed mode bank is inconsistent: " + problem);

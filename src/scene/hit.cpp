@@ -74,22 +74,20 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
   if (settings.impulse_n_s)
     for (int a = 0; a < 3; ++a) impulse[a] = (*settings.impulse_n_s)[a];
 
-  // How long the contact lasts: Hertz theory for a sphere striking a locally flat surface, at the
-  // speed that gives this impulse in an elastic rebound (J = 2 m* v); the engine's own rule.
-  ContactPartner striker_sphere;
+  // How long the contact lasts: Hertz theory for a ball striking a locally flat surface, at the
+  // speed that gives this impulse in an elastic rebound (tapSpeed); the engine's own rule. The
+  // default striker is the library's (defaultStriker: steel, 5 mm), as libstrike's.
+  ContactPartner striker_ball;
   double speed = 0.0;
   if (!settings.contact_time_s) {
     Result<Material> striker = builtinMaterials().find(settings.striker);
     if (!striker) return striker.error();
-    const double radius = settings.striker_radius_m;
-    const double striker_mass = striker->density_kg_m3 * 4.0 / 3.0 * M_PI * std::pow(radius, 3);
-    const double reduced_mass = striker_mass * bank.mass_kg / (striker_mass + bank.mass_kg);
+    striker_ball.youngs_pa = striker->youngs_pa;
+    striker_ball.poisson = striker->poisson;
+    striker_ball.radius_m = settings.striker_radius_m;
+    striker_ball.mass_kg = ballMass(striker->density_kg_m3, settings.striker_radius_m);
     const double j_normal = std::fabs(impulse[0] * normal[0] + impulse[1] * normal[1] + impulse[2] * normal[2]);
-    speed = j_normal / (2.0 * reduced_mass);
-    striker_sphere.youngs_pa = striker->youngs_pa;
-    striker_sphere.poisson = striker->poisson;
-    striker_sphere.radius_m = radius;
-    striker_sphere.mass_kg = striker_mass;
+    speed = tapSpeed(j_normal, striker_ball.mass_kg, bank.mass_kg);
   }
 
   // The sound engine with one voice, as `strike render` and libstrike run it. The listener is
@@ -117,7 +115,7 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
   if (settings.listener_m) listener.position_m = *settings.listener_m;
   engine.setListener(listener);
   const double contact_time_s = settings.contact_time_s ? *settings.contact_time_s
-                                : speed > 0.0           ? engine.contactDuration(0, striker_sphere, speed)
+                                : speed > 0.0           ? engine.contactDuration(0, striker_ball, speed)
                                                         : 0.0;
   EngineImpact impact;
   impact.voice = 0;

@@ -24,6 +24,7 @@
 #include "strike/bank.hpp"
 #include "strike/bank_cache.hpp"
 #include "strike/contact_noise.hpp"
+#include "strike/element_order.hpp"
 #include "strike/materials.hpp"
 #include "strike/normalized_problem.hpp"
 #include "strike/precompute.hpp"
@@ -148,7 +149,7 @@ Status scaleGeometry(Body& body) {
 
 /// Loads the normalized mesh (to solve, and for mass and surface until then).
 Status loadNormalMesh(Body& body) {
-  Result<LoadedMesh> loaded = loadTetMesh(body.normal.settings.mesh_spec, meshOptionsFor(body.normal.settings));
+  Result<LoadedMesh> loaded = loadMeshFor(body.normal.settings);
   if (!loaded) return badInput("objects \"" + body.object->name + "\": " + loaded.error().message);
   body.mesh = std::move(*loaded);
   return {};
@@ -368,7 +369,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
     return {};
   }
   if (!settings.cache_dir.empty() && openCached(settings.cache_dir, body, report)) return {};
-  Result<LoadedMesh> loaded = loadTetMesh(object.mesh, meshOptionsFor(body.precompute));
+  Result<LoadedMesh> loaded = loadMeshFor(body.precompute);
   if (!loaded) return badInput("objects \"" + object.name + "\": " + loaded.error().message);
   body.bank = std::make_shared<const ModeBank>(massAndSurfaceBank(*loaded, body.precompute));
   body.mesh = std::move(*loaded);
@@ -752,7 +753,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
         --report.banks_cached;
         report.precompute_saved_seconds -= body.bank->factorize_seconds + body.bank->lanczos_seconds;
       }
-      Result<LoadedMesh> loaded = loadTetMesh(body.object->mesh, meshOptionsFor(body.precompute));
+      Result<LoadedMesh> loaded = loadMeshFor(body.precompute);
       if (!loaded) return badInput("objects \"" + body.object->name + "\": " + loaded.error().message);
       body.mesh = std::move(*loaded);
     }

@@ -30,6 +30,24 @@ double norm6(const std::array<double, 6>& v) {
 
 }  // namespace
 
+double ballMass(double density_kg_m3, double radius_m) {
+  return density_kg_m3 * 4.0 / 3.0 * M_PI * std::pow(radius_m, 3);
+}
+
+ContactPartner defaultStriker() {
+  ContactPartner striker;
+  striker.youngs_pa = kDefaultStrikerYoungs_pa;
+  striker.poisson = kDefaultStrikerPoisson;
+  striker.radius_m = kDefaultStrikerRadius_m;
+  striker.mass_kg = ballMass(kDefaultStrikerDensity_kg_m3, kDefaultStrikerRadius_m);
+  return striker;
+}
+
+double tapSpeed(double j_normal_n_s, double striker_kg, double object_kg) {
+  const double reduced_mass = striker_kg > 0.0 ? striker_kg * object_kg / (striker_kg + object_kg) : object_kg;
+  return reduced_mass > 0.0 ? j_normal_n_s / (2.0 * reduced_mass) : 0.0;
+}
+
 double SoundEngine::contactDuration(uint32_t slot, const ContactPartner& partner, double normal_speed_m_s) const {
   const Voice* v = voice(slot);
   return v ? hertzDuration(*v, partner, normal_speed_m_s) : 0.0;
@@ -208,7 +226,22 @@ void SoundEngine::impact(const EngineImpact& d) {
   } else {
     v->projector_.projectOnce(point.data(), impulse.data(), v->modal_.data());
   }
-  const double duration = d.contact_duration_s < 0.0 ? hertzDuration(*v, d.partner, d.normal_speed_m_s)
+  double speed = d.normal_speed_m_s;
+  if (d.contact_duration_s < 0.0 && !(speed > 0.0)) {
+    // The striker's speed from the impulse (tapSpeed), along the normal of the vertex nearest
+    // the point (the largest of its triangle's weights), as `strike hit` reckons it.
+    size_t vertex = static_cast<size_t>(std::max(d.surface_vertex, 0));
+    if (d.surface_vertex < 0 || vertex >= bank.surfaceVertexCount()) {
+      uint32_t corners[3] = {0, 0, 0};
+      double weights[3] = {1, 0, 0};
+      v->projector_.locator().nearest(point.data(), corners, weights);
+      vertex = corners[std::max_element(weights, weights + 3) - weights];
+    }
+    const float* n = &bank.surface_normals[3 * vertex];
+    speed =
+        tapSpeed(std::fabs(impulse[0] * n[0] + impulse[1] * n[1] + impulse[2] * n[2]), d.partner.mass_kg, v->mass_kg_);
+  }
+  const double duration = d.contact_duration_s < 0.0 ? hertzDuration(*v, d.partner, speed)
                                                      : std::min(d.contact_duration_s, settings_.max_contact_duration_s);
   scheduleImpact(*v, v->modal_.data(), d.time_s >= 0.0 ? d.time_s : time(), duration, d.shape, world, impulse);
 }

@@ -7,12 +7,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <string>
 #include <vector>
 
 #include "cli/run_cli.hpp"
 #include "strike/audio.hpp"
 #include "strike/bank.hpp"
+#include "strike/materials.hpp"
 #include "strike/strike.h"
 #include "test_bank.hpp"  // the hand-made plate: modes at 440, 1000, 2500, 5200 Hz
 
@@ -116,6 +118,107 @@ TEST_F(OutputLevel, FullScaleSettingScalesTheOutput) {
   EXPECT_EQ(by_default, twenty) << "the default is 20 Pa full scale";
   const double ratio = levelOf(pascals).rms / levelOf(by_default).rms;
   EXPECT_NEAR(ratio, 20.0, 20.0 * 1e-5) << "output_full_scale_pa = 1 writes pascals";
+}
+
+/// Power-weighted mean frequency of |X(f)|^2 over 0..rate/2 (Hann window, radix-2 FFT).
+double spectralCentroidHz(const std::vector<float>& x, double rate) {
+  size_t n = 1;
+  while (n < x.size()) n *= 2;
+  std::vector<std::complex<double>> a(n);
+  for (size_t i = 0; i < x.size(); ++i)
+    a[i] = x[i] * (0.5 - 0.5 * std::cos(2 * M_PI * static_cast<double>(i) / static_cast<double>(x.size())));
+  for (size_t i = 1, j = 0; i < n; ++i) {  // bit reversal
+    size_t bit = n >> 1;
+    for (; j & bit; bit >>= 1) j ^= bit;
+    j ^= bit;
+    if (i < j) std::swap(a[i], a[j]);
+  }
+  for (size_t len = 2; len <= n; len *= 2) {
+    const std::complex<double> w1 = std::polar(1.0, -2 * M_PI / static_cast<double>(len));
+    for (size_t i = 0; i < n; i += len) {
+      std::complex<double> w = 1;
+      for (size_t k = 0; k < len / 2; ++k, w *= w1) {
+        const std::complex<double> u = a[i + k], v = a[i + k + len / 2] * w;
+        a[i + k] = u + v, a[i + k + len / 2] = u - v;
+      }
+    }
+  }
+  double weighted = 0, total = 0;
+  for (size_t k = 0; k <= n / 2; ++k) {
+    const double power = std::norm(a[k]);
+    weighted += power * static_cast<double>(k) * rate / static_cast<double>(n);
+    total += power;
+  }
+  return weighted / total;
+}
+
+/// The default tap through the C API: strike_impact_desc_default() with only the object, the
+/// vertex and the impulse set (0.01 N s into the surface, `strike hit`'s default impulse).
+std::vector<float> defaultTapThroughCApi(const std::string& bank_path) {
+  strike_context_config cfg = strike_context_config_default();
+  cfg.sample_rate_hz = kRate;
+  cfg.channels = 1;
+  cfg.max_block_frames = 512;
+  strike_context ctx = nullptr;
+  EXPECT_EQ(strike_context_create(&cfg, &ctx), STRIKE_OK);
+  if (!ctx) return {};
+  strike_bank bank = nullptr;
+  EXPECT_EQ(strike_bank_load_file(ctx, bank_path.c_str(), &bank), STRIKE_OK) << strike_context_last_error(ctx);
+  strike_object_config ocfg = strike_object_config_default();
+  ocfg.bank = bank;
+  ocfg.position[1] = kDistance_m;
+  strike_object_id id{};
+  EXPECT_EQ(strike_object_add(ctx, &ocfg, &id), STRIKE_OK) << strike_context_last_error(ctx);
+  double normal[3] = {0, 0, 0};
+  EXPECT_EQ(strike_bank_surface_vertex(bank, kVertex, nullptr, normal), STRIKE_OK);
+  strike_impact_desc hit = strike_impact_desc_default();
+  hit.object = id;
+  hit.surface_vertex = static_cast<int32_t>(kVertex);
+  for (int a = 0; a < 3; ++a) hit.impulse[a] = -0.01 * normal[a];
+  EXPECT_EQ(strike_impact(ctx, &hit), STRIKE_OK);
+  std::vector<float> out(static_cast<size_t>(kSeconds * kRate));
+  for (size_t done = 0; done < out.size(); done += 512) {
+    float* channel = out.data() + done;
+    EXPECT_EQ(strike_render(ctx, &channel, 1, static_cast<uint32_t>(std::min<size_t>(512, out.size() - done))),
+              STRIKE_OK);
+  }
+  strike_bank_destroy(bank);
+  strike_context_destroy(ctx);
+  return out;
+}
+
+// The same tap with every front-end's defaults: `strike hit` (and Python's strike.hit(), which
+// gives its bytes, python/tests) and libstrike's strike_impact_desc_default() strike with one
+// striker, so they sound the same. Before, libstrike's default (a 10 mm ball of the object's
+// material, immovable, 1 m/s) rang a kilogram bar ~30 dB quieter and duller.
+TEST_F(OutputLevel, DefaultTapSoundsTheSameThroughStrikeHitAndTheCApi) {
+  const std::string wav = testing::TempDir() + "/capi_default_tap.wav";
+  char args[256];
+  std::snprintf(args, sizeof args, "--vertex %u --distance %.17g --duration %.17g --rate %.17g --quiet", kVertex,
+                kDistance_m, kSeconds, kRate);
+  const test::CliResult r = test::runCli("hit '" + bank_ + "' -o '" + wav + "' " + args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  Result<AudioBuffer> cli = readAudio(wav);
+  ASSERT_TRUE(cli) << cli.error().message;
+  const std::vector<float> capi = defaultTapThroughCApi(bank_);
+  const double peak_db = 20 * std::log10(levelOf(capi).peak / levelOf(cli->samples).peak);
+  const double centroid_cli = spectralCentroidHz(cli->samples, kRate);
+  const double centroid_capi = spectralCentroidHz(capi, kRate);
+  std::printf("default tap: peak %+.3f dB (C API / strike hit), centroid %.1f Hz / %.1f Hz\n", peak_db, centroid_capi,
+              centroid_cli);
+  EXPECT_NEAR(peak_db, 0.0, 1.0);
+  EXPECT_NEAR(centroid_capi / centroid_cli, 1.0, 0.05);
+}
+
+// The library's striker is steel as the material table has it (`strike hit --striker steel`).
+TEST(DefaultStriker, IsTheMaterialTablesSteel) {
+  const strike_impact_desc d = strike_impact_desc_default();
+  Result<Material> steel = builtinMaterials().find("steel");
+  ASSERT_TRUE(steel);
+  EXPECT_EQ(d.striker_youngs_pa, steel->youngs_pa);
+  EXPECT_EQ(d.striker_poisson, steel->poisson);
+  EXPECT_DOUBLE_EQ(d.striker_mass_kg, steel->density_kg_m3 * 4.0 / 3.0 * M_PI * std::pow(d.striker_radius_m, 3));
+  EXPECT_LE(d.normal_speed_m_s, 0.0) << "the speed comes from the impulse";
 }
 
 TEST(OutputLevelConfig, FullScaleMustBePositiveAndFinite) {

@@ -340,9 +340,10 @@ int runModes(const std::vector<std::string>& raw_args) {
   Result<Material> material = materialFromArgs(args);
   if (!material) return reportError("modes", material.error());
   settings.material = *material;
-  Result<long long> order = args.integer("--order", 1);
+  // No --order: the library's automatic order (src/precompute/element_order.cpp).
+  Result<long long> order = args.integer("--order", kAutoOrder);
   if (!order) return reportError("modes", order.error());
-  if (*order != 1 && *order != 2)
+  if (args.has("--order") && *order != 1 && *order != 2)
     return reportError("modes", badInput("--order = " + args.text("--order") + " (must be 1 or 2)"));
   settings.order = static_cast<int>(*order);
   if (args.has("--transfer") && args.has("--no-transfer"))
@@ -378,20 +379,6 @@ int runModes(const std::vector<std::string>& raw_args) {
   for (const char* option : {"--max-memory", "--max-seconds"})
     if (args.has(option) && !args.has("--tolerance"))
       return reportError("modes", badInput(std::string(option) + " is a budget for --tolerance; give --tolerance too"));
-  // No --order: Tet10 for thin shapes, Tet4 for solids (src/precompute/element_order.cpp), judged on
-  // the automatic Tet4 mesh (one extra meshing). Tet files keep their own order.
-  std::string order_reason;
-  if (!args.has("--order") && !args.has("--tolerance") && canRemesh(settings.mesh_spec)) {
-    MeshOptions probe_options;
-    probe_options.max_tets = settings.max_tets;
-    Result<LoadedMesh> probe = loadTetMesh(settings.mesh_spec, probe_options);
-    if (!probe) return reportError("modes", probe.error());
-    const OrderChoice choice = chooseElementOrder(probe->mesh);
-    settings.order = choice.order;
-    order_reason =
-        "Tet" + std::string(choice.order == 2 ? "10" : "4") + " chosen: " + choice.reason + " (--order to override)";
-  }
-
   if (args.has("--error-estimate") && args.has("--no-error-estimate"))
     return reportError("modes", badInput("--error-estimate and --no-error-estimate contradict each other"));
   // Default: on when the mesh can be coarsened (Richardson, ~10-25% extra; see
@@ -423,7 +410,8 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (!written) return reportError("modes", written.error());
   if (!quiet) {
     printSummary(settings, *result, output);
-    if (!order_reason.empty()) std::fprintf(stderr, "  order       %s\n", order_reason.c_str());
+    if (!result->report.order_reason.empty())
+      std::fprintf(stderr, "  order       %s (--order to override)\n", result->report.order_reason.c_str());
     if (args.has("--similar")) {
       const NormalizedProblem problem = normalizeProblem(settings);
       std::fprintf(stderr, "  similar     scaled from a solve of %s (x %.9g m, its lowest %d modes)%s%s\n",

@@ -151,6 +151,25 @@ struct ContactPartner {
   double restitution = 0.5;
 };
 
+/// The striker of a tap whose caller names none. `strike hit`, the Python package's strike.hit(),
+/// libstrike's strike_impact_desc_default() and the LV2 plugin all strike with it, so the same
+/// tap sounds the same from each: a steel ball 5 mm in radius (4.11 g), free, that meets the
+/// object at the speed giving the tap's impulse in an elastic rebound (tapSpeed). Steel as in
+/// assets/materials.json (a test checks that they agree).
+constexpr double kDefaultStrikerRadius_m = 0.005;
+constexpr double kDefaultStrikerYoungs_pa = 2.0e11;
+constexpr double kDefaultStrikerPoisson = 0.29;
+constexpr double kDefaultStrikerDensity_kg_m3 = 7850.0;
+
+/// Mass of a ball, kg.
+double ballMass(double density_kg_m3, double radius_m);
+/// The default striker (kDefaultStriker*) as a contact partner.
+ContactPartner defaultStriker();
+/// The speed at which a free striker of mass striker_kg (0: immovable) meets a free object of
+/// mass object_kg when it rebounds elastically with normal impulse j_normal: J = 2 m* v, with m*
+/// the reduced mass. 0 when there is no mass to move.
+double tapSpeed(double j_normal_n_s, double striker_kg, double object_kg);
+
 /// One body's side of one contact point in one physics step.
 struct EngineContact {
   uint32_t voice = 0;
@@ -178,6 +197,8 @@ struct EngineImpact {
   bool world_frame = false;
   int32_t surface_vertex = -1;  ///< >= 0: at this surface vertex (point ignored)
   std::array<double, 3> point{}, impulse{};
+  /// Approach speed for the Hertz time; <= 0: the partner's tapSpeed for the impulse's component
+  /// along the surface normal where it strikes (the partner then needs a mass).
   double normal_speed_m_s = 1.0;
   double contact_duration_s = -1.0;  ///< < 0: Hertz; 0: ideal impulse; > 0: this long
   ContactPartner partner;

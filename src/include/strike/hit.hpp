@@ -10,6 +10,7 @@
 
 #include "strike/audio.hpp"
 #include "strike/bank.hpp"
+#include "strike/engine.hpp"
 #include "strike/result.hpp"
 #include "strike/synth.hpp"
 
@@ -26,8 +27,8 @@ struct HitSettings {
   std::optional<std::array<double, 3>> listener_m;  ///< or the listener here (mesh frame; distance_m unused)
   double gain = 1.0;                                ///< on top of kFullScalePascal
   std::optional<double> contact_time_s;             ///< force pulse length; default from Hertz theory
-  std::string striker = "steel";                    ///< striker sphere material (Hertz contact time)
-  double striker_radius_m = 0.005;
+  std::string striker = "steel";                    ///< striker ball material (Hertz contact time)
+  double striker_radius_m = kDefaultStrikerRadius_m;  ///< the defaults are the library's striker (defaultStriker)
   SimdLevel simd = SimdLevel::Auto;  ///< the synthesizer's kernel (last bits only)
 };
 

@@ -43,7 +43,9 @@ constexpr int64_t kDefaultMaxTets = 2'000'000;
 
 /// Options for turning a MESH argument into a TetMesh.
 struct MeshOptions {
-  int order = 1;                   ///< 1: Tet4, 2: Tet10 (mid-edge nodes added, straight edges)
+  /// 1: Tet4, 2: Tet10 (mid-edge nodes added, straight edges). 0: a tet file's own order, a mesh
+  /// built here Tet4: what the precompute's automatic order (kAutoOrder) judges the shape on.
+  int order = 1;
   double target_edge_m = 0.0;      ///< target tet edge length; 0 picks one from the bounding box
   double radius_edge_ratio = 1.4;  ///< TetGen quality bound (-q), smaller = better shaped tets
   /// Size cap (memory and time of the FEM and eigen-solve): a mesh with more tets, or a surface

@@ -18,7 +18,9 @@ namespace strike {
 struct PrecomputeSettings {
   std::string mesh_spec;  ///< file path or primitive ("box:0.3,0.02,0.02")
   Material material;
-  int order = 1;             ///< 1 Tet4, 2 Tet10
+  /// 1 Tet4, 2 Tet10, kAutoOrder (0, the default of every front-end): chosen from the shape by
+  /// chooseElementOrder (src/precompute/element_order.cpp).
+  int order = 0;
   double target_edge_m = 0;  ///< 0: automatic
   double mesh_scale = 1.0;   ///< metres per unit of a mesh file (MeshOptions::scale); primitives ignore it
   double max_freq_hz = 20000.0;
@@ -59,6 +61,7 @@ struct PrecomputeReport {
   double error_estimate_seconds = 0.0;
   double error_estimate_ratio = 0.0;  ///< h_coarse / h_fine of the Richardson pair
   size_t error_estimate_coarse_dofs = 0;
+  std::string order_reason;  ///< with kAutoOrder: why this order (one line for the summary)
 };
 
 struct PrecomputeResult {
@@ -66,10 +69,11 @@ struct PrecomputeResult {
   PrecomputeReport report;
 };
 
-/// The meshing options these settings ask for (order, size, cap, progress).
+/// The meshing options these settings ask for (order, size, cap, progress). loadMeshFor() is the
+/// mesh a precompute solves on (it resolves kAutoOrder).
 MeshOptions meshOptionsFor(const PrecomputeSettings& settings);
 
-/// Runs the precompute. Errors name the mesh, the material field or the solver failure.
+/// Runs the precompute on loadMeshFor(settings). Errors name the mesh, the material field or the solver failure.
 Result<PrecomputeResult> computeModeBank(const PrecomputeSettings& settings);
 /// The same from a mesh already loaded (settings.mesh_spec is recorded, not read again).
 Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const PrecomputeSettings& settings);

@@ -23,7 +23,7 @@ struct SceneObject {
   Material material;
   std::string units = "m";     ///< unit of the mesh file's coordinates: "m", "cm" or "mm"
   double mesh_scale = 1.0;     ///< metres per mesh unit (1, 0.01, 0.001), from units
-  int order = 1;               ///< element order when the bank is computed
+  int order = 0;               ///< element order when the bank is computed; 0: kAutoOrder
   double size_m = 0.0;         ///< target tet edge when the bank is computed (0 = automatic)
   bool is_static = false;      ///< never moves (a table); still sounds when struck
   std::string shape = "auto";  ///< collision shape: auto, convex, pieces, concave (docs/contact.md)

@@ -451,16 +451,21 @@ typedef struct strike_impact_desc {
   int32_t surface_vertex;
   double point[3];   /**< contact point, m */
   double impulse[3]; /**< impulse applied TO the object, N s */
-  /** Relative normal speed at contact, m/s (> 0), for the Hertz contact time: faster is
-   *  shorter, so harder hits are brighter. Default 1. */
+  /** Relative normal speed at contact, m/s, for the Hertz contact time: faster is shorter, so
+   *  harder hits are brighter. <= 0 (default): the speed at which the striker (of
+   *  striker_mass_kg; immovable when 0) meets the object to give this impulse in an elastic
+   *  rebound, J.n = 2 m* v with m* the reduced mass and n the surface normal where it strikes. */
   double normal_speed_m_s;
   /** < 0 (default): Hertz duration from normal_speed_m_s and the materials; 0: an ideal
    *  impulse; > 0: this duration, s. Always capped at max_contact_duration_s. */
   double contact_duration_s;
-  double striker_radius_m;  /**< radius of the striking body at contact, m; 0 = flat. Default 0.01 */
-  double striker_youngs_pa; /**< 0 (default): same material as the object */
-  double striker_poisson;   /**< used when striker_youngs_pa > 0; default 0.3 */
-  double striker_mass_kg;   /**< 0 (default): immovable (infinite mass) */
+  /* The striker. The defaults (since 0.5) are the striker of `strike hit` and the Python
+   * package's strike.hit(): a steel ball 5 mm in radius (E 200 GPa, nu 0.29, 7850 kg/m^3,
+   * 4.11 g), so the same tap sounds the same from each. */
+  double striker_radius_m;  /**< radius of the striking body at contact, m; 0 = flat. Default 0.005 */
+  double striker_youngs_pa; /**< 0: same material as the object. Default 2e11 (steel) */
+  double striker_poisson;   /**< used when striker_youngs_pa > 0; default 0.29 (steel) */
+  double striker_mass_kg;   /**< 0: immovable (infinite mass). Default 4.11e-3 (the steel ball) */
   /** Frames after the start of the next strike_render() at which the contact begins
    *  (sample-accurate scheduling within or beyond that block). Default 0. */
   uint32_t sample_offset;

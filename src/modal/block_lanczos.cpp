@@ -65,9 +65,36 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   const Eigen::Index locked = static_cast<Eigen::Index>(found.lambdas.size());
   const Eigen::Index b = block;
   const Eigen::Index max_steps = std::max<Eigen::Index>(2, max_basis / b);
-  Eigen::MatrixXd Q(n, (max_steps + 1) * b);
-  Eigen::MatrixXd MQ(n, (max_steps + 1) * b);
-  Eigen::MatrixXd T = Eigen::MatrixXd::Zero((max_steps + 1) * b, (max_steps + 1) * b);
+  // The basis is taken as it is needed: first enough for what a cut-off usually leaves, then
+  // twice as much each time it fills, each growth forecast against the budget first. A request
+  // for more modes than the band holds then costs no more than one for fewer (the cut-off ends
+  // the run before the basis grows). Q and M Q grow by columns (a realloc: no copy of the big
+  // blocks where the allocator can move pages); T, small, is copied.
+  Eigen::Index capacity_steps = std::min<Eigen::Index>(max_steps, std::max<Eigen::Index>(2, kFirstBasisVectors / b));
+  if (Status fits =
+          checkMemoryForecast(ctx, static_cast<double>((capacity_steps + 1) * b),
+                              std::min<double>(want, (capacity_steps + 1) * b / 3.0), "for its first Lanczos basis");
+      !fits)
+    return fits.error();
+  Eigen::MatrixXd Q(n, (capacity_steps + 1) * b);
+  Eigen::MatrixXd MQ(n, (capacity_steps + 1) * b);
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero((capacity_steps + 1) * b, (capacity_steps + 1) * b);
+  auto grow = [&]() -> Status {
+    const Eigen::Index steps = std::min<Eigen::Index>(max_steps, 2 * capacity_steps);
+    const Eigen::Index columns = (steps + 1) * b;
+    if (Status fits = checkMemoryForecast(ctx, static_cast<double>(columns), std::min<double>(want, columns / 3.0),
+                                          "to grow its Lanczos basis to " + std::to_string(columns) +
+                                              " vectors (the band holds more modes than the basis has found)");
+        !fits)
+      return fits;
+    Q.conservativeResize(Eigen::NoChange, columns);
+    MQ.conservativeResize(Eigen::NoChange, columns);
+    Eigen::MatrixXd bigger = Eigen::MatrixXd::Zero(columns, columns);
+    bigger.topLeftCorner(T.rows(), T.cols()) = T;
+    T = std::move(bigger);
+    capacity_steps = steps;
+    return {};
+  };
 
   auto deflate = [&](Eigen::MatrixXd& W) {
     if (locked > 0) W.noalias() -= found.vectors * (found.m_vectors.transpose() * W);
@@ -137,6 +164,9 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
   Eigen::Index next_check = 0;
   for (Eigen::Index j = 0; j < max_steps; ++j) {
     const Eigen::Index k = (j + 1) * b;  // basis size after this step's block
+    if (j + 1 > capacity_steps) {
+      if (Status grown = grow(); !grown) return grown.error();
+    }
     auto t0 = Clock::now();
     if (!ctx.solver.solve(MQ.middleCols(j * b, b).data(), W.data(), static_cast<int>(b), ctx.parts)) {
       return internalError("eigensolver: CHOLMOD block solve failed");

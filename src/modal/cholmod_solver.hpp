@@ -20,7 +20,10 @@ class CholmodSolver {
   CholmodSolver(const CholmodSolver&) = delete;
   CholmodSolver& operator=(const CholmodSolver&) = delete;
 
-  /// Factors A (both triangles stored; CHOLMOD reads the lower one).
+  /// The symbolic analysis of A (fill-reducing ordering, supernodes): returns the bytes the
+  /// numeric factorization will take, before it takes them.
+  Result<double> analyze(const Eigen::SparseMatrix<double>& A);
+  /// Factors A (both triangles stored; CHOLMOD reads the lower one), after analyze(A) or alone.
   Status factorize(const Eigen::SparseMatrix<double>& A);
 
   /// x = A^{-1} b for ncols right-hand sides stored column-major with leading dimension n.

@@ -31,6 +31,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <new>
 #include <sstream>
@@ -55,10 +56,12 @@ namespace strike {
 namespace {
 
 using detail::blockLanczos;
+using detail::checkMemoryForecast;
 using detail::CholmodSolver;
 using detail::Clock;
 using detail::Context;
 using detail::Found;
+using detail::kFirstBasisVectors;
 using detail::lanczosChunk;
 using detail::secondsSince;
 using detail::SpMat;
@@ -110,7 +113,7 @@ constexpr double kTwoPi = 6.283185307179586476925286766559;
 /// angular frequency of one element, whatever the units or material. A tiny fraction of it
 /// keeps K - sigma M well conditioned (cond ~ lambda_max / |sigma| ~ 1e5) while staying far
 /// below the wanted eigenvalues, where the shift would slow Lanczos convergence down.
-double chooseShift(const SpMat& K, const SpMat& M, double lambda_cut) {
+double medianDiagonalRatio(const SpMat& K, const SpMat& M) {
   std::vector<double> ratio;
   ratio.reserve(static_cast<size_t>(K.rows()));
   const Eigen::VectorXd dk = K.diagonal();
@@ -118,13 +121,27 @@ double chooseShift(const SpMat& K, const SpMat& M, double lambda_cut) {
   for (Eigen::Index i = 0; i < K.rows(); ++i) {
     if (dk[i] > 0.0 && dm[i] > 0.0) ratio.push_back(dk[i] / dm[i]);
   }
-  if (ratio.empty()) return -1.0;
+  if (ratio.empty()) return 0.0;
   std::nth_element(ratio.begin(), ratio.begin() + static_cast<std::ptrdiff_t>(ratio.size() / 2), ratio.end());
-  const double scale = ratio[ratio.size() / 2];
+  return ratio[ratio.size() / 2];
+}
+
+double chooseShift(double scale, double lambda_cut) {
+  if (!(scale > 0.0)) return -1.0;
   double shift = 1e-4 * scale;
   if (std::isfinite(lambda_cut)) shift = std::min(shift, 0.05 * lambda_cut);
   shift = std::max(shift, 1e-9 * scale);
   return -shift;
+}
+
+std::string memoryFrequencyText(double hz) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g Hz", hz);
+  return text;
+}
+
+double sparseBytes(const SpMat& A) {
+  return 12.0 * static_cast<double>(A.nonZeros()) + 4.0 * static_cast<double>(A.cols() + 1);
 }
 
 Result<ModalResult> solveDense(const SpMat& K, const SpMat& M, ModalResult out, Eigen::VectorXd& lambdas,
@@ -169,7 +186,8 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   const double lambda_cut = std::pow(kTwoPi * settings.max_freq_hz, 2);
   const double lambda_rigid = std::pow(kTwoPi * settings.rigid_freq_hz, 2);
   ModalResult out;
-  out.sigma = chooseShift(K, M, lambda_cut);
+  const double element_scale = medianDiagonalRatio(K, M);
+  out.sigma = chooseShift(element_scale, lambda_cut);
   // A rigid mode's computed eigenvalue is round-off, ~eps * |sigma| * cond: count anything
   // below a tiny fraction of the shift as rigid too, whatever rigid_freq_hz says.
   const double lambda_zero = std::max(lambda_rigid, 1e-6 * std::abs(out.sigma));
@@ -206,14 +224,36 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     const auto t_factor = Clock::now();
     if (settings.progress) settings.progress("factorize", 0.0);
     SpMat A = K - out.sigma * M;
+    // Forecast before the factor and the basis are taken: the factor's size is exact once the
+    // symbolic analysis has ordered A (a small fraction of the factorization's time).
+    Result<double> factor_bytes = solver->analyze(A);
+    if (!factor_bytes) return factor_bytes.error();
+    Context ctx{K, M_pruned, *solver, out.sigma, settings};
+    ctx.matrices_bytes = sparseBytes(K) + sparseBytes(M) + sparseBytes(M_pruned) + sparseBytes(A);
+    ctx.factor_bytes = *factor_bytes;
+    // A cut-off above the elements' own frequency leaves every mode the mesh has in the band:
+    // then the request is all the cap asks for, and its whole basis is forecast at once.
+    const double wanted = settings.max_modes + 7.0;
+    const double full_basis = std::min<double>(n - 1, kBasisFactor * wanted + 2 * kBlockSize);
+    const bool band_holds_the_mesh = lambda_cut >= element_scale;
+    const double first_basis =
+        band_holds_the_mesh ? full_basis : std::min<double>(full_basis, kFirstBasisVectors + kBlockSize);
+    if (Status fits = checkMemoryForecast(
+            ctx, first_basis, band_holds_the_mesh ? std::min<double>(wanted, n) : std::min(wanted, first_basis / 3.0),
+            band_holds_the_mesh ? "for the factorization and the Lanczos basis of every mode up to " +
+                                      memoryFrequencyText(settings.max_freq_hz) +
+                                      " (above the mesh's own element frequency: the band holds all its modes)"
+                                : std::string("for the factorization and its first Lanczos basis"));
+        !fits)
+      return fits.error();
     Status st = solver->factorize(A);
     if (!st) return st.error();
+    ctx.matrices_bytes -= sparseBytes(A);
     A = SpMat();
     out.factorize_seconds = secondsSince(t_factor);
     if (settings.progress) settings.progress("factorize", 1.0);
 
     const auto t_lanczos = Clock::now();
-    Context ctx{K, M_pruned, *solver, out.sigma, settings};
     ctx.parts = &parts;
     Found found;
     // A small request (at most kArpackModes pairs): ARPACK alone, to full accuracy. A larger
@@ -284,6 +324,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     out.block_size = ctx.block_size;
     out.lanczos_basis = ctx.basis;
     out.reorthogonalizations = ctx.reorthogonalizations;
+    out.forecast_bytes = ctx.forecast_bytes;
     all_lambdas = Eigen::Map<Eigen::VectorXd>(found.lambdas.data(), static_cast<Eigen::Index>(found.lambdas.size()));
     all_vectors = std::move(found.vectors);
     all_m_vectors = std::move(found.m_vectors);
@@ -381,6 +422,49 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
 }
 
 }  // namespace
+
+namespace detail {
+
+Status checkMemoryForecast(Context& ctx, double basis_vectors, double modes, const std::string& when) {
+  const double n = static_cast<double>(ctx.K.rows());
+  const double basis_bytes = modalWorkspaceBytes(n, 0.0, basis_vectors, modes);
+  const double total = ctx.matrices_bytes + ctx.factor_bytes + basis_bytes;
+  ctx.forecast_bytes = std::max(ctx.forecast_bytes, total);
+  const double budget = ctx.settings.max_bytes;
+  if (!(budget > 0.0) || total <= budget) return {};
+  char text[640];
+  std::snprintf(text, sizeof text,
+                "the eigen-solve of %.0f DOF would need about %s %s (K and M %s, the factorization %s, a Lanczos "
+                "basis of %.0f vectors with the modes it finds %s): more than the memory budget of %s. Raise "
+                "--max-memory (default: the memory available), or ask for less: a coarser mesh (--size) or fewer "
+                "modes (--max-modes, --max-freq)",
+                n, memoryText(total).c_str(), when.c_str(), memoryText(ctx.matrices_bytes).c_str(),
+                memoryText(ctx.factor_bytes).c_str(), basis_vectors, memoryText(basis_bytes).c_str(),
+                memoryText(budget).c_str());
+  return badInput(text);
+}
+
+}  // namespace detail
+
+double modalWorkspaceBytes(double n, double nnz_k, double basis, double modes) {
+  // K, M, M with its zeros pruned (a third of K's entries) and the shifted matrix: 12 bytes a
+  // nonzero (value and row index).
+  const double matrices = 12.0 * nnz_k * (1.0 + 1.0 + 1.0 / 3.0 + 1.0);
+  // The basis Q and M Q (n x basis), the projection T and its working copy, the Ritz vectors,
+  // the block's own vectors (a few n x 16 blocks), and the pairs found with M times them.
+  const double lanczos = 8.0 * (2.0 * n * basis + 3.0 * basis * basis + 8.0 * n * 16.0);
+  const double found = 8.0 * 2.0 * n * modes;
+  return matrices + lanczos + found;
+}
+
+std::string memoryText(double bytes) {
+  char text[32];
+  if (bytes >= 1e9)
+    std::snprintf(text, sizeof text, "%.2f GB", bytes / 1e9);
+  else
+    std::snprintf(text, sizeof text, "%.0f MB", std::ceil(bytes / 1e6));
+  return text;
+}
 
 void useOneBlasThread() {
   if (openblas_set_num_threads == nullptr || blas_thread_shutdown_ == nullptr) return;

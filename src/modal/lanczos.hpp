@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "cholmod_solver.hpp"
@@ -50,7 +51,22 @@ struct Context {
   int block_size = 0;
   int basis = 0;
   int reorthogonalizations = 0;
+  /// Bytes held through the Lanczos stage besides its basis (K, M, the factor); the basis
+  /// forecasts each growth against the solve's budget (ModalSettings::max_bytes; 0: none).
+  double matrices_bytes = 0.0, factor_bytes = 0.0;
+  double forecast_bytes = 0.0;  ///< the largest forecast made
 };
+
+/// Checks a forecast of the whole solve against the budget: bad input naming the forecast, its
+/// parts and what to change when it is over (eigensolver.cpp).
+Status checkMemoryForecast(Context& ctx, double basis_vectors, double modes, const std::string& when);
+
+/// The first block Lanczos basis, in vectors: enough for the modes a 20 kHz cut-off leaves on the
+/// examples (the bar 144 vectors for its 29 pairs, the bowl 240 for 58); a request beyond them
+/// grows the basis only when the band holds more.
+constexpr int kFirstBasisVectors = 256;
+/// Pairs a basis of k vectors converges, at most about k / 4 (measured: the two above, and the
+/// 4.5x basis of a request the cap limits); the forecast counts k / 3.
 
 /// One ARPACK run for `nev` eigenpairs of OP deflated against `found`; appends the converged
 /// pairs to `found`. Returns the number appended (arpack_lanczos.cpp).

@@ -101,6 +101,7 @@ Result<CoarseSolve> solveCoarse(const TetMesh& mesh, const PrecomputeSettings& s
   // up to twice the highest fine frequency (and never fewer than one mode).
   modal.max_freq_hz = std::max(2.0 * fine_max_hz, 1e-3);
   modal.max_modes = static_cast<int>(std::max<size_t>(1, wanted));
+  modal.max_bytes = settings.max_memory_bytes;
   Result<ModalResult> modes = solveModesExclusive(K, M, modal);
   if (!modes) return modes.error();
   CoarseSolve out;
@@ -262,9 +263,16 @@ Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, co
     if (finer && !affordable)
       report.note = "a finer mesh for the estimate would have " + std::to_string(3 * finer->loaded.mesh.nodes.rows()) +
                     " DOF, more than " + std::to_string(kMaxFinerEstimateDofs);
+    Result<CoarseSolve> solved = internalError("not solved");
     if (affordable) {
-      Result<CoarseSolve> solved = solveCoarse(finer->loaded.mesh, settings, modes, fine_max_hz);
-      if (!solved) return solved.error();
+      solved = solveCoarse(finer->loaded.mesh, settings, modes, fine_max_hz);
+      // A finer solve over the memory budget: the estimate falls back on the bound below.
+      if (!solved && solved.error().kind != ErrorKind::BadInput) return solved.error();
+      if (!solved)
+        report.note = "the finer mesh's solve (" + std::to_string(3 * finer->loaded.mesh.nodes.rows()) +
+                      " DOF) is over the memory budget";
+    }
+    if (affordable && solved) {
       const double r =
           std::cbrt(static_cast<double>(finer->loaded.mesh.tets.rows()) / static_cast<double>(fine.tets.rows()));
       const double rp = r * r;
@@ -438,6 +446,14 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     }
     say(announce);
     Result<PrecomputeResult> trial = computeModeBankForMesh(loaded, trial_settings);
+    // A later step whose own solve forecasts more than the budget ends the refinement as the
+    // step's forecast above would have (the finest result kept).
+    if (!trial && trial.error().kind == ErrorKind::BadInput && !out.trials.empty() && options.max_bytes > 0) {
+      out.stopped_by_budget = true;
+      out.stop_reason = "stopped in step " + std::to_string(step + 1) + ": " + trial.error().message;
+      say(out.stop_reason);
+      break;
+    }
     if (!trial) return trial.error();
     ToleranceTrial t;
     t.order = 2;

@@ -244,6 +244,7 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
   modal.max_modes = settings.max_modes;
   modal.rigid_freq_hz = settings.rigid_freq_hz;
   modal.progress = settings.progress;
+  modal.max_bytes = settings.max_memory_bytes;
   Result<ModalResult> modes = solveModesExclusive(K, M, modal);
   if (!modes) return modes.error();
 
@@ -259,6 +260,8 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
   result.report.operator_applications = modes->operator_applications;
   if (settings.acoustic_transfer) {
     // The acoustic transfer: a phase of its own, part of the bank's cost (total_seconds).
+    if (Status fits = checkTransferMemory(bank, settings.transfer, settings.max_memory_bytes); !fits)
+      return fits.error();
     if (Status solved = solveTransferInto(bank, settings.transfer, settings.transfer_max_freq_hz, settings.progress);
         !solved)
       return solved.error();

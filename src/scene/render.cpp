@@ -353,6 +353,7 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   body.precompute.max_freq_hz = max_freq_hz;
   body.precompute.max_modes = scene.max_modes;
   body.precompute.max_tets = settings.max_tets;
+  body.precompute.max_memory_bytes = settings.max_memory_bytes;
   body.precompute.progress = settings.progress;
   body.precompute.acoustic_transfer = settings.acoustic_transfer;
   body.precompute.transfer_max_freq_hz = heard_hz;

@@ -3,8 +3,11 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
+
+#include "strike/parse_size.hpp"
 
 namespace strike::cli {
 
@@ -130,6 +133,33 @@ Result<ParsedArgs> parseArgs(const CommandSpec& spec, const std::vector<std::str
   return parsed;
 }
 
+std::string wrapHelp(const std::string& text, size_t indent, size_t width) {
+  std::string out;
+  size_t column = indent;
+  std::istringstream lines(text);
+  std::string line;
+  bool first_line = true;
+  while (std::getline(lines, line)) {
+    if (!first_line) out += "\n" + std::string(indent, ' '), column = indent;
+    first_line = false;
+    std::istringstream words(line);
+    std::string word;
+    bool first_word = true;
+    while (words >> word) {
+      if (!first_word && column + 1 + word.size() > width) {
+        out += "\n" + std::string(indent, ' ');
+        column = indent;
+        first_word = true;
+      }
+      if (!first_word) out += ' ', ++column;
+      out += word;
+      column += word.size();
+      first_word = false;
+    }
+  }
+  return out;
+}
+
 std::string helpText(const CommandSpec& spec) {
   std::ostringstream out;
   out << "usage: " << spec.usage << "\n\n" << spec.summary << "\n";
@@ -141,16 +171,42 @@ std::string helpText(const CommandSpec& spec) {
         left.resize(30, ' ');
       else
         left += "\n" + std::string(30, ' ');
-      std::string help = o.help;  // continuation lines line up under the first
-      for (size_t at = help.find('\n'); at != std::string::npos; at = help.find('\n', at + 1))
-        help.insert(at + 1, 30, ' ');
-      out << left << help << "\n";
+      out << left << wrapHelp(o.help, 30, kHelpWidth) << "\n";
     }
   }
   if (!spec.examples.empty()) out << "\nexamples:\n" << spec.examples;
   out << "\nEvery command, option, output and exit code: docs/cli.md; the scene file: docs/scene-format.md\n"
          "(in the source tree; exit codes: 0 success, 1 bad input, 2 internal error).\n";
   return out.str();
+}
+
+namespace {
+
+/// MemAvailable from /proc/meminfo, bytes; 0 when it cannot be read.
+double availableMemoryBytes() {
+  std::FILE* file = std::fopen("/proc/meminfo", "r");
+  if (!file) return 0.0;
+  char line[256];
+  double bytes = 0.0;
+  while (std::fgets(line, sizeof line, file)) {
+    unsigned long long kib = 0;
+    if (std::sscanf(line, "MemAvailable: %llu kB", &kib) == 1) {
+      bytes = 1024.0 * static_cast<double>(kib);
+      break;
+    }
+  }
+  std::fclose(file);
+  return bytes;
+}
+
+}  // namespace
+
+Result<double> memoryBudgetFromArgs(const ParsedArgs& args) {
+  if (!args.has("--max-memory")) return availableMemoryBytes();
+  Result<uint64_t> bytes = parseByteSize(args.text("--max-memory"), "--max-memory");
+  if (!bytes) return bytes.error();
+  if (*bytes == 0) return badInput("--max-memory = " + args.text("--max-memory") + " (must be > 0, e.g. 4G or 500M)");
+  return static_cast<double>(*bytes);
 }
 
 }  // namespace strike::cli

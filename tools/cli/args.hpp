@@ -46,6 +46,12 @@ class ParsedArgs {
 Result<ParsedArgs> parseArgs(const CommandSpec& spec, const std::vector<std::string>& args);
 bool wantsHelp(const std::vector<std::string>& args);
 std::string helpText(const CommandSpec& spec);
+/// Every --help line fits in this many columns: options' help is wrapped at word boundaries,
+/// continuation lines under the first.
+constexpr size_t kHelpWidth = 100;
+/// `text` word-wrapped to `width` columns, its lines after the first indented by `indent`
+/// (the first starts at column `indent`); the text's own line breaks are kept.
+std::string wrapHelp(const std::string& text, size_t indent, size_t width);
 
 /// The sample encoding from --format, defaulting by the output's extension: float for .wav
 /// (keeps levels above full scale), pcm24 for .flac (FLAC has no float).
@@ -59,6 +65,11 @@ Result<SimdLevel> simdLevelFor(const ParsedArgs& args);
 inline constexpr const char* kSimdHelp =
     "synthesizer kernel: auto, scalar, avx2 or avx512; default $STRIKE_SIMD, else auto. Kernels differ "
     "only in the last bits (< -120 dB re peak: docs/determinism.md)";
+
+/// The memory budget of a command's solves, bytes: --max-memory SIZE (K, M, G, T: powers of
+/// 1024, as the cache's sizes), else the memory available now (MemAvailable; 0, no budget, when
+/// it cannot be read).
+Result<double> memoryBudgetFromArgs(const ParsedArgs& args);
 
 /// Parses a number strictly: the whole text, finite. `what` names it in the error.
 Result<double> parseNumber(const std::string& text, const std::string& what);

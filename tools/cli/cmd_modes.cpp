@@ -41,11 +41,9 @@ CommandSpec modesSpec() {
       {"--rayleigh-stiffness", "A1", "Rayleigh damping a1 (s) in C = a1 K + a2 M; default 0 or the material's"},
       {"--rayleigh-mass", "A2", "Rayleigh damping a2 (1/s); default 0 or the material's"},
       {"--order", "1|2",
-       "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default: from the\n"
-       "                              shape: 2 when the wall (2 x volume / area) is under 10% of the largest extent "
-       "(plates,\n"
-       "                              shells, bars: Tet4 locks in bending, 108% off on a mug), else 1; the summary "
-       "says why"},
+       "element order: 1 linear tets (Tet4), 2 quadratic (Tet10, more accurate); default: from the shape: 2 "
+       "when the wall (2 x volume / area) is under 10% of the largest extent (plates, shells, bars: Tet4 locks in "
+       "bending, 108% off on a mug), else 1; the summary says why"},
       {"--size", "METRES", "target tet edge length; default: chosen from the object's size"},
       {"--units", "m|cm|mm", "unit of a mesh file's coordinates (not of primitives); default m"},
       {"--max-freq", "HZ", "keep every mode up to this frequency; default 20000"},
@@ -57,9 +55,10 @@ CommandSpec modesSpec() {
        "refine a Tet10 mesh until every mode's estimated error is below PCT: 0.5% or 0.005\n"
        "(a bare number >= 0.1 is refused as ambiguous). Each step at most triples the DOF\n"
        "and is announced with its forecast time and memory"},
-      {"--max-memory", "BYTES",
-       "with --tolerance: do not start a step forecast to need more (e.g. 4G, 500M);\n"
-       "default: the memory available now (MemAvailable)"},
+      {"--max-memory", "SIZE",
+       "memory budget (e.g. 4G, 500M): every solve (the eigen-solve, the transfer, each --tolerance\n"
+       "step) forecasts its memory first and is refused at once, with the forecast, when it needs\n"
+       "more; default: the memory available now (MemAvailable)"},
       {"--max-seconds", "S",
        "with --tolerance: do not start a step forecast to end later than S seconds\n"
        "after the start; default: no limit. A budget stop keeps the finest result and says so"},
@@ -240,23 +239,6 @@ Result<double> parseTolerance(const std::string& raw) {
   return tolerance;
 }
 
-/// MemAvailable from /proc/meminfo, bytes; 0 when it cannot be read (then no memory budget).
-double availableMemoryBytes() {
-  std::FILE* file = std::fopen("/proc/meminfo", "r");
-  if (!file) return 0.0;
-  char line[256];
-  double bytes = 0.0;
-  while (std::fgets(line, sizeof line, file)) {
-    unsigned long long kib = 0;
-    if (std::sscanf(line, "MemAvailable: %llu kB", &kib) == 1) {
-      bytes = 1024.0 * static_cast<double>(kib);
-      break;
-    }
-  }
-  std::fclose(file);
-  return bytes;
-}
-
 /// `--tolerance PCT`: refine until the estimated error meets PCT for every kept mode, within
 /// the memory and time budgets (src/precompute/error_estimate.cpp); prints each step's forecast
 /// before it runs, what it cost, and how it ended.
@@ -272,15 +254,7 @@ Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSe
   // The transfer, when asked for, aims at the same relative error (its far field's, rms over
   // directions); its element budget may stop it short, and the summary says where.
   settings.transfer.target_relative_error = *tolerance;
-  if (args.has("--max-memory")) {
-    // The same sizes as `strike cache` and `render --cache-max-size` (K, M, G, T: powers of 1024).
-    Result<uint64_t> bytes = parseByteSize(args.text("--max-memory"), "--max-memory");
-    if (!bytes) return bytes.error();
-    if (*bytes == 0) return badInput("--max-memory = " + args.text("--max-memory") + " (must be > 0, e.g. 4G or 500M)");
-    options.max_bytes = static_cast<double>(*bytes);
-  } else {
-    options.max_bytes = availableMemoryBytes();
-  }
+  options.max_bytes = settings.max_memory_bytes;
   Result<double> seconds = args.number("--max-seconds", 0.0);
   if (!seconds) return seconds.error();
   if (args.has("--max-seconds") && !(*seconds > 0))
@@ -376,9 +350,11 @@ int runModes(const std::vector<std::string>& raw_args) {
     return reportError("modes", badInput("--max-tets = " + args.text("--max-tets") + " (must be >= 1)"));
   settings.max_tets = *max_tets;
 
-  for (const char* option : {"--max-memory", "--max-seconds"})
-    if (args.has(option) && !args.has("--tolerance"))
-      return reportError("modes", badInput(std::string(option) + " is a budget for --tolerance; give --tolerance too"));
+  if (args.has("--max-seconds") && !args.has("--tolerance"))
+    return reportError("modes", badInput("--max-seconds is a budget for --tolerance; give --tolerance too"));
+  Result<double> max_memory = memoryBudgetFromArgs(args);
+  if (!max_memory) return reportError("modes", max_memory.error());
+  settings.max_memory_bytes = *max_memory;
   if (args.has("--error-estimate") && args.has("--no-error-estimate"))
     return reportError("modes", badInput("--error-estimate and --no-error-estimate contradict each other"));
   // Default: on when the mesh can be coarsened (Richardson, ~10-25% extra; see

@@ -42,6 +42,9 @@ CommandSpec renderSpec() {
        "after the render, remove the least recently used banks until the cache fits\n"
        "in SIZE (e.g. 500M, 2G; 0 = no cap); default 2G. See `strike cache`"},
       {"--max-tets", "N", "refuse object meshes with more tets than this (memory cap); default 2000000"},
+      {"--max-memory", "SIZE",
+       "memory budget of each object's solve (e.g. 4G, 500M): a solve forecast to need more is refused\n"
+       "before it starts, with the forecast; default: the memory available now"},
       {"--no-transfer", "",
        "solve no acoustic transfer for the banks computed (solved by default, as by `strike modes`):\n"
        "each mode is then heard at its direction-averaged level, with no direction and a sign that\n"
@@ -115,13 +118,14 @@ void printSummary(const RenderResult& result, const std::string& output, double 
       "(an event counts once per sounding body it touches), making %zu changes of load (a steady load is silent)\n",
       r.impacts, r.sustained_contacts, r.load_changes);
   if (r.continuous_contacts > 0 || r.continuous_dropped > 0) {
-    std::fprintf(stderr, "  rolling     %zu rolling or sliding contacts heard (a body and a partner its surface moves over)",
+    std::fprintf(stderr,
+                 "  rolling     %zu rolling or sliding contacts heard (a body and a partner its surface moves over)",
                  r.continuous_contacts);
     if (r.continuous_dropped > 0)
       std::fprintf(stderr, ", %zu contact points of further partners not heard (a body sounds with at most %u at once)",
-                   r.continuous_dropped,
-                   static_cast<unsigned>(kForceChannels));
-    if (r.continuous_last_force_s >= 0.0) std::fprintf(stderr, "; the last stopped at %.3f s", r.continuous_last_force_s);
+                   r.continuous_dropped, static_cast<unsigned>(kForceChannels));
+    if (r.continuous_last_force_s >= 0.0)
+      std::fprintf(stderr, "; the last stopped at %.3f s", r.continuous_last_force_s);
     std::fprintf(stderr, "\n");
   }
   std::fprintf(stderr, "  modes       %llu in the banks, %llu out of the audible band, at most %llu ringing at once\n",
@@ -202,6 +206,9 @@ int runRender(const std::vector<std::string>& raw_args) {
   if (*max_tets < 1)
     return reportError("render", badInput("--max-tets = " + args.text("--max-tets") + " (must be >= 1)"));
   settings.max_tets = *max_tets;
+  Result<double> max_memory = memoryBudgetFromArgs(args);
+  if (!max_memory) return reportError("render", max_memory.error());
+  settings.max_memory_bytes = *max_memory;
   Result<long long> max_events = args.integer("--max-events", static_cast<long long>(settings.max_events));
   if (!max_events) return reportError("render", max_events.error());
   if (*max_events < 1)

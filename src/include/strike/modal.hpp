@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <string>
 
 #include "strike/progress.hpp"
 #include "strike/result.hpp"
@@ -41,6 +42,13 @@ struct ModalSettings {
   /// the bits: the BLAS kernels
   /// OpenBLAS picks for the CPU (docs/determinism.md).
   int threads = 2;
+  /// Memory budget of the solve, bytes; 0: none. The solve forecasts what it will hold before it
+  /// takes it: K, M, the factorization (exact, from CHOLMOD's symbolic analysis) and the first
+  /// Lanczos basis before it factors, then the larger basis each time the basis must grow (it
+  /// grows only while the band still holds modes, so a --max-modes beyond what the band holds
+  /// costs nothing). A forecast above the budget ends the solve with a bad-input error that says
+  /// the forecast and what to change, before the memory is taken.
+  double max_bytes = 0.0;
   /// For tests: the helper thread sleeps this long before it picks up each part (a part it
   /// has not picked up within 300 us is done by the calling thread). Never changes the bits.
   int helper_delay_us = 0;
@@ -67,7 +75,16 @@ struct ModalResult {
   int block_size = 0;                  ///< block Lanczos block size used (0: ARPACK only)
   int lanczos_basis = 0;               ///< largest block Krylov basis built
   int reorthogonalizations = 0;        ///< extra (DGKS) Gram-Schmidt passes in block Lanczos
+  double forecast_bytes = 0.0;         ///< the largest memory forecast the solve made (ModalSettings::max_bytes)
 };
+
+/// What the eigen-solve of an n-DOF problem holds besides its factor: K, M (and the pruned M, the
+/// shifted matrix) of nnz_k nonzeros each, and a Lanczos basis of `basis` vectors with the
+/// projection and the modes it finds (at most `modes`). Bytes; the solver's own forecast.
+double modalWorkspaceBytes(double n, double nnz_k, double basis, double modes);
+
+/// "1.23 GB" / "312 MB": memory in the words of the forecasts' messages.
+std::string memoryText(double bytes);
 
 Result<ModalResult> solveModes(const Eigen::SparseMatrix<double>& K, const Eigen::SparseMatrix<double>& M,
                                const ModalSettings& settings);

@@ -48,6 +48,12 @@ struct PrecomputeSettings {
   /// more solves theirs then (extendTransfer). Not part of the cache key: the bank records which
   /// modes have a transfer (a prefix, AcousticTransfer::modeCount()).
   double transfer_max_freq_hz = synthesizedTopHz(SynthSettings{}.max_freq_hz, SynthSettings{}.sample_rate_hz);
+  /// Memory budget of each solve, bytes; 0: none (`--max-memory`, default the memory available).
+  /// The eigen-solve (ModalSettings::max_bytes) and the acoustic transfer
+  /// (transferMemoryForecastBytes) forecast what they will hold before they take it, and one
+  /// whose forecast is over the budget is refused with the forecast (bad input). Not part of the
+  /// cache key: it changes whether a bank is computed, never its numbers.
+  double max_memory_bytes = 0.0;
 };
 
 struct PrecomputeReport {
@@ -81,6 +87,14 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
 /// A bank with no modes yet: mass properties and surface of the mesh, for the simulator, so a
 /// scene can be simulated before deciding which objects need an eigen-solve.
 ModeBank massAndSurfaceBank(const LoadedMesh& loaded, const PrecomputeSettings& settings);
+
+/// The acoustic transfer's own memory forecast for this bank (its surface and modes), bytes:
+/// what solveTransferInto will hold at its peak besides the bank (memory_forecast.cpp).
+double transferMemoryForecastBytes(const ModeBank& bank, const TransferSettings& settings);
+
+/// Refuses a transfer whose forecast is over `max_bytes` (0: no budget): bad input that says the
+/// forecast and the option to change.
+Status checkTransferMemory(const ModeBank& bank, const TransferSettings& settings, double max_bytes);
 
 /// How many of the bank's modes lie at or below `max_freq_hz`: its heard modes, a prefix (the
 /// modes are ascending), the ones a render whose band ends there plays.

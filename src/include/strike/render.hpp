@@ -68,6 +68,8 @@ struct RenderSettings {
   double gain = 1.0;                             ///< output scale on top of kFullScalePascal
   int64_t max_tets = kDefaultMaxTets;            ///< size cap of each object's tet mesh (PrecomputeSettings::max_tets)
   size_t max_events = SimSettings{}.max_events;  ///< cap on recorded contact events (SimSettings::max_events)
+  /// Memory budget of each object's solve, bytes (PrecomputeSettings::max_memory_bytes); 0: none.
+  double max_memory_bytes = 0.0;
   /// For `strike bench leftout` only: leave nothing out, to measure what leaving out saves. Every
   /// object gets a bank and an oscillator (struck or not, however softly); the synth keeps every
   /// mode of the banks (no 20 kHz synth cap: the banks' own cut-off, the scene's max_freq_hz

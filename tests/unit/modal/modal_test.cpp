@@ -306,5 +306,55 @@ TEST(Errors, BadInputsBecomeErrorsNotCrashes) {
   EXPECT_FALSE(solveModes(K2, M2, bad).ok());
 }
 
+// Memory forecasts. A cap far beyond the modes the band holds must cost nothing: the Lanczos
+// basis grows only while the band still has modes, so the solve (and its forecast) is the one of
+// a cap the band fills. A budget below the forecast refuses the solve before it factors.
+TEST(MemoryForecast, ACapBeyondTheBandCostsNothingAndABudgetBelowTheForecastRefuses) {
+  MeshOptions options;
+  options.order = 2;
+  options.target_edge_m = 0.01;
+  auto mesh = makeBox(0.3, 0.02, 0.02, options);
+  ASSERT_TRUE(mesh.ok());
+  Eigen::SparseMatrix<double> K, M;
+  assembleStiffnessAndMass(*mesh, kSteel, K, M);
+  ModalSettings settings;
+  settings.max_freq_hz = 20000.0;
+  settings.max_modes = 200;
+  auto capped = solveModes(K, M, settings);
+  ASSERT_TRUE(capped.ok()) << capped.error().message;
+  ASSERT_GT(capped->eigenvalues.size(), 5);
+  ASSERT_FALSE(capped->capped_by_max_modes) << "the band, not the cap, must end the solve";
+  settings.max_modes = 10000;
+  auto uncapped = solveModes(K, M, settings);
+  ASSERT_TRUE(uncapped.ok()) << uncapped.error().message;
+  EXPECT_EQ(uncapped->eigenvalues, capped->eigenvalues);
+  EXPECT_EQ(uncapped->lanczos_basis, capped->lanczos_basis);
+  EXPECT_LE(uncapped->forecast_bytes, 1.5 * capped->forecast_bytes);
+  // The forecast holds at least the basis the solve built (Q and M Q, 8 bytes a number).
+  EXPECT_GE(capped->forecast_bytes, 16.0 * K.rows() * capped->lanczos_basis);
+
+  settings.max_modes = 200;
+  settings.max_bytes = 0.5 * capped->forecast_bytes;
+  auto refused = solveModes(K, M, settings);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().kind, ErrorKind::BadInput);
+  EXPECT_NE(refused.error().message.find("more than the memory budget"), std::string::npos) << refused.error().message;
+  EXPECT_NE(refused.error().message.find("--max-memory"), std::string::npos);
+  settings.max_bytes = capped->forecast_bytes;
+  auto fits = solveModes(K, M, settings);
+  ASSERT_TRUE(fits.ok()) << fits.error().message;
+  EXPECT_EQ(fits->eigenvalues, capped->eigenvalues);
+
+  // A cut-off above the elements' own frequency: the band holds every mode of the mesh, and the
+  // whole request's basis is forecast at once.
+  settings.max_freq_hz = 1e7;
+  settings.max_modes = 10000;
+  settings.max_bytes = 4.0 * capped->forecast_bytes;
+  auto everything = solveModes(K, M, settings);
+  ASSERT_FALSE(everything.ok());
+  EXPECT_NE(everything.error().message.find("the band holds all its modes"), std::string::npos)
+      << everything.error().message;
+}
+
 }  // namespace
 }  // namespace strike

@@ -1,0 +1,33 @@
+// SPDX-License-Identifier: MIT
+// The acoustic transfer's memory forecast and its budget check (precompute.hpp). The figure is
+// the transfer solver's: whoever changes what the solver holds changes it here in the same commit.
+#include <cstdio>
+#include <string>
+
+#include "strike/modal.hpp"
+#include "strike/precompute.hpp"
+
+namespace strike {
+
+double transferMemoryForecastBytes(const ModeBank& bank, const TransferSettings& settings) {
+  // One mode's system at a time: a dense complex matrix of at most max_elements unknowns (rows:
+  // the collocation points and the interior CHIEF points, at most as many again), kept in double
+  // and factored in single precision, with the coarse solve's copy: ~64 bytes an entry squared.
+  // Beside it the surface's quadrature data (~1 KB a triangle) and each mode's far field (a few
+  // KB). An upper bound of the order of what the solver holds, not a measurement.
+  const double elements = settings.fixed_elements > 0 ? settings.fixed_elements : settings.max_elements;
+  const double system = 64.0 * elements * elements;
+  const double surface = 1024.0 * static_cast<double>(bank.surface_triangles.size() / 3);
+  const double far_fields = 8192.0 * static_cast<double>(bank.modeCount());
+  return system + surface + far_fields;
+}
+
+Status checkTransferMemory(const ModeBank& bank, const TransferSettings& settings, double max_bytes) {
+  const double forecast = transferMemoryForecastBytes(bank, settings);
+  if (!(max_bytes > 0.0) || forecast <= max_bytes) return {};
+  return badInput("the acoustic transfer of " + std::to_string(bank.modeCount()) + " modes would need about " +
+                  memoryText(forecast) + ": more than the memory budget of " + memoryText(max_bytes) +
+                  ". Raise --max-memory (default: the memory available), or skip the transfer (--no-transfer)");
+}
+
+}  // namespace strike

@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstring>
@@ -20,9 +21,24 @@ struct TemporarySlot {
 
 std::array<TemporarySlot, 64> g_temporary_slots;  // outputs in progress, per process
 
+// The interruption's message, in two buffers: a writer fills the one the handler does not read,
+// then points the handler at it, so the handler never sees a half-written line.
+struct InterruptMessage {
+  char line[2][1024] = {};
+  std::atomic<int> current{0};
+};
+InterruptMessage g_interrupt_message;
+
 void strikeInterruptHandler(int signal_number) {
   for (TemporarySlot& slot : g_temporary_slots)
     if (slot.state.load(std::memory_order_acquire) == 2) ::unlink(slot.path);
+  const char* line = g_interrupt_message.line[g_interrupt_message.current.load(std::memory_order_acquire)];
+  const size_t length = std::strlen(line);
+  if (length > 0) {
+    ssize_t ignored = ::write(STDERR_FILENO, line, length);
+    ignored = ::write(STDERR_FILENO, "\n", 1);
+    (void)ignored;
+  }
   ::signal(signal_number, SIG_DFL);
   ::raise(signal_number);
 }
@@ -48,6 +64,15 @@ void unregisterTemporary(int slot_number) {
   slot.state.store(1, std::memory_order_release);
   slot.path[0] = '\0';
   slot.state.store(0, std::memory_order_release);
+}
+
+void setInterruptMessage(const std::string& line) {
+  const int next = 1 - g_interrupt_message.current.load(std::memory_order_acquire);
+  char* buffer = g_interrupt_message.line[next];
+  const size_t length = std::min(line.size(), sizeof g_interrupt_message.line[0] - 1);
+  std::memcpy(buffer, line.data(), length);
+  buffer[length] = '\0';
+  g_interrupt_message.current.store(next, std::memory_order_release);
 }
 
 void installInterruptCleanup() {

@@ -2,6 +2,7 @@
 // The block stage of the eigen-solver: block shift-invert Lanczos with multi-right-hand-side
 // solves, BLAS-3 Gram-Schmidt and top-Ritz-pair checks by LAPACK dsyevr.
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "lanczos.hpp"
@@ -235,7 +236,16 @@ Result<int> blockLanczos(Context& ctx, Found& found, int block, int want, int mi
       converged.push_back(ctx.sigma + 1.0 / theta);
       ++num_converged;
     }
-    if (ctx.settings.progress) ctx.settings.progress("lanczos", std::min(0.95, static_cast<double>(k) / max_basis));
+    if (ctx.settings.progress) {
+      // How far: the basis against its cap, the pairs against the request, or the highest
+      // converged eigenvalue against the cut-off's (Lanczos converges from the lowest up),
+      // whichever is furthest.
+      const double lambda_cut = std::pow(2.0 * M_PI * ctx.settings.max_freq_hz, 2);
+      const double top = converged.empty() ? 0.0 : std::max(0.0, converged.back() / lambda_cut);
+      const double done =
+          std::max({static_cast<double>(k) / max_basis, static_cast<double>(num_converged) / want, top});
+      ctx.settings.progress("lanczos", std::min(0.95, done));
+    }
     // Few converged yet: the next check can wait a step or two (each costs O(k^3)).
     next_check = j + (num_converged < want / 2 ? 3 : num_converged < (4 * want) / 5 ? 2 : 1);
     if (last || enough(converged)) {

@@ -82,6 +82,9 @@ CommandSpec modesSpec() {
        "else solved and put there); default $STRIKE_CACHE_DIR or ~/.cache/strike"},
       {"--no-cache", "", "with --similar: solve, read and write no cache"},
       {"--quiet", "", "no progress or summary on stderr"},
+      {"--progress", "",
+       "show progress even when stderr is not a terminal (a line every 5 s: phase, object, share done, time "
+       "left); on a terminal it is shown by default"},
       {"--list-materials", "",
        "print the material table (elastic constants, damping, restitution, friction) with sources and exit"},
   };
@@ -363,7 +366,7 @@ int runModes(const std::vector<std::string>& raw_args) {
       args.has("--error-estimate") || (!args.has("--no-error-estimate") && canRemesh(settings.mesh_spec));
 
   const bool quiet = args.has("--quiet");
-  ProgressReporter progress(quiet);
+  ProgressReporter progress("modes", quiet, args.has("--progress"));
   settings.progress = progress.callback();
   if (!args.has("--similar") && (args.has("--cache") || args.has("--no-cache")))
     return reportError("modes", badInput("--cache and --no-cache go with --similar (a direct solve is not cached)"));
@@ -384,6 +387,7 @@ int runModes(const std::vector<std::string>& raw_args) {
   Status written =
       writeBank(output, result->bank, args.has("--compact") ? ShapeEncoding::Int16 : ShapeEncoding::Float32);
   if (!written) return reportError("modes", written.error());
+  progress.written(output);
   if (!quiet) {
     printSummary(settings, *result, output);
     if (!result->report.order_reason.empty())

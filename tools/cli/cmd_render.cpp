@@ -62,6 +62,9 @@ CommandSpec renderSpec() {
        "send the simulation through libstrike's C API, step by step, as a game would\n"
        "(strike_step, strike_render in blocks of 256): the same sound within -100 dB"},
       {"--quiet", "", "no progress or summary on stderr (warnings are still printed)"},
+      {"--progress", "",
+       "show progress even when stderr is not a terminal (a line every 5 s: phase, object, share done, time "
+       "left); on a terminal it is shown by default"},
   };
   spec.examples =
       "  strike render examples/scenes/bar-drop.json -o bar-drop.wav\n"
@@ -235,7 +238,7 @@ int runRender(const std::vector<std::string>& raw_args) {
   const SampleEncoding encoding = *encoding_result;
 
   const bool quiet = args.has("--quiet");
-  ProgressReporter progress(quiet);
+  ProgressReporter progress("render", quiet, args.has("--progress"));
   settings.progress = progress.callback();
   // Warnings are printed as they are found, even with --quiet: they say the result is probably
   // not what was meant, and the scene's are known before the simulation starts.
@@ -248,6 +251,7 @@ int runRender(const std::vector<std::string>& raw_args) {
   if (!result) return reportError("render", result.error());
   Status written = writeAudio(output, result->audio, encoding);
   if (!written) return reportError("render", written.error());
+  progress.written(output);
   if (args.has("--events")) {
     Status events = writeEventsCsv(args.text("--events"), *result);
     if (!events) {

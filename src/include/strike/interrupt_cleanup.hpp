@@ -33,6 +33,12 @@ class TemporaryRegistration {
   int slot_;
 };
 
+/// The one line the handler writes to stderr when it is interrupted (a newline is added; at most
+/// 1023 bytes kept), e.g. "strike render: interrupted during simulate; nothing was written" (a
+/// program that draws a progress line on a terminal starts it with "\r\033[K" to clear that).
+/// Empty: nothing is said. Copied into a fixed buffer, so the handler reads it without allocating.
+void setInterruptMessage(const std::string& line);
+
 /// Installs the cleanup handler for SIGINT, SIGTERM and SIGHUP (not where they are ignored, as
 /// under nohup). Call once, early in main.
 void installInterruptCleanup();

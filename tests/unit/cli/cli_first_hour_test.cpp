@@ -1,13 +1,19 @@
 // SPDX-License-Identifier: MIT
 // "The first hour, round two": what still tripped a new user. Memory forecasts refuse a solve
 // over --max-memory before it starts; help and messages; the CLI reference covers every command.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "run_cli.hpp"
 
@@ -50,6 +56,68 @@ TEST(FirstHourMemory, ASolveForecastOverMaxMemoryIsRefusedWithItsForecastAndWrit
   const CliResult zero = runCli("modes box:0.05,0.03,0.02 --material steel --max-memory 0 -o " + dir + "/d.modes");
   EXPECT_EQ(zero.exit_code, 1);
   EXPECT_NE(zero.err.find("--max-memory = 0"), std::string::npos) << zero.err;
+}
+
+struct Interrupted {
+  bool by_sigint = false;  ///< ended by SIGINT (a shell shows exit status 130)
+  std::string err;
+};
+
+/// Starts `strike ARGS...` with SIGINT at its default action (a test runner may ignore it),
+/// sends it SIGINT after `after_s`, and waits for it (killed outright after 60 s, then failed).
+Interrupted interruptAfter(const std::vector<std::string>& args, double after_s, const std::string& err_path) {
+  Interrupted out;
+  const pid_t child = fork();
+  if (child == 0) {
+    signal(SIGINT, SIG_DFL);
+    const int fd = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, STDERR_FILENO);
+    const int null = open("/dev/null", O_WRONLY);
+    dup2(null, STDOUT_FILENO);
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(STRIKE_CLI));
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(STRIKE_CLI, argv.data());
+    _exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::duration<double>(after_s));
+  kill(child, SIGINT);
+  int status = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (waitpid(child, &status, WNOHANG) == 0) {
+    if (std::chrono::steady_clock::now() - start > std::chrono::seconds(60)) {
+      kill(child, SIGKILL);
+      waitpid(child, &status, 0);
+      ADD_FAILURE() << "still running 60 s after SIGINT";
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  out.by_sigint = WIFSIGNALED(status) && WTERMSIG(status) == SIGINT;
+  out.err = test::slurp(err_path);
+  return out;
+}
+
+TEST(FirstHourInterrupt, SigintStopsTheSolveAndTheRenderSaysWhatAndLeavesNothing) {
+  const std::string dir = folder("interrupt");
+  // The bar's solve and its transfer take seconds: interrupted in its first second.
+  const Interrupted modes =
+      interruptAfter({"modes", "box:0.3,0.02,0.02", "--material", "steel", "--order", "2", "-o", dir + "/bar.modes"},
+                     0.8, dir + "/modes.err");
+  EXPECT_TRUE(modes.by_sigint) << modes.err;
+  EXPECT_NE(modes.err.find("strike modes: interrupted during "), std::string::npos) << modes.err;
+  EXPECT_NE(modes.err.find("; nothing was written"), std::string::npos) << modes.err;
+  const Interrupted render =
+      interruptAfter({"render", std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/bar-drop.json", "-o",
+                      dir + "/bar.wav", "--no-cache", "--events", dir + "/bar.csv"},
+                     1.0, dir + "/render.err");
+  EXPECT_TRUE(render.by_sigint) << render.err;
+  EXPECT_NE(render.err.find("strike render: interrupted during "), std::string::npos) << render.err;
+  // Only the two error captures are left: no output, no temporary.
+  std::vector<std::string> left;
+  for (const auto& entry : fs::directory_iterator(dir)) left.push_back(entry.path().filename().string());
+  EXPECT_EQ(left.size(), 2u) << left.back();
 }
 
 }  // namespace

@@ -10,13 +10,14 @@
 namespace strike {
 
 double transferMemoryForecastBytes(const ModeBank& bank, const TransferSettings& settings) {
-  // One mode's system at a time: a dense complex matrix of at most max_elements unknowns (rows:
-  // the collocation points and the interior CHIEF points, at most as many again), kept in double
-  // and factored in single precision, with the coarse solve's copy: ~64 bytes an entry squared.
+  // One group's system at a time (transferSystemBytes, transfer_solver.hpp): a dense complex
+  // matrix of at most max_elements unknowns (rows: the collocation points and the interior CHIEF
+  // points, at most a tenth more) in double with its single-precision copy (LU / QR), and the
+  // coarse solve's beside it; GMRES's basis above 700 unknowns is 61 vectors, small beside it.
   // Beside it the surface's quadrature data (~1 KB a triangle) and each mode's far field (a few
   // KB). An upper bound of the order of what the solver holds, not a measurement.
   const double elements = settings.fixed_elements > 0 ? settings.fixed_elements : settings.max_elements;
-  const double system = 64.0 * elements * elements;
+  const double system = transferSystemBytes(static_cast<uint64_t>(elements));
   const double surface = 1024.0 * static_cast<double>(bank.surface_triangles.size() / 3);
   const double far_fields = 8192.0 * static_cast<double>(bank.modeCount());
   return system + surface + far_fields;

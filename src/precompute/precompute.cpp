@@ -193,7 +193,8 @@ uint64_t transferSettingsKey(const TransferSettings& t, uint64_t key) {
                              static_cast<double>(t.min_elements),
                              static_cast<double>(t.fixed_elements),
                              t.chief ? 1.0 : 0.0,
-                             static_cast<double>(kTransferSolverRevision)};
+                             static_cast<double>(kTransferSolverRevision),
+                             static_cast<double>(t.direct_max_elements)};
   return fnv1a64(transfer, sizeof transfer, key);
 }
 

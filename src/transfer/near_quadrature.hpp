@@ -22,8 +22,8 @@ inline bool nearLeaf(const V3& x, const V3& c, double d) {
 }
 
 /// The quadrature of the near triangles of each collocation point, which does not depend on the
-/// wavenumber once its rules are chosen: chosen once per cut at the bank's largest wavenumber
-/// k_ref (a rule fine enough at k_ref is at every lower k), then every mode only evaluates
+/// wavenumber once its rules are chosen: chosen once per cut at a wavenumber k_ref at least the
+/// solve's (a rule fine enough at k_ref is at every lower k), then every mode only evaluates
 /// e^{ikr} at the stored distances. Per point: int G += w_g G(r), int dG/dn += w_dn dG/dr / r.
 struct NearCache {
   std::vector<size_t> begin;                // per row: its points are [begin[row], begin[row + 1])

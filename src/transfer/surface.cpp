@@ -152,6 +152,26 @@ void findInteriorPoints(Surface& s) {
 
 }  // namespace
 
+double surfaceRadius(const ModeBank& bank) {
+  const size_t vertices = bank.surfaceVertexCount();
+  const V3 centre(bank.centre_m[0], bank.centre_m[1], bank.centre_m[2]);
+  double radius = 0.0;
+  for (size_t t = 0; t < bank.surface_triangles.size() / 3; ++t) {
+    V3 v[3];
+    bool valid = true;
+    for (int c = 0; c < 3; ++c) {
+      const uint32_t at = bank.surface_triangles[3 * t + c];
+      valid = valid && at < vertices;
+      if (valid)
+        v[c] =
+            V3(bank.surface_positions[3 * at], bank.surface_positions[3 * at + 1], bank.surface_positions[3 * at + 2]);
+    }
+    if (!valid || !(0.5 * (v[1] - v[0]).cross(v[2] - v[0]).norm() > 0)) continue;
+    for (const V3& corner : v) radius = std::max(radius, (corner - centre).norm());
+  }
+  return radius;
+}
+
 Result<Surface> makeSurface(const ModeBank& bank) {
   Surface s;
   const size_t vertices = bank.surfaceVertexCount();

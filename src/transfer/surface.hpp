@@ -53,6 +53,10 @@ struct Surface {
   double max_piece_m = 1e300;        // pieces of a row's sum: at most this across (makePieces)
 };
 
+/// The largest distance of a corner of a triangle of nonzero area from the bank's centre
+/// (Surface::radius, without the rest of makeSurface).
+double surfaceRadius(const ModeBank& bank);
+
 /// The surface of `bank` (degenerate triangles dropped), its tree and its interior points.
 Result<Surface> makeSurface(const ModeBank& bank);
 

@@ -6,17 +6,19 @@
 
 #include "assembly.hpp"
 #include "dense_solve.hpp"
+#include "iterative_solve.hpp"
 
 namespace strike::transfer {
 
 ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, double k, size_t elements, size_t chief,
-                      double k_ref, std::map<size_t, NearCache>& near_caches, TwoParts& parts) {
+                      double k_rule, std::map<size_t, NearCache>& near_caches, TwoParts& parts,
+                      const SystemOptions& options) {
   ModeSolve out;
   const auto assembly_start = std::chrono::steady_clock::now();
   out.cut = cutWithCount(s, elements);
   const Cut& cut = out.cut;
   auto cached = near_caches.find(elements);
-  if (cached == near_caches.end()) cached = near_caches.emplace(elements, buildNearCache(s, cut, k_ref)).first;
+  if (cached == near_caches.end()) cached = near_caches.emplace(elements, buildNearCache(s, cut, k_rule)).first;
   const NearCache& near = cached->second;
   out.pieces = makePieces(s, cut, k);
   out.piece_data = pieceData(s, out.pieces, data);
@@ -51,9 +53,15 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
       for (size_t q = 0; q < rhs; ++q) b(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(q)) = -lq[q];
     }
   });
-  auto solve = [](const Eigen::MatrixXcd& matrix, const Eigen::MatrixXcd& rhs_m) -> Eigen::MatrixXcd {
-    if (matrix.rows() == matrix.cols()) return solveSquare(matrix, rhs_m);
-    return solveLeastSquares(matrix, rhs_m);
+  // The fine and the coarse solve run side by side (below): an iterative one's products stay on
+  // its own thread.
+  std::array<IterativeReport, 2> reports;
+  auto solve = [&](const Eigen::MatrixXcd& matrix, const Eigen::MatrixXcd& rhs_m, int which) -> Eigen::MatrixXcd {
+    if (matrix.rows() != matrix.cols()) return solveLeastSquares(matrix, rhs_m);
+    if (static_cast<size_t>(matrix.rows()) <= options.direct_max_elements) return solveSquare(matrix, rhs_m);
+    TwoParts one_thread(false);
+    return solveGmres(matrix, rhs_m, options.iterative_tolerance, 2000, one_thread,
+                      &reports[static_cast<size_t>(which)]);
   };
   out.assembly_seconds = secondsSince(assembly_start);
   const auto factor_start = std::chrono::steady_clock::now();
@@ -66,7 +74,7 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
   Eigen::MatrixXcd P, pc;
   parts.run(size_t{2}, size_t{1}, [&](size_t begin, size_t, int) {
     if (begin == 0) {
-      P = solve(A, b);
+      P = solve(A, b, 0);
       return;
     }
     if (!coarse_solve) return;
@@ -82,8 +90,9 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
       if (j < nc) Ac(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j)) += 0.5;
       bc.row(static_cast<Eigen::Index>(j)) = b.row(static_cast<Eigen::Index>(fine_row));
     }
-    pc = solve(Ac, bc);
+    pc = solve(Ac, bc, 1);
   });
+  out.iterations = reports[0].iterations;
   out.elements = n;
   out.chief = chief;
   out.p.resize(rhs);

@@ -22,12 +22,23 @@ struct ModeSolve {
   Pieces pieces;
   PieceData piece_data;
   double assembly_seconds = 0.0, factor_seconds = 0.0;
+  size_t iterations = 0;  ///< GMRES iterations of the fine solve (0: a direct solve)
+};
+
+/// How the systems are solved.
+struct SystemOptions {
+  /// Square systems with more unknowns than this are solved by GMRES (iterative_solve.hpp), the
+  /// others by single-precision LU refined in double (dense_solve.hpp).
+  size_t direct_max_elements = 700;
+  double iterative_tolerance = 1e-5;  ///< GMRES's relative residual
 };
 
 /// Solves the exterior Neumann problem for the boundary data `data` (one right-hand side each:
 /// modes of one frequency share the matrix and its factorization) at wavenumber k with
-/// `elements` unknowns (about) and `chief` interior points.
+/// `elements` unknowns (about) and `chief` interior points. The near quadrature's rules are
+/// chosen at k_rule >= k; `near_caches` (per number of unknowns) must all be of that k_rule.
 ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, double k, size_t elements, size_t chief,
-                      double k_ref, std::map<size_t, NearCache>& near_caches, TwoParts& parts);
+                      double k_rule, std::map<size_t, NearCache>& near_caches, TwoParts& parts,
+                      const SystemOptions& options = {});
 
 }  // namespace strike::transfer

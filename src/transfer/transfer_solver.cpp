@@ -25,6 +25,25 @@ using namespace transfer;
 
 namespace {
 
+/// The wavenumber at which a group's near quadrature rules are chosen: k rounded up to the grid
+/// 2^(j/4) (a rule fine enough there is fine enough at k). A group's rules thus depend on its own
+/// wavenumber alone, never on the other modes solved in the same call, and groups within a
+/// quarter octave share their near caches. Exact (frexp / ldexp and constants): the same bits
+/// on every machine.
+double ruleWavenumber(double k) {
+  if (!(k > 0)) return 0.0;
+  int exponent = 0;
+  const double f = 2.0 * std::frexp(k, &exponent);  // k = f 2^(exponent - 1), f in [1, 2)
+  constexpr double kGrid[] = {1.0, 1.189207115002721, 1.4142135623730951, 1.681792830507429, 2.0};
+  double q = 2.0;
+  for (double g : kGrid)
+    if (g >= f) {
+      q = g;
+      break;
+    }
+  return std::ldexp(q, exponent - 1);
+}
+
 /// Unknowns the target error asks for at wavenumber k, within the budget.
 size_t elementsFor(const Surface& s, const TransferSettings& settings, double k) {
   if (settings.fixed_elements > 0) return std::min<size_t>(settings.fixed_elements, s.tris.size());
@@ -48,6 +67,26 @@ size_t chiefPointsFor(const Surface& s, const TransferSettings& settings, double
 }
 
 }  // namespace
+
+std::vector<size_t> transferGroups(const ModeBank& bank, const TransferSettings& settings) {
+  // Modes of (nearly) one frequency, as degenerate pairs of symmetric bodies are (split by the
+  // mesh's asymmetry), share the system and its factorization: solved at the first one's
+  // wavenumber, which changes the others' far fields by about (relative frequency gap) x (1 + ka),
+  // added to their estimates. Shared while that is at most a tenth of the target (in quadrature,
+  // +0.5% of an estimate at the target).
+  constexpr double kSharedGapShare = 0.1;
+  const double radius = surfaceRadius(bank), c_air = settings.speed_of_sound_m_s;
+  const size_t modes = bank.modeCount();
+  std::vector<size_t> group_start;
+  for (size_t mode = 0; mode < modes; ++mode) {
+    const double omega = std::sqrt(std::max(bank.eigenvalues[mode], 0.0));
+    const double first = group_start.empty() ? -1.0 : std::sqrt(std::max(bank.eigenvalues[group_start.back()], 0.0));
+    const double allowed = kSharedGapShare * settings.target_relative_error / (1.0 + first / c_air * radius);
+    if (group_start.empty() || !(std::abs(omega - first) <= allowed * first)) group_start.push_back(mode);
+  }
+  group_start.push_back(modes);
+  return group_start;
+}
 
 Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const TransferSettings& settings,
                                                const ProgressFn& progress, std::vector<TransferModeStats>* stats) {
@@ -85,33 +124,19 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     if ((p1 - p0).cross(p2 - p0).norm() > 0) corners.push_back({v[0], v[1], v[2]});
   }
 
-  // Modes of (nearly) one frequency, as degenerate pairs of symmetric bodies are (split by the
-  // mesh's asymmetry), share the system and its factorization: solved at the first one's
-  // wavenumber, which changes the others' far fields by about (relative frequency gap) x (1 + ka),
-  // added to their estimates. Shared while that is at most a tenth of the target (in quadrature,
-  // +0.5% of an estimate at the target).
-  constexpr double kSharedGapShare = 0.1;
-  std::vector<size_t> group_start;
-  for (size_t mode = 0; mode < modes; ++mode) {
-    const double omega = std::sqrt(std::max(bank.eigenvalues[mode], 0.0));
-    const double first = group_start.empty() ? -1.0 : std::sqrt(std::max(bank.eigenvalues[group_start.back()], 0.0));
-    const double allowed = kSharedGapShare * settings.target_relative_error / (1.0 + first / c_air * s.radius);
-    if (group_start.empty() || !(std::abs(omega - first) <= allowed * first)) group_start.push_back(mode);
-  }
-  group_start.push_back(modes);
+  const std::vector<size_t> group_start = transferGroups(bank, settings);
+  SystemOptions system_options;
+  system_options.direct_max_elements = settings.direct_max_elements;
+  system_options.iterative_tolerance = std::min(1e-5, 0.01 * settings.target_relative_error);
 
-  // The near quadrature per cut, its rules chosen at the largest wavenumber.
-  double k_ref = 0.0;
-  for (size_t mode = 0; mode < modes; ++mode)
-    k_ref = std::max(k_ref, std::sqrt(std::max(bank.eigenvalues[mode], 0.0)) / c_air);
+  // The near quadrature per cut, its rules chosen at the group's wavenumber rounded up to a
+  // quarter octave (ruleWavenumber): kept while the groups' rule wavenumber stays the same.
   std::map<size_t, NearCache> near_caches;
+  double near_caches_k = -1.0;
 
   std::vector<NodeData> data;
   std::vector<std::vector<cd>> coef;
   std::vector<double> energy, diff;
-  // The last group solved at the budget whose modes all missed the target there: its wavenumber
-  // and its best mode's estimate (0: none yet).
-  double missed_k = 0.0, missed_best = 0.0;
   for (size_t g = 0; g + 1 < group_start.size(); ++g) {
     const auto group_begin = std::chrono::steady_clock::now();
     const size_t first = group_start[g], last = group_start[g + 1], rhs = last - first;
@@ -141,15 +166,15 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     // (not only the wavelength) sets the resolution, and the estimate sees it.
     size_t elements = elementsFor(s, settings, k);
     const size_t cap = settings.fixed_elements > 0 ? elements : std::min<size_t>(settings.max_elements, s.tris.size());
-    // Straight to the budget when a lower frequency's modes all missed the target there: the error
-    // of constant elements grows as (k h)^2, so these modes are predicted to miss it at the budget
-    // too, and every step below it would be solved only to be dropped (the result is the
-    // budget's solve either way).
-    if (missed_k > 0 && missed_best * (k / missed_k) * (k / missed_k) > settings.target_relative_error) elements = cap;
+    const double k_rule = ruleWavenumber(k);
+    if (k_rule != near_caches_k) {
+      near_caches.clear();
+      near_caches_k = k_rule;
+    }
     // Per mode: the far field of the first resolution that met the target (or the last).
     std::vector<double> total(rhs, 0.0);
     std::vector<char> done(rhs, 0);
-    std::vector<uint32_t> mode_elements(rhs, 0), mode_chief(rhs, 0);
+    std::vector<uint32_t> mode_elements(rhs, 0), mode_chief(rhs, 0), mode_iterations(rhs, 0);
     std::vector<int> mode_cap(rhs, n_cap);  // the order up to which the mode's far field was projected
     diff.assign(rhs, 0.0);
     energy.assign(rhs * (n_cap + 1), 0.0);
@@ -159,7 +184,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     std::vector<std::vector<cd>> step_coef, step_dcoef;
     while (true) {
       const size_t chief = chiefPointsFor(s, settings, k, elements);
-      const ModeSolve solved = solveSystem(s, data, k, elements, chief, k_ref, near_caches, parts);
+      const ModeSolve solved = solveSystem(s, data, k, elements, chief, k_rule, near_caches, parts, system_options);
       ++solves;
       assembly_seconds += solved.assembly_seconds;
       factor_seconds += solved.factor_seconds;
@@ -190,6 +215,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
         mode_cap[r] = projected;
         mode_elements[r] = static_cast<uint32_t>(solved.elements);
         mode_chief[r] = static_cast<uint32_t>(solved.chief);
+        mode_iterations[r] = static_cast<uint32_t>(solved.iterations);
         done[r] = last_step || !(diff[r] > std::pow(settings.target_relative_error, 2) * total[r]);
       }
       if (std::all_of(done.begin(), done.end(), [](char d) { return d != 0; })) break;
@@ -204,14 +230,6 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
       elements = asked >= static_cast<double>(cap) ? cap : std::min(cap, elements * 5 / 2);
     }
     const double group_seconds = secondsSince(group_begin);
-    if (elements >= cap && settings.fixed_elements == 0) {
-      double best = 1e300;
-      for (size_t r = 0; r < rhs; ++r) best = std::min(best, total[r] > 0 ? std::sqrt(diff[r] / total[r]) : 0.0);
-      if (best > settings.target_relative_error) {
-        missed_k = k;
-        missed_best = best;
-      }
-    }
 
     for (size_t r = 0; r < rhs; ++r) {
       const size_t mode = first + r;
@@ -249,6 +267,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
         st.factor_seconds = factor_seconds / static_cast<double>(rhs);
         st.far_field_seconds = far_field_seconds / static_cast<double>(rhs);
         st.solves = solves;
+        st.iterations = mode_iterations[r];
       }
     }
     if (progress) progress("transfer", static_cast<double>(last) / static_cast<double>(modes + 1));
@@ -266,8 +285,9 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
       for (size_t t = 0; t < s.tris.size(); ++t) data[j].q[t] = -s.tris[t].normal[j];
       nodeData(s, data[j]);
     }
-    const ModeSolve solved =
-        solveSystem(s, data, 0.0, elements, 0, k_ref, near_caches, parts);  // the three right-hand sides at once
+    near_caches.clear();  // (rules at k = 0)
+    const ModeSolve solved = solveSystem(s, data, 0.0, elements, 0, 0.0, near_caches, parts,
+                                         system_options);  // the three right-hand sides at once
     for (int j = 0; j < 3; ++j)
       for (size_t c = 0; c < solved.cut.nodes.size(); ++c) {
         const V3 va = s.nodes[solved.cut.nodes[c]].vector_area;

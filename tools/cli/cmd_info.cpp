@@ -12,6 +12,10 @@
 namespace strike::cli {
 namespace {
 
+/// How far a mode's level may be off for a transfer error estimate e (relative rms over
+/// directions): the larger of |20 log10(1 - e)| and 20 log10(1 + e), dB (60 dB past e = 0.999).
+double transferLevelDb(double e) { return e >= 0.999 ? 60.0 : -20.0 * std::log10(1.0 - e); }
+
 CommandSpec infoSpec() {
   CommandSpec spec;
   spec.usage = "strike info BANK.modes [--json]";
@@ -114,13 +118,18 @@ void printTable(const std::string& path, const ModeBank& bank) {
   const size_t with_transfer = bank.transfer.modeCount();
   const bool has_transfer = !bank.transfer.offset.empty() && bank.modeCount() > 0;
   if (has_transfer && with_transfer == bank.modeCount())
-    std::printf("sound     acoustic transfer (%s) in %.2f s\n\n", bank.transfer.method.c_str(), bank.transfer_seconds);
+    std::printf("sound     acoustic transfer (%s) in %.2f s\n", bank.transfer.method.c_str(), bank.transfer_seconds);
   else if (has_transfer)
     std::printf(
         "sound     acoustic transfer (%s) in %.2f s for the first %zu modes (the heard ones, to %.0f Hz); a mode "
-        "without one (-) is heard direction-averaged until a render that plays it solves its own\n\n",
+        "without one (-) is heard direction-averaged until a render that plays it solves its own\n",
         bank.transfer.method.c_str(), bank.transfer_seconds, with_transfer,
         with_transfer > 0 ? bank.frequencyHz(with_transfer - 1) : 0.0);
+  if (has_transfer)
+    std::printf(
+        "          transfer err: a mode's estimated far-field error, rms over directions relative to the field's\n"
+        "          rms; e = 5%% is -26 dB under the field, its level within 20 log10(1 -+ e) = -0.45/+0.42 dB\n"
+        "          (the column `dB`: the larger of the two)\n\n");
   else
     std::printf(
         "sound     no acoustic transfer (format %u): heard through the direction average of the older "
@@ -129,16 +138,16 @@ void printTable(const std::string& path, const ModeBank& bank) {
   const bool has_error = !bank.frequency_error_estimate.empty();
   const std::vector<double> efficiency = has_transfer ? radiationEfficiency(bank) : std::vector<double>{};
   std::printf("%5s %14s %12s %10s%s%s\n", "mode", "frequency Hz", "decay 1/s", "T60 s", has_error ? "  est. error" : "",
-              has_transfer ? "  order  transfer err  efficiency" : "");
+              has_transfer ? "  order  transfer err     dB  efficiency" : "");
   for (size_t i = 0; i < bank.modeCount(); ++i) {
     const double t60 = t60Seconds(bank.decayPerS(i));
     std::printf("%5zu %14.3f %12.4g %10.4g", i, bank.frequencyHz(i), bank.decayPerS(i), t60);
     if (has_error) std::printf("  %9.3g%%", 100.0 * bank.frequency_error_estimate[i]);
     if (has_transfer && i < with_transfer)
-      std::printf("  %5u %12.3g%% %11.3g", bank.transfer.order[i], 100.0 * bank.transfer.relative_error[i],
-                  efficiency[i]);
+      std::printf("  %5u %12.3g%% %6.2f %11.3g", bank.transfer.order[i], 100.0 * bank.transfer.relative_error[i],
+                  transferLevelDb(bank.transfer.relative_error[i]), efficiency[i]);
     else if (has_transfer)
-      std::printf("  %5s %13s %11s", "-", "-", "-");
+      std::printf("  %5s %13s %6s %11s", "-", "-", "-", "-");
     std::printf("\n");
   }
 }

@@ -58,7 +58,8 @@ CommandSpec modesSpec() {
       {"--max-memory", "SIZE",
        "memory budget (e.g. 4G, 500M): every solve (the eigen-solve, the transfer, each --tolerance\n"
        "step) forecasts its memory first and is refused at once, with the forecast, when it needs\n"
-       "more; default: the memory available now (MemAvailable)"},
+       "more; default: the memory available now (MemAvailable). With --transfer-max-elements\n"
+       "the transfer's budget is lowered until its largest system fits in half of it"},
       {"--max-seconds", "S",
        "with --tolerance: do not start a step forecast to end later than S seconds\n"
        "after the start; default: no limit. A budget stop keeps the finest result and says so"},
@@ -73,6 +74,15 @@ CommandSpec modesSpec() {
        "bar), more on plates, planks and blocks of linear tets, whose eigen-solve is cheap\n"
        "(docs/acoustic-transfer.md)"},
       {"--transfer", "", "solve the acoustic transfer (the default; kept so older scripts run)"},
+      {"--transfer-tolerance", "PCT",
+       "refine each mode's transfer until its estimated error (rms over directions of its far\n"
+       "field's error, relative to the field's rms) is below PCT, within the element budget:\n"
+       "e.g. 10% (-20 dB: the level within -0.9/+0.8 dB) or 0.05; default 5% (-26 dB, +-0.4 dB),\n"
+       "or --tolerance's. Modes it cannot meet are reported (NOT met) with the reason"},
+      {"--transfer-max-elements", "N",
+       "the transfer's element budget: at most N unknowns per solve; default 700 (dense LU);\n"
+       "above 700 a wall without interior points is solved by GMRES (memory ~48 N^2 bytes,\n"
+       "forecast and kept within --max-memory)"},
       {"--similar", "",
        "solve the shape at unit size with a reference material and scale the bank to the object,\n"
        "as `strike render --similar` does: the bank that render uses (frequencies equal to a\n"
@@ -194,11 +204,17 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
                  bank.modeCount() > worst_mode ? bank.frequencyHz(worst_mode) : 0.0, bank.transfer.method.c_str());
     size_t over = 0;
     for (float e : bank.transfer.relative_error) over += e > target ? 1 : 0;
+    // What an estimate means for the sound: the error's level under the field's, and the
+    // field's level within 20 log10(1 -+ e) dB.
+    std::fprintf(stderr, "  transfer    tolerance %.3g%% (%.0f dB: a mode's level within %+.2f/%+.2f dB) %s",
+                 100.0 * target, 20.0 * std::log10(target), 20.0 * std::log10(std::max(1e-6, 1.0 - target)),
+                 20.0 * std::log10(1.0 + target), over == 0 ? "met on every mode\n" : "NOT met: ");
     if (over > 0)
       std::fprintf(stderr,
-                   "  note        the transfer of %zu of %zu modes is estimated worse than its target %.3g%%: the "
-                   "element budget (%u) stops it short (docs/acoustic-transfer.md)\n",
-                   over, bank.transfer.modeCount(), 100.0 * target, settings.transfer.max_elements);
+                   "%zu of %zu modes estimated worse (max %.0f dB, %+.1f dB); the element budget (%u unknowns) stops "
+                   "them short (--transfer-max-elements; docs/acoustic-transfer.md)\n",
+                   over, bank.transfer.modeCount(), 20.0 * std::log10(worst), 20.0 * std::log10(1.0 + worst),
+                   settings.transfer.max_elements);
     if (bank.transfer.modeCount() < bank.modeCount())
       std::fprintf(stderr,
                    "  heard       the transfer of the %zu modes up to %.0f Hz, what a render plays; the %zu above "
@@ -228,17 +244,17 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
 
 /// --tolerance: "0.5%" or "0.005". A bare number >= 0.1 is refused: "0.5" is 50% to the
 /// parser and half a percent to whoever typed it (issue 15).
-Result<double> parseTolerance(const std::string& raw) {
+Result<double> parseTolerance(const std::string& raw, const std::string& option = "--tolerance") {
   std::string text = raw;
   const bool percent = !text.empty() && text.back() == '%';
   if (percent) text.pop_back();
-  Result<double> value = parseNumber(text, "--tolerance");
+  Result<double> value = parseNumber(text, option);
   if (!value) return value.error();
   if (!percent && *value >= 0.1)
-    return badInput("--tolerance = " + raw + " is ambiguous: write " + raw + "% for " + raw +
+    return badInput(option + " = " + raw + " is ambiguous: write " + raw + "% for " + raw +
                     " percent, or a fraction below 0.1 (0.005 = 0.5%)");
   const double tolerance = percent ? *value / 100.0 : *value;
-  if (!(tolerance > 0 && tolerance < 1)) return badInput("--tolerance = " + raw + " (must be between 0 and 100%)");
+  if (!(tolerance > 0 && tolerance < 1)) return badInput(option + " = " + raw + " (must be between 0 and 100%)");
   return tolerance;
 }
 
@@ -256,7 +272,7 @@ Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSe
   options.tolerance = *tolerance;
   // The transfer, when asked for, aims at the same relative error (its far field's, rms over
   // directions); its element budget may stop it short, and the summary says where.
-  settings.transfer.target_relative_error = *tolerance;
+  if (!args.has("--transfer-tolerance")) settings.transfer.target_relative_error = *tolerance;
   options.max_bytes = settings.max_memory_bytes;
   Result<double> seconds = args.number("--max-seconds", 0.0);
   if (!seconds) return seconds.error();
@@ -294,6 +310,32 @@ Result<PrecomputeResult> computeToTolerance(const ParsedArgs& args, PrecomputeSe
   settings.target_edge_m = chosen->trials.back().target_edge_m;
   PrecomputeResult out = std::move(chosen->chosen);
   return out;
+}
+
+/// --transfer-tolerance and --transfer-max-elements (and --max-memory's cap on the latter).
+Status transferOptions(const ParsedArgs& args, PrecomputeSettings& settings, bool quiet) {
+  if (args.has("--transfer-tolerance")) {
+    Result<double> tolerance = parseTolerance(args.text("--transfer-tolerance"), "--transfer-tolerance");
+    if (!tolerance) return tolerance.error();
+    settings.transfer.target_relative_error = *tolerance;
+  }
+  if (!args.has("--transfer-max-elements")) return {};
+  Result<long long> budget = args.integer("--transfer-max-elements", 700);
+  if (!budget) return budget.error();
+  if (*budget < 16 || *budget > 100000)
+    return badInput("--transfer-max-elements = " + args.text("--transfer-max-elements") + " (must be 16 to 100000)");
+  uint64_t elements = static_cast<uint64_t>(*budget);
+  if (settings.max_memory_bytes > 0) {
+    // Half the budget for the largest system and its coarse copy (the rest: mesh, bank, caches).
+    while (elements > 16 && transferSystemBytes(elements) > 0.5 * settings.max_memory_bytes)
+      elements = elements * 9 / 10;
+  }
+  settings.transfer.max_elements = static_cast<uint32_t>(elements);
+  if (!quiet)
+    std::fprintf(stderr, "strike modes: transfer budget %llu unknowns (forecast %.0f MB for its largest system)%s\n",
+                 static_cast<unsigned long long>(elements), transferSystemBytes(elements) / 1e6,
+                 elements < static_cast<uint64_t>(*budget) ? ", lowered to fit the memory budget (--max-memory)" : "");
+  return {};
 }
 
 }  // namespace
@@ -358,6 +400,7 @@ int runModes(const std::vector<std::string>& raw_args) {
   Result<double> max_memory = memoryBudgetFromArgs(args);
   if (!max_memory) return reportError("modes", max_memory.error());
   settings.max_memory_bytes = *max_memory;
+  if (Status ok = transferOptions(args, settings, args.has("--quiet")); !ok) return reportError("modes", ok.error());
   if (args.has("--error-estimate") && args.has("--no-error-estimate"))
     return reportError("modes", badInput("--error-estimate and --no-error-estimate contradict each other"));
   // Default: on when the mesh can be coarsened (Richardson, ~10-25% extra; see

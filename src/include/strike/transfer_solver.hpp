@@ -20,8 +20,8 @@
 // Error estimate per mode: the far field of the same system with clusters merged pairwise
 // (about half the unknowns), against the full one, plus the truncated tail.
 // Cost (docs/acoustic-transfer.md): a row is summed over the cut's pieces in vectorized passes;
-// the near triangles' quadrature is built once per cut (rules at the bank's largest k) and
-// only its exponentials are evaluated per mode; modes of one frequency share the system and
+// the near triangles' quadrature is built once per cut (rules at the group's k rounded up to a
+// quarter octave) and only its exponentials are evaluated per mode; modes of one frequency share the system and
 // its LU or least-squares QR (single precision, refined in double); the far field is summed at
 // the directions of a Gauss-Legendre x uniform rule and projected on the harmonics. The rows
 // and the directions are each done in two fixed halves, the second on a helper thread (same
@@ -53,6 +53,10 @@ struct TransferSettings {
   uint32_t min_elements = 160;
   /// Force this many unknowns for every mode (0: automatic). For studies of error against cost.
   uint32_t fixed_elements = 0;
+  /// Square systems (no interior points) with more unknowns than this are solved by restarted
+  /// GMRES (a relative residual of min(1e-5, target / 100)), the others by a dense LU: with an
+  /// element budget above it, thin walls get more unknowns at ~N^2 instead of N^3.
+  uint32_t direct_max_elements = 700;
   /// Interior (CHIEF) points once k reaches the interior resonances (false: never; a study).
   bool chief = true;
   /// 2: the system's rows are assembled, and the far field summed at its directions, in two
@@ -66,9 +70,12 @@ struct TransferSettings {
 /// 2026-11; 3: modes share a solve while the gap costs a tenth of the target, the far field is
 /// first projected to a lower order, a group goes straight to the budget when a lower frequency
 /// missed the target there; 4: least-squares (interior-point) systems by a single-precision QR
-/// refined in double, which changes the last bits of a few coefficients), so cached transfers
-/// are solved again rather than mixed with the new solver's.
-constexpr uint32_t kTransferSolverRevision = 4;
+/// refined in double, which changes the last bits of a few coefficients; 5: a group's near
+/// quadrature rules chosen at its own wavenumber (rounded up to a quarter octave) instead of the
+/// bank's largest, and no group starting at the budget because a lower one missed the target
+/// there: a group's transfer depends on its own modes and the settings alone), so cached
+/// transfers are solved again rather than mixed with the new solver's.
+constexpr uint32_t kTransferSolverRevision = 5;
 
 /// What one mode's solve cost and found (for studies and reports).
 struct TransferModeStats {
@@ -82,7 +89,27 @@ struct TransferModeStats {
   double factor_seconds = 0.0;     ///< of `seconds`: LU / QR and the coarse solve
   double far_field_seconds = 0.0;  ///< of `seconds`: the spherical-harmonic projection
   uint32_t solves = 0;             ///< systems solved (refinement steps)
+  uint32_t iterations = 0;         ///< GMRES iterations of the kept solve (0: a direct solve)
 };
+
+/// The memory of the largest system of a solve with `elements` unknowns, forecast before it is
+/// allocated: the matrix in double and its single-precision copy (LU), and the error estimate's
+/// coarse system beside it (about half the unknowns), 24 bytes per entry; the interior points'
+/// rows (at most a tenth more) included.
+inline double transferSystemBytes(uint64_t elements) {
+  const double n = static_cast<double>(elements), rows = 1.1 * n, coarse = 0.5 * n + 0.1 * n;
+  return 24.0 * (rows * n + coarse * 0.5 * n);
+}
+
+/// The groups of modes that share one solve (modes of nearly one frequency: a degenerate pair
+/// split by the mesh's asymmetry): group g is modes [starts[g], starts[g + 1]), the last entry
+/// is the mode count. Each group's transfer (coefficients, order, estimate) depends on its own
+/// modes' eigenvalues and shapes, the surface and the settings alone: solving a bank whose modes
+/// are some of these groups gives those groups the same bits (so a bank may be extended by the
+/// groups above the ones it has, as a cold solve of them all would give). A group starts where a
+/// mode is farther from the group's first mode than the target allows, so the groups of the
+/// modes from a group start on do not depend on the modes below it.
+std::vector<size_t> transferGroups(const ModeBank& bank, const TransferSettings& settings);
 
 /// Solves the transfer of every mode of `bank` (its eigenvalues, shapes on surface vertices,
 /// surface triangles CCW from outside) and the rigid translation's dipole tensor. `progress`

@@ -256,6 +256,76 @@ TEST(TransferSolver, SameBitsOnOneThreadAndOnTwo) {
   }
 }
 
+// A group's transfer depends on its own modes and the settings alone (transferGroups): a bank of
+// some of the groups gives them the same bits as the bank of them all, so a bank can be extended
+// by the groups it lacks with the bits of a cold solve. Here a degenerate pair (one group, split
+// by 1e-5), a mode below it and one above, the pair solved alone and with the others; the
+// refinement runs (no fixed resolution), as the defaults do.
+TEST(TransferSolver, AGroupSolvedAloneHasTheBitsItHasAmongOthers) {
+  const double a = 0.05, c_air = 343.0;
+  ModeBank all = sphereBank(a, 0.012);
+  ModeBank pair = sphereBank(a, 0.012);
+  addYnmMode(all, 1, 0, 1.5 / a, c_air);
+  for (ModeBank* bank : {&all, &pair}) {
+    addYnmMode(*bank, 2, 1, 4.0 / a, c_air);
+    addYnmMode(*bank, 2, -1, 4.0 * (1.0 + 1e-5) / a, c_air);
+  }
+  addYnmMode(all, 3, 2, 9.0 / a, c_air);
+  TransferSettings settings;
+  settings.max_elements = 400;
+  const std::vector<size_t> groups = transferGroups(all, settings);
+  ASSERT_EQ(groups, (std::vector<size_t>{0, 1, 3, 4}));
+  EXPECT_EQ(transferGroups(pair, settings), (std::vector<size_t>{0, 2}));
+  Result<AcousticTransfer> with_others = solveAcousticTransfer(all, settings);
+  Result<AcousticTransfer> alone = solveAcousticTransfer(pair, settings);
+  ASSERT_TRUE(with_others) << with_others.error().message;
+  ASSERT_TRUE(alone) << alone.error().message;
+  for (size_t i = 0; i < 2; ++i) {
+    const size_t mode = 1 + i;
+    ASSERT_EQ(alone->order[i], with_others->order[mode]) << i;
+    const size_t count = alone->offset[i + 1] - alone->offset[i];
+    EXPECT_EQ(std::memcmp(&alone->coefficients[alone->offset[i]], &with_others->coefficients[with_others->offset[mode]],
+                          count * sizeof(alone->coefficients[0])),
+              0)
+        << i;
+    EXPECT_EQ(alone->relative_error[i], with_others->relative_error[mode]) << i;
+  }
+}
+
+// A square system above direct_max_elements is solved by GMRES: the same far field as the LU's
+// to well within the residual it stops at (1e-5), and the estimate (the coarse system, by GMRES
+// too) the same. Below ka ~ 2 the sphere has no interior points: square systems.
+TEST(TransferSolver, GmresGivesTheFarFieldOfTheLu) {
+  const double a = 0.05, c_air = 343.0, rho = 1.2;
+  ModeBank bank = sphereBank(a, 0.01);
+  addYnmMode(bank, 1, 0, 1.0 / a, c_air);
+  addYnmMode(bank, 2, -1, 1.5 / a, c_air);
+  TransferSettings settings;
+  settings.air_density_kg_m3 = rho;
+  settings.fixed_elements = 400;
+  std::vector<AcousticTransfer> runs;
+  std::vector<TransferModeStats> stats;
+  for (const uint32_t direct_max : {700u, 100u}) {
+    settings.direct_max_elements = direct_max;
+    Result<AcousticTransfer> t = solveAcousticTransfer(bank, settings, {}, &stats);
+    ASSERT_TRUE(t) << t.error().message;
+    runs.push_back(*t);
+  }
+  EXPECT_GT(stats[0].iterations, 0u);  // the second run's: GMRES
+  for (size_t i = 0; i < 2; ++i) {
+    ASSERT_EQ(runs[0].order[i], runs[1].order[i]);
+    double wrong = 0.0, total = 0.0;
+    for (uint64_t j = runs[0].offset[i]; j < runs[0].offset[i + 1]; ++j) {
+      wrong += std::norm(cd(runs[1].coefficients[j]) - cd(runs[0].coefficients[j]));
+      total += std::norm(cd(runs[0].coefficients[j]));
+    }
+    EXPECT_LT(std::sqrt(wrong / total), 1e-4) << i;
+    EXPECT_NEAR(runs[1].relative_error[i], runs[0].relative_error[i], 1e-3 * runs[0].relative_error[i]) << i;
+    const SphereError e = compare(runs[1], i, i == 0 ? 1 : 2, i == 0 ? 0 : -1, (i == 0 ? 1.0 : 1.5) / a, a, rho);
+    EXPECT_LT(e.relative, 0.05) << i;
+  }
+}
+
 TEST(TransferSolver, IsLinearInTheShapeSoSignsAndDegenerateBasesCancel) {
   const double a = 0.05, c_air = 343.0, k = 3.0 / a;
   ModeBank bank = sphereBank(a, 0.01);
@@ -355,6 +425,8 @@ TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
   ASSERT_TRUE(bank) << bank.error().message;
   TransferSettings settings;
   if (const char* max = std::getenv("STRIKE_TRANSFER_MAX_ELEMENTS")) settings.max_elements = std::atoi(max);
+  if (const char* max = std::getenv("STRIKE_TRANSFER_DIRECT_MAX")) settings.direct_max_elements = std::atoi(max);
+  if (const char* target = std::getenv("STRIKE_TRANSFER_TARGET")) settings.target_relative_error = std::atof(target);
   if (const char* every = std::getenv("STRIKE_TRANSFER_EVERY")) {  // every N-th mode only (N-1, 2N-1, ...)
     const size_t n = std::max(1, std::atoi(every)), vertices = bank->surfaceVertexCount();
     ModeBank kept = *bank;
@@ -379,10 +451,35 @@ TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
   for (size_t i = 0; i < stats.size(); ++i)
     std::printf(
         "%3zu %8.1f Hz ka %6.2f elements %4u chief %3u order %3u estimate %7.4f %6.3f s (solves %u, assembly %.3f, "
-        "factor %.3f, far field %.3f)\n",
+        "factor %.3f, far field %.3f, iterations %u)\n",
         i, bank->frequencyHz(i), stats[i].ka, stats[i].elements, stats[i].chief_points, stats[i].order,
         stats[i].relative_error, stats[i].seconds, stats[i].solves, stats[i].assembly_seconds, stats[i].factor_seconds,
-        stats[i].far_field_seconds);
+        stats[i].far_field_seconds, stats[i].iterations);
+  // Against a reference transfer of the same modes (a bank solved tighter): the true error of
+  // each mode's far field (rms over directions, Parseval), beside its estimate.
+  if (const char* reference_path = std::getenv("STRIKE_TRANSFER_REFERENCE")) {
+    Result<ModeBank> reference = readBank(reference_path);
+    ASSERT_TRUE(reference) << reference.error().message;
+    const AcousticTransfer& r = reference->transfer;
+    ASSERT_EQ(r.modeCount(), t->modeCount());
+    size_t within = 0, over3 = 0;
+    for (size_t i = 0; i < t->modeCount(); ++i) {
+      double wrong = 0.0, total = 0.0;
+      const uint64_t a = t->offset[i + 1] - t->offset[i], b = r.offset[i + 1] - r.offset[i];
+      for (uint64_t j = 0; j < std::max(a, b); ++j) {
+        const cd x = j < a ? cd(t->coefficients[t->offset[i] + j]) : cd(0.0);
+        const cd y = j < b ? cd(r.coefficients[r.offset[i] + j]) : cd(0.0);
+        wrong += std::norm(x - y);
+        total += std::norm(y);
+      }
+      const double truth = std::sqrt(wrong / total), estimate = t->relative_error[i];
+      within += truth <= estimate ? 1 : 0;
+      over3 += truth > 3.0 * estimate ? 1 : 0;
+      std::printf("%3zu true error %7.4f estimate %7.4f ratio %.2f\n", i, truth, estimate, truth / estimate);
+    }
+    std::printf("true error within the estimate: %zu of %zu; over 3x the estimate: %zu\n", within, t->modeCount(),
+                over3);
+  }
 }
 }  // namespace
 }  // namespace strike

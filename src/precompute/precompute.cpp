@@ -2,6 +2,7 @@
 #include "strike/precompute.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <map>
 
@@ -121,6 +122,11 @@ Status extendTransfer(ModeBank& bank, size_t modes, const TransferSettings& sett
   const size_t first = bank.transfer.modeCount();
   const bool none = bank.transfer.offset.empty();  // not even the dipole: never solved
   if (modes > bank.modeCount()) return internalError("a transfer asked for more modes than the bank has");
+  // Whole groups (modes of nearly one frequency share a solve: transferGroups): a transfer ends
+  // where a group ends, so an extension starts where one starts and its modes get the bits of a
+  // cold solve of them all (a group's solve depends on its own modes alone).
+  const std::vector<size_t> groups = transferGroups(bank, settings);
+  modes = *std::lower_bound(groups.begin(), groups.end(), modes);
   if (first >= modes && !none) return {};
   const auto start = std::chrono::steady_clock::now();
   if (progress) progress("transfer", 0.0);

@@ -14,12 +14,15 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <thread>
 
 #include "cache_lock.hpp"
 #include "hull_cache.hpp"
 #include "pieces_cache.hpp"
 #include "playback.hpp"
+#include "side_by_side.hpp"
 #include "strike/atomic_file.hpp"
 #include "strike/bank.hpp"
 #include "strike/bank_cache.hpp"
@@ -377,6 +380,23 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
   return {};
 }
 
+/// What solving the body's bank may hold at its peak, bytes, for running solves side by side:
+/// the eigen-solve's 30 KB per degree of freedom (the first step's forecast of `strike modes
+/// --tolerance`, error_estimate.cpp: the mug's peaked at 1.42 GB for 47k DOF; the solve's exact
+/// forecast needs its factor's symbolic analysis, made in the solve) plus, with the acoustic
+/// transfer, the larger of its own forecast (transferMemoryForecastBytes) and what it was measured
+/// to take above the eigen-solve: 0.36 GB on box:0.2,0.1,0.05 (896 triangles, 9 modes; the
+/// forecast says 33 MB), nothing on assets/meshes/glass.obj (0.47 GB peak either way).
+double solveForecastBytes(const Body& body) {
+  constexpr double kTransferMeasuredBytes = 0.5e9;
+  const double dofs = body.mesh ? 3.0 * static_cast<double>(body.mesh->mesh.nodes.rows()) : 0.0;
+  const double transfer =
+      body.precompute.acoustic_transfer
+          ? std::max(kTransferMeasuredBytes, transferMemoryForecastBytes(*body.bank, body.precompute.transfer))
+          : 0.0;
+  return 30e3 * dofs + transfer;
+}
+
 /// Whether the body's cached bank lacks the transfer of modes this render plays (it was solved
 /// for a lower band: another sample rate, or a bank for fewer uses).
 bool lacksHeardTransfer(const Body& body, const RenderSettings& settings) {
@@ -725,6 +745,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   std::map<uint64_t, size_t> solved_by_key;    // similar_reuse: objects of one shape share one solve
   std::map<uint64_t, ModeBank> unit_by_key;    // ...and one transfer per wave speed and modes kept
   std::map<uint64_t, std::shared_ptr<const ModeBank>> extended_by_key;  // cached banks given more transfer
+  std::vector<size_t> to_solve;                                         // bodies whose bank is solved now
+  std::vector<std::pair<size_t, size_t>> shares;  // (body, the identical body whose bank it takes)
   for (size_t i = 0; i < bodies.size(); ++i) {
     Body& body = bodies[i];
     if (body.max_velocity_change_m_s == 0.0 && !settings.leave_nothing_out) continue;
@@ -760,44 +782,86 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     }
     if (body.has_modes) continue;
     if (auto shared = computed_by_key.find(body.cache_key); shared != computed_by_key.end()) {
-      body.bank = bodies[shared->second].bank;
-      body.has_modes = true;
-      ++report.banks_shared;
+      shares.emplace_back(i, shared->second);  // its bank once that body has one (below)
       continue;
     }
-    // Held until the bank is in the cache: a render elsewhere that needs it waits, then reads it.
-    CacheEntryLock lock;
-    if (!settings.cache_dir.empty()) {
-      lock = CacheEntryLock(cachePath(settings.cache_dir, body.cache_key, ".lock"));
-      if (lock.held() && !body.from_cache && openCached(settings.cache_dir, body, report)) {
-        // Solved by whoever held the lock while this render simulated or waited.
-        if (lacksHeardTransfer(body, settings) ? extendCachedTransfer(body, settings, extended_by_key, report)
-                                               : readStruckShapes(body, static_cast<uint32_t>(i), result.events,
-                                                                  bool(settings.output), settings.session, report)) {
-          body.mesh.reset();
-          continue;
-        }
-        --report.banks_cached;
-        report.precompute_saved_seconds -= body.bank->factorize_seconds + body.bank->lanczos_seconds;
-        body.file.reset();
-        body.rows.reset();
-        body.has_modes = false;
-        body.from_cache = false;
+    computed_by_key[body.cache_key] = i;
+    to_solve.push_back(i);
+  }
+  // Held until the banks are in the cache: a render elsewhere that needs one waits, then reads it.
+  // Taken in the order of the keys, as every render takes them, so two never wait for each other.
+  std::map<uint64_t, CacheEntryLock> locks;
+  std::vector<size_t> by_key = to_solve;
+  std::sort(by_key.begin(), by_key.end(),
+            [&](size_t a, size_t b) { return bodies[a].cache_key < bodies[b].cache_key; });
+  for (size_t i : settings.cache_dir.empty() ? std::vector<size_t>{} : by_key) {
+    Body& body = bodies[i];
+    CacheEntryLock lock(cachePath(settings.cache_dir, body.cache_key, ".lock"));
+    if (lock.held() && !body.from_cache && openCached(settings.cache_dir, body, report)) {
+      // Solved by whoever held the lock while this render simulated or waited.
+      if (lacksHeardTransfer(body, settings) ? extendCachedTransfer(body, settings, extended_by_key, report)
+                                             : readStruckShapes(body, static_cast<uint32_t>(i), result.events,
+                                                                bool(settings.output), settings.session, report)) {
+        body.mesh.reset();
+        to_solve.erase(std::find(to_solve.begin(), to_solve.end(), i));
+        continue;
       }
+      --report.banks_cached;
+      report.precompute_saved_seconds -= body.bank->factorize_seconds + body.bank->lanczos_seconds;
+      body.file.reset();
+      body.rows.reset();
+      body.has_modes = false;
+      body.from_cache = false;
     }
-    if (settings.progress) settings.progress("modes " + body.object->name, -1.0);
-    Result<PrecomputeResult> computed = computeModeBankForMesh(*body.mesh, body.precompute);
-    if (!computed) return badInput("objects \"" + body.object->name + "\": " + computed.error().message);
-    for (const MeshWarning& w : computed->report.warnings) warn("objects \"" + body.object->name + "\": " + w.message);
-    body.bank = std::make_shared<const ModeBank>(std::move(computed->bank));
+    locks.emplace(body.cache_key, std::move(lock));
+  }
+  // The new banks, side by side (side_by_side.hpp): each solve's bits are a serial solve's.
+  std::vector<std::optional<Result<PrecomputeResult>>> computed(to_solve.size());
+  std::mutex progress_lock;  // the caller's progress callback is called from one thread at a time
+  auto progress = [&](std::string_view phase, double fraction) {
+    std::lock_guard<std::mutex> hold(progress_lock);
+    settings.progress(phase, fraction);
+  };
+  runSideBySide(
+      to_solve.size(),
+      settings.solve_threads > 0 ? settings.solve_threads : std::max(1u, std::thread::hardware_concurrency()),
+      settings.max_memory_bytes > 0 ? settings.max_memory_bytes : availableMemoryBytes(),
+      [&](size_t j) { return solveForecastBytes(bodies[to_solve[j]]); },
+      [&](size_t j) {
+        Body& body = bodies[to_solve[j]];
+        PrecomputeSettings precompute = body.precompute;
+        if (settings.progress) {
+          precompute.progress = progress;
+          progress("modes " + body.object->name, -1.0);
+        }
+        computed[j] = computeModeBankForMesh(*body.mesh, precompute);
+      });
+  for (size_t j = 0; j < to_solve.size(); ++j) {  // in the bodies' order, as a serial solve
+    Body& body = bodies[to_solve[j]];
+    Result<PrecomputeResult>& bank = *computed[j];
+    if (!bank) return badInput("objects \"" + body.object->name + "\": " + bank.error().message);
+    for (const MeshWarning& w : bank->report.warnings) warn("objects \"" + body.object->name + "\": " + w.message);
+    body.bank = std::make_shared<const ModeBank>(std::move(bank->bank));
     body.has_modes = true;
     body.mesh.reset();
-    computed_by_key[body.cache_key] = i;
     ++report.banks_computed;
     if (!settings.cache_dir.empty()) {
       // A failed cache write costs the next render time, never this one its result.
       (void)writeBank(cachePath(settings.cache_dir, body.cache_key, ".modes"), *body.bank);
+      locks.erase(body.cache_key);
     }
+  }
+  for (const auto& [i, holder] : shares) {  // identical objects: the bank of the first
+    Body& body = bodies[i];
+    body.bank = bodies[holder].bank;
+    body.file = bodies[holder].file;  // read from the cache meanwhile: its shapes where this one is struck
+    body.has_modes = true;
+    ++report.banks_shared;
+    if (body.file)
+      if (Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output),
+                                         settings.session, report);
+          !read)
+        return read.error();
   }
   report.precompute_seconds = secondsSince(precompute_start);
   if (!settings.cache_dir.empty() && settings.cache_max_bytes > 0) {

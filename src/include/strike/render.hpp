@@ -93,6 +93,10 @@ struct RenderSettings {
   /// `strike render` and the Python package turn it on unless told `--no-transfer`; here it is
   /// asked for, as in PrecomputeSettings. Banks given in the scene are used as they are.
   bool acoustic_transfer = false;
+  /// How many of the banks this render computes are solved at once, each on a thread of its own
+  /// (src/scene/side_by_side.hpp): 0, one per core, as far as the memory forecast allows; 1, one
+  /// after another. The banks, and so the output, are the same bytes either way.
+  unsigned solve_threads = 0;
   /// Physics step, s (at most 1 ms, what the issue allows). Contact times fall on this grid, so an
   /// impact is placed within one step (48 samples at 48 kHz); 1 ms halves the simulation cost of
   /// the 0.5 ms step used before (`strike bench render` measures both).

@@ -230,3 +230,77 @@ TEST(HeardTransfer, ARenderThatPlaysMoreModesSolvesTheirTransferCachesItAndSound
 
 }  // namespace
 }  // namespace strike
+
+namespace strike {
+namespace {
+
+// Objects solve side by side: a render with three new objects solves their banks (eigen-solve and
+// acoustic transfer) one after another and two at a time, and gets the same banks to the bit and
+// the same output bytes.
+std::string threeObjects() {
+  return R"({"sample_rate": 48000, "duration": 0.3, "listener": {"position": [0.2, -0.5, 0.3]}, "max_modes": 6,
+    "objects": [
+      {"name": "bar", "mesh": "box:0.12,0.02,0.015", "material": "steel", "order": 2, "size": 0.01,
+       "position": [0, 0, 0.04], "angular_velocity": [1, 2, 0]},
+      {"name": "plank", "mesh": "box:0.2,0.03,0.01", "material": "aluminium", "order": 2, "size": 0.01,
+       "position": [0, 0.15, 0.05], "angular_velocity": [0, 1, 2]},
+      {"name": "block", "mesh": "box:0.1,0.04,0.02", "material": "brass", "order": 2, "size": 0.01,
+       "position": [0, -0.15, 0.06]}]})";
+}
+
+struct SolvedRender {
+  std::vector<float> samples;
+  std::vector<ModeBank> banks;  ///< as cached, in the objects' order
+  size_t computed = 0;
+  double precompute_seconds = 0.0;
+};
+
+SolvedRender renderWith(unsigned solve_threads) {
+  const std::string cache = testing::TempDir() + "/side-by-side-" + std::to_string(static_cast<long>(getpid())) + "-" +
+                            std::to_string(solve_threads);
+  std::filesystem::remove_all(cache);
+  Result<Scene> scene = parseScene(threeObjects(), "/tmp/side-by-side.json");
+  EXPECT_TRUE(scene) << (scene ? "" : scene.error().message);
+  if (!scene) return {};
+  RenderSettings settings;
+  settings.cache_dir = cache;
+  settings.acoustic_transfer = true;
+  settings.solve_threads = solve_threads;
+  Result<RenderResult> out = renderScene(*scene, settings);
+  EXPECT_TRUE(out) << (out ? "" : out.error().message);
+  if (!out) return {};
+  SolvedRender r{out->audio.samples, {}, out->report.banks_computed, out->report.precompute_seconds};
+  char name[32];
+  for (const BodyBank& b : out->banks) {
+    std::snprintf(name, sizeof name, "/%016llx.modes", static_cast<unsigned long long>(b.cache_key));
+    Result<ModeBank> bank = readBank(cache + name);
+    EXPECT_TRUE(bank) << (bank ? "" : bank.error().message);
+    if (bank) r.banks.push_back(std::move(*bank));
+  }
+  std::filesystem::remove_all(cache);
+  return r;
+}
+
+TEST(SideBySide, BanksSolvedAtOnceAreTheBanksOfASerialSolve) {
+  const SolvedRender serial = renderWith(1), two = renderWith(2);
+  std::printf("banks solved in %.2f s one after another, %.2f s two at a time\n", serial.precompute_seconds,
+              two.precompute_seconds);
+  ASSERT_EQ(serial.computed, 3u);
+  ASSERT_EQ(serial.banks.size(), 3u);
+  for (const SolvedRender* other : {&two}) {
+    EXPECT_EQ(other->computed, 3u);
+    ASSERT_EQ(other->banks.size(), 3u);
+    for (size_t b = 0; b < 3; ++b) {
+      const ModeBank &x = serial.banks[b], &y = other->banks[b];
+      EXPECT_GT(x.transfer.modeCount(), 0u);
+      EXPECT_EQ(x.eigenvalues, y.eigenvalues) << "bank " << b;
+      EXPECT_EQ(std::memcmp(x.shapes.data(), y.shapes.data(), x.shapes.size() * sizeof(float)), 0) << "bank " << b;
+      EXPECT_TRUE(x.shapes.size() == y.shapes.size() && sameBits(x.transfer, y.transfer)) << "bank " << b;
+    }
+    ASSERT_FALSE(serial.samples.empty());
+    EXPECT_EQ(other->samples, serial.samples);
+  }
+}
+
+}  // namespace
+}  // namespace strike

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/args.hpp"
 #include "cli/commands.hpp"
 #include "strike/interrupt_cleanup.hpp"
 #include "strike/modal.hpp"
@@ -69,6 +70,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "strike %s: internal error: %s\n", command.c_str(), e.what());
     return 2;
   }
-  std::fprintf(stderr, "strike: error: unknown command '%s'\n\n%s", command.c_str(), kUsage);
+  const std::string near =
+      strike::cli::closestName(command, {"render", "modes", "info", "hit", "analyze", "cache", "batch", "bench"});
+  std::fprintf(stderr, "strike: error: unknown command '%s'%s\n\n%s", command.c_str(),
+               near.empty() ? "" : ("; did you mean " + near + "?").c_str(), kUsage);
   return 1;
 }

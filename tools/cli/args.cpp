@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "args.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -108,9 +109,13 @@ Result<ParsedArgs> parseArgs(const CommandSpec& spec, const std::vector<std::str
       const OptionSpec* option = nullptr;
       for (const OptionSpec& o : spec.options)
         if (o.name == name) option = &o;
-      if (!option)
-        return badInput("unknown option '" + name + "' (see `" + spec.usage.substr(0, spec.usage.find(' ', 7)) +
-                        " --help`)");
+      if (!option) {
+        std::vector<std::string> names;
+        for (const OptionSpec& o : spec.options) names.push_back(o.name);
+        const std::string near = closestName(name, names);
+        return badInput("unknown option '" + name + "'" + (near.empty() ? "" : "; did you mean " + near + "?") +
+                        " (see `" + spec.usage.substr(0, spec.usage.find(' ', 7)) + " --help`)");
+      }
       if (option->value_name.empty()) {
         if (has_inline_value) return badInput("option " + name + " takes no value");
         parsed.values_[name] = "1";
@@ -131,6 +136,35 @@ Result<ParsedArgs> parseArgs(const CommandSpec& spec, const std::vector<std::str
   if (count > spec.max_positional)
     return badInput("unexpected argument '" + parsed.positional[spec.max_positional] + "'; usage: " + spec.usage);
   return parsed;
+}
+
+std::string closestName(const std::string& typed, const std::vector<std::string>& names) {
+  // Levenshtein distance by one row of the table (Wagner & Fischer 1974).
+  auto distance = [](const std::string& a, const std::string& b) {
+    std::vector<size_t> row(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+      size_t diagonal = row[0];
+      row[0] = i;
+      for (size_t j = 1; j <= b.size(); ++j) {
+        const size_t above = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        diagonal = above;
+      }
+    }
+    return row[b.size()];
+  };
+  std::string best;
+  size_t best_distance = 0;
+  for (const std::string& name : names) {
+    const size_t d = distance(typed, name);
+    if (best.empty() || d < best_distance) best = name, best_distance = d;
+  }
+  // Close enough to be a slip: at most 2 edits, and about a third of the letters at most.
+  const size_t letters =
+      typed.find_first_not_of('-') == std::string::npos ? 0 : typed.size() - typed.find_first_not_of('-');
+  if (best.empty() || best_distance > 2 || 3 * best_distance > std::max<size_t>(letters, 3) + 1) return "";
+  return best;
 }
 
 std::string wrapHelp(const std::string& text, size_t indent, size_t width) {
@@ -162,7 +196,7 @@ std::string wrapHelp(const std::string& text, size_t indent, size_t width) {
 
 std::string helpText(const CommandSpec& spec) {
   std::ostringstream out;
-  out << "usage: " << spec.usage << "\n\n" << spec.summary << "\n";
+  out << "usage: " << spec.usage << "\n\n" << wrapHelp(spec.summary, 0, kHelpWidth) << "\n";
   if (!spec.options.empty()) {
     out << "\noptions:\n";
     for (const OptionSpec& o : spec.options) {

@@ -71,6 +71,10 @@ inline constexpr const char* kSimdHelp =
 /// it cannot be read).
 Result<double> memoryBudgetFromArgs(const ParsedArgs& args);
 
+/// The name in `names` the user most probably meant by `typed` (a slip of one or two letters:
+/// "--rat" for "--rate", "rendr" for "render"), or "" when none is that close.
+std::string closestName(const std::string& typed, const std::vector<std::string>& names);
+
 /// Parses a number strictly: the whole text, finite. `what` names it in the error.
 Result<double> parseNumber(const std::string& text, const std::string& what);
 

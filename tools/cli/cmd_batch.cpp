@@ -12,11 +12,48 @@
 #include <string>
 #include <vector>
 
+#include "args.hpp"
 #include "commands.hpp"
 
 namespace strike::cli {
 
+namespace {
+
+// The options are python/strike/batch.py's (its parser checks them); this help says what they do.
+CommandSpec batchSpec() {
+  CommandSpec spec;
+  spec.usage = "strike batch MANIFEST.jsonl -o DIR [--workers N | --scheduler ADDRESS | --shard K/N] [options]";
+  spec.summary =
+      "Renders a manifest of scenes into a folder, on this machine or a Dask cluster, and writes beside every\n"
+      "sound (ID.wav, as `strike render`) what made it (ID.json: the scene as rendered, its parameters, seed,\n"
+      "versions and levels). MANIFEST.jsonl holds one JSON object a line: {\"scene\": FILE or object}, a\n"
+      "template with parameters, or a randomized dataset's seed and index or count; optionally \"id\" (the\n"
+      "output's name), \"rate\", \"duration\", \"gain\". A bad line stops the batch before anything renders,\n"
+      "naming MANIFEST:LINE, the key and the value. Runs the Python package (python3 -m strike.batch); the\n"
+      "manifest format, randomized scenes and clusters are in docs/datasets.md.";
+  spec.options = {
+      {"-o", "DIR", "output folder (required; made if missing)"},
+      {"--workers", "N", "a local Dask cluster of N worker processes; default: the cores"},
+      {"--scheduler", "ADDRESS", "use a running Dask cluster, e.g. tcp://head:8786"},
+      {"--shard", "K/N", "render lines K, K+N, K+2N, ... here, with no Dask (Slurm arrays)"},
+      {"--cache", "DIR", "bank cache folder shared by the workers; default $STRIKE_CACHE_DIR or ~/.cache/strike"},
+      {"--similar", "", "one eigen-solve per shape at unit size, scaled to every size and material (docs/datasets.md)"},
+      {"--quiet", "", "no progress bar"},
+  };
+  spec.examples =
+      "  strike batch scenes.jsonl -o out/ --workers 2\n"
+      "  strike batch scenes.jsonl -o out/ --scheduler tcp://head:8786\n"
+      "  strike batch scenes.jsonl -o out/ --shard 3/100\n";
+  return spec;
+}
+
+}  // namespace
+
 int runBatch(const std::vector<std::string>& args) {
+  if (wantsHelp(args)) {
+    std::fputs(helpText(batchSpec()).c_str(), stdout);
+    return 0;
+  }
 #ifndef STRIKE_PYTHON_EXECUTABLE
   (void)args;
   std::fputs(

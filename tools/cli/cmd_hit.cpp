@@ -141,8 +141,10 @@ int runHit(const std::vector<std::string>& raw_args) {
   const double peak = hit->peak;
   const size_t clipped = hit->clipped_samples;
   const size_t vertex = hit->vertex;
-  const std::array<double, 3>& point = hit->point_m;
-  const std::array<double, 3>& impulse = hit->impulse_n_s;
+  // Adding 0.0 turns a -0.0 (a negated zero component) into 0: printed "0", not "-0".
+  const std::array<double, 3> point = {hit->point_m[0] + 0.0, hit->point_m[1] + 0.0, hit->point_m[2] + 0.0};
+  const std::array<double, 3> impulse = {hit->impulse_n_s[0] + 0.0, hit->impulse_n_s[1] + 0.0,
+                                         hit->impulse_n_s[2] + 0.0};
   const double contact_time_s = hit->contact_time_s;
   const std::string output = args.text("-o");
   Result<SampleEncoding> encoding_result = sampleEncodingFor(args, output);
@@ -192,11 +194,12 @@ int runHit(const std::vector<std::string>& raw_args) {
       std::fprintf(stderr, "  level       peak %.4g (%.1f dBFS, %.1f dB SPL at %.3g m)\n", peak,
                    20.0 * std::log10(peak), 20.0 * std::log10(peak * kFullScalePascal / *gain / 20e-6), *distance);
     if (bank.transfer.empty() && bank.modeCount() > 0)
-      std::fprintf(stderr,
-                   "  note        the bank has no acoustic transfer (format %u, or solved with --no-transfer): each mode\n"
-                   "              is heard at its direction-averaged level, no direction, a sign that depends on the\n"
-                   "              solve (docs/listener.md); `strike modes` solves it by default\n",
-                   bank.format_version);
+      std::fprintf(
+          stderr,
+          "  note        the bank has no acoustic transfer (format %u, or solved with --no-transfer): each mode\n"
+          "              is heard at its direction-averaged level, no direction, a sign that depends on the\n"
+          "              solve (docs/listener.md); `strike modes` solves it by default\n",
+          bank.format_version);
     if (clipped > 0)
       std::fprintf(stderr, "  CLIPPING    %zu samples at or above full scale%s; lower --gain\n", clipped,
                    encoding == SampleEncoding::Float32 ? " (kept in the float file)" : " (clipped in the file)");

@@ -353,6 +353,11 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (args.positional.empty()) return reportError("modes", badInput("missing MESH; usage: " + spec.usage));
   if (!args.has("-o")) return reportError("modes", badInput("missing -o BANK.modes (where to write the bank)"));
   if (Status ok = checkOutputFile("-o", args.text("-o"), {}); !ok) return reportError("modes", ok.error());
+  if (const std::string out = args.text("-o"); out.size() < 6 || out.compare(out.size() - 6, 6, ".modes") != 0)
+    std::fprintf(stderr,
+                 "strike modes: warning: -o %s does not end in .modes: a scene's \"bank\", strike info and strike hit "
+                 "read it all the same, but .modes is how banks are named (and found by `strike cache`)\n",
+                 out.c_str());
 
   PrecomputeSettings settings;
   settings.mesh_spec = args.positional[0];

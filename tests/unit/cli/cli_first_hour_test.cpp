@@ -120,5 +120,78 @@ TEST(FirstHourInterrupt, SigintStopsTheSolveAndTheRenderSaysWhatAndLeavesNothing
   EXPECT_EQ(left.size(), 2u) << left.back();
 }
 
+TEST(FirstHourMessages, ASlipOfOneOrTwoLettersIsAnsweredWithDidYouMean) {
+  const CliResult command = runCli("rendr scene.json -o x.wav");
+  EXPECT_EQ(command.exit_code, 1);
+  EXPECT_NE(command.err.find("unknown command 'rendr'; did you mean render?"), std::string::npos) << command.err;
+  const CliResult option = runCli("render scene.json -o x.wav --rat 44100");
+  EXPECT_EQ(option.exit_code, 1);
+  EXPECT_NE(option.err.find("unknown option '--rat'; did you mean --rate?"), std::string::npos) << option.err;
+  const CliResult swapped = runCli("modes box:0.1,0.1,0.1 --material steel -o x.modes --quite");
+  EXPECT_NE(swapped.err.find("did you mean --quiet?"), std::string::npos) << swapped.err;
+  // Nothing near: no guess.
+  const CliResult far = runCli("hit x.modes -o x.wav --loudness 3");
+  EXPECT_EQ(far.exit_code, 1);
+  EXPECT_EQ(far.err.find("did you mean"), std::string::npos) << far.err;
+}
+
+// Every command `strike --help` lists has its section in docs/cli.md, with every option its --help
+// lists; its option rows fit in 100 columns, their continuation lines under the first (column 31).
+TEST(FirstHourMessages, EveryCommandIsDocumentedAndItsHelpRowsLineUp) {
+  std::ifstream in(std::string(STRIKE_SOURCE_DIR) + "/docs/cli.md");
+  const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(doc.empty());
+  const CliResult usage = runCli("--help");
+  ASSERT_EQ(usage.exit_code, 0);
+  std::istringstream lines(usage.out.substr(usage.out.find("commands:")));
+  std::string line;
+  std::getline(lines, line);
+  std::vector<std::string> commands;
+  while (std::getline(lines, line) && line.rfind("  ", 0) == 0) {
+    std::istringstream words(line);
+    std::string command, sub;
+    words >> command >> sub;
+    if (command == "bench") command += " " + sub;
+    commands.push_back(command);
+  }
+  ASSERT_GE(commands.size(), 10u) << usage.out;
+  for (const std::string& command : commands) {
+    EXPECT_NE(doc.find("## `strike " + command.substr(0, command.find(' '))), std::string::npos)
+        << "strike " << command << " has no section in docs/cli.md";
+    const CliResult help = runCli(command + " --help");
+    ASSERT_EQ(help.exit_code, 0) << command;
+    EXPECT_NE(help.out.find("examples:"), std::string::npos) << command;
+    const size_t options = help.out.find("\noptions:\n");
+    if (options == std::string::npos) continue;
+    std::istringstream rows(help.out.substr(options + 10, help.out.find("\n\n", options + 10) - options - 10));
+    while (std::getline(rows, line)) {
+      EXPECT_LE(line.size(), 100u) << command << ": " << line;
+      if (line.rfind("  -", 0) == 0) {
+        const std::string option = line.substr(2, line.find(' ', 2) - 2);
+        EXPECT_NE(doc.find("`" + option), std::string::npos) << "strike " << command << " " << option;
+      } else {
+        EXPECT_EQ(line.find_first_not_of(' '), 30u) << command << ": " << line;
+      }
+    }
+  }
+}
+
+TEST(FirstHourMessages, ABankNotNamedModesIsWarnedAndNoNumberPrintsAsMinusZero) {
+  const std::string dir = folder("names");
+  const CliResult modes =
+      runCli("modes box:0.05,0.03,0.02 --material steel --no-transfer --no-error-estimate -o " + dir + "/bar.mode");
+  ASSERT_EQ(modes.exit_code, 0) << modes.err;
+  EXPECT_NE(modes.err.find("warning: -o " + dir + "/bar.mode does not end in .modes"), std::string::npos) << modes.err;
+  // The default impulse is the inward normal: on the top face (0, 0, 1) it is (-0.0, -0.0, -0.01).
+  const CliResult hit = runCli("hit " + dir + "/bar.mode -o " + dir + "/hit.wav --duration 0.1 --at 0,0,0.01");
+  ASSERT_EQ(hit.exit_code, 0) << hit.err;
+  const size_t impulse = hit.err.find("impulse (");
+  ASSERT_NE(impulse, std::string::npos) << hit.err;
+  const std::string printed = hit.err.substr(impulse, hit.err.find('\n', impulse) - impulse);
+  EXPECT_EQ(printed.find("-0,"), std::string::npos) << printed;
+  EXPECT_EQ(printed.find("-0)"), std::string::npos) << printed;
+  EXPECT_NE(printed.find("0, 0"), std::string::npos) << printed;
+}
+
 }  // namespace
 }  // namespace strike

@@ -183,9 +183,10 @@ strike_status loadBank(strike_context ctx, const uint8_t* bytes, size_t size, co
     return fail(ctx, STRIKE_ERR_PARSE, "%s: inconsistent mode bank: %s", source.c_str(), problem.c_str());
   auto loaded = std::make_shared<LoadedBank>();
   loaded->bank = std::move(decoded.value());
-  loaded->pressure_weights = radiationWeights(loaded->bank, ctx->config.reference_distance_m);
-  // The output convention: pressure / output_full_scale_pa (1.0 = 20 Pa by default, as the tools).
-  for (double& w : loaded->pressure_weights) w /= ctx->config.output_full_scale_pa;
+  // The output convention: pressure / output_full_scale_pa (1.0 = 20 Pa by default, as the tools);
+  // the object's gain is applied apart.
+  loaded->pressure_weights = pressureWeights(loaded->bank, ctx->config.reference_distance_m,
+                                             outputPerPascal(1.0, ctx->config.output_full_scale_pa));
   void* mem = ctx->allocArray<strike_bank_s>(1);
   *out = new (mem) strike_bank_s{ctx, std::move(loaded), ctx->config.free, ctx->config.user};
   ctx->last_error[0] = '\0';
@@ -586,7 +587,8 @@ STRIKE_API strike_status STRIKE_CALL strike_object_add(strike_context ctx, const
     desc.bank = std::shared_ptr<const ModeBank>(data, &data->bank);  // shares the bank's ownership
     desc.weights = c.radiation == STRIKE_RADIATION_PRESSURE ? data->pressure_weights
                                                             : std::vector<double>(data->bank.modeCount(), 1.0);
-    if (c.radiation == STRIKE_RADIATION_PRESSURE) desc.pressure_scale = 1.0 / ctx->config.output_full_scale_pa;
+    if (c.radiation == STRIKE_RADIATION_PRESSURE)
+      desc.pressure_scale = outputPerPascal(1.0, ctx->config.output_full_scale_pa);
     desc.is_static = c.is_static != 0;
     desc.contact_radius_m = c.contact_radius_m;
     desc.roughness.rms_m = c.roughness_rms_m;

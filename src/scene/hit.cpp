@@ -102,9 +102,8 @@ Result<HitResult> renderHit(const ModeBank& bank, const HitSettings& settings) {
   SoundEngine engine(engine_settings);
   VoiceDesc desc;
   desc.bank = std::shared_ptr<const ModeBank>(std::shared_ptr<const ModeBank>(), &bank);  // not owned
-  desc.weights = radiationWeights(bank, engine_settings.reference_distance_m);
-  for (double& w : desc.weights) w *= settings.gain / kFullScalePascal;
-  desc.pressure_scale = settings.gain / kFullScalePascal;
+  desc.pressure_scale = outputPerPascal(settings.gain);
+  desc.weights = pressureWeights(bank, engine_settings.reference_distance_m, desc.pressure_scale);
   Voice voice(desc, engine_settings);
   engine.install(0, &voice);
   std::array<double, 3> side = {point[0] - bank.centre_m[0], point[1] - bank.centre_m[1], point[2] - bank.centre_m[2]};

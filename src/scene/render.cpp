@@ -34,6 +34,7 @@
 #include "strike/render_session.hpp"
 #include "strike/scene_checks.hpp"
 #include "strike/synth.hpp"
+#include "surfaces.hpp"
 
 namespace strike {
 namespace {
@@ -493,12 +494,8 @@ Status readStruckShapes(Body& body, uint32_t index, const std::vector<ContactEve
   return {};
 }
 
-/// (1 - nu^2) / E: how a material's restitution weighs against another's (combineContact).
-double compliance(const Material& m) { return (1.0 - m.poisson * m.poisson) / m.youngs_pa; }
-
 SimBodyDesc simBody(const Body& body) {
   const SceneObject& object = *body.object;
-  const MaterialTable& table = builtinMaterials();
   SimBodyDesc desc;
   desc.name = object.name;
   desc.is_static = object.is_static;
@@ -517,36 +514,17 @@ SimBodyDesc simBody(const Body& body) {
   }
   desc.velocity_m_s = object.velocity_m_s;
   desc.angular_velocity_rad_s = object.angular_velocity_rad_s;
-  const ContactProperties contact = table.contactProperties(body.bank->material.name);
-  desc.restitution = std::isnan(object.restitution) ? contact.restitution : object.restitution;
-  desc.friction = std::isnan(object.friction) ? contact.friction : object.friction;
-  desc.rolling_resistance =
-      std::isnan(object.rolling_resistance) ? contact.rolling_resistance : object.rolling_resistance;
-  desc.compliance_per_pa = compliance(body.bank->material);
+  const SurfaceProperties surface = objectSurface(object, body.bank->material);
+  desc.restitution = surface.restitution;
+  desc.friction = surface.friction;
+  desc.rolling_resistance = surface.rolling_resistance;
+  desc.compliance_per_pa = surface.compliance_per_pa;
   desc.contact_radius_m = body.contact_radius_m;
   desc.shape = object.shape == "convex"    ? SimBodyDesc::Shape::ConvexHull
                : object.shape == "concave" ? SimBodyDesc::Shape::Concave
                : object.shape == "pieces"  ? SimBodyDesc::Shape::ConvexPieces
                                            : SimBodyDesc::Shape::Auto;
   return desc;
-}
-
-// A body's surface for rolling and sliding sound: its material's roughness (or the object's own
-// keys), seeded by its name so that each surface has its own profile, the same in every render.
-SurfaceRoughness surfaceRoughness(const SceneObject& object, const std::string& material) {
-  const ContactProperties contact = builtinMaterials().contactProperties(material);
-  SurfaceRoughness r;
-  r.rms_m = std::isnan(object.roughness_rms_m) ? contact.roughness_rms_m : object.roughness_rms_m;
-  r.correlation_m =
-      std::isnan(object.roughness_correlation_m) ? contact.roughness_correlation_m : object.roughness_correlation_m;
-  r.seed = fnv1a64(object.name.data(), object.name.size());
-  if (!(r.correlation_m > 0.0)) r.rms_m = 0.0;
-  return r;
-}
-
-double bodyRestitution(const SceneObject& object, const std::string& material) {
-  return std::isnan(object.restitution) ? builtinMaterials().contactProperties(material).restitution
-                                        : object.restitution;
 }
 
 double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) {
@@ -678,12 +656,11 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   sim.impact_speed_m_s = kImpactSpeed_m_s;  // impacts are timed within the step (ContactEvent::time_s)
   sim.ground = scene.has_ground;
   sim.ground_height_m = scene.ground_height_m;
-  const ContactProperties ground_contact = builtinMaterials().contactProperties(scene.ground_material.name);
-  sim.ground_restitution = std::isnan(scene.ground_restitution) ? ground_contact.restitution : scene.ground_restitution;
-  sim.ground_friction = std::isnan(scene.ground_friction) ? ground_contact.friction : scene.ground_friction;
-  sim.ground_rolling_resistance =
-      std::isnan(scene.ground_rolling_resistance) ? ground_contact.rolling_resistance : scene.ground_rolling_resistance;
-  sim.ground_compliance_per_pa = compliance(scene.ground_material);
+  const SurfaceProperties ground_surface = groundSurface(scene);  // for the simulation and the sound
+  sim.ground_restitution = ground_surface.restitution;
+  sim.ground_friction = ground_surface.friction;
+  sim.ground_rolling_resistance = ground_surface.rolling_resistance;
+  sim.ground_compliance_per_pa = ground_surface.compliance_per_pa;
   for (const ContactPairSpec& pair : scene.contact_pairs) {
     // An object's name first; "ground" is the ground unless an object has that name.
     auto indexOf = [&](const std::string& name) {
@@ -901,13 +878,13 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     if (body.rows) voice.rows = std::move(*body.rows), voice.use_rows = true;
     voice.locator = body.locator;
     voice.located = std::move(body.located);
-    voice.weights = radiationWeights(*body.bank, engine_settings.reference_distance_m);
-    for (double& w : voice.weights) w *= settings.gain / kFullScalePascal;
-    voice.pressure_scale = settings.gain / kFullScalePascal;
+    voice.pressure_scale = outputPerPascal(settings.gain);
+    voice.weights = pressureWeights(*body.bank, engine_settings.reference_distance_m, voice.pressure_scale);
     voice.is_static = body.object->is_static;
     voice.contact_radius_m = body.contact_radius_m;
-    voice.roughness = surfaceRoughness(*body.object, body.bank->material.name);
-    voice.restitution = bodyRestitution(*body.object, body.bank->material.name);
+    const SurfaceProperties surface = objectSurface(*body.object, body.bank->material);
+    voice.roughness = surface.roughness;
+    voice.restitution = surface.restitution;
     if (Status added = output->addVoice(static_cast<uint32_t>(index), voice, sim_bodies[index].position_m,
                                         sim_bodies[index].orientation_wxyz, body.object->name);
         !added)
@@ -929,19 +906,15 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     partner.poisson = bodies[i].bank->material.poisson;
     partner.radius_m = bodies[i].contact_radius_m;
     partner.mass_kg = bodies[i].object->is_static ? 0.0 : bodies[i].bank->mass_kg;
-    partner.roughness = surfaceRoughness(*bodies[i].object, bodies[i].bank->material.name);
-    partner.restitution = bodyRestitution(*bodies[i].object, bodies[i].bank->material.name);
+    const SurfaceProperties surface = objectSurface(*bodies[i].object, bodies[i].bank->material);
+    partner.roughness = surface.roughness;
+    partner.restitution = surface.restitution;
   }
   ContactPartner ground;
   ground.youngs_pa = scene.ground_material.youngs_pa;
   ground.poisson = scene.ground_material.poisson;
-  {
-    const ContactProperties ground_surface = builtinMaterials().contactProperties(scene.ground_material.name);
-    ground.roughness.rms_m = ground_surface.roughness_rms_m;
-    ground.roughness.correlation_m = ground_surface.roughness_correlation_m;
-    ground.roughness.seed = fnv1a64("ground", 6);
-    ground.restitution = std::isnan(scene.ground_restitution) ? ground_surface.restitution : scene.ground_restitution;
-  }
+  ground.roughness = ground_surface.roughness;
+  ground.restitution = ground_surface.restitution;
   result.audio.sample_rate_hz = rate;
   result.audio.channels = 1;
   result.audio.samples.assign(static_cast<size_t>(std::llround(duration * rate)), 0.0f);

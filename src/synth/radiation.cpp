@@ -119,6 +119,12 @@ std::vector<double> radiationWeights(const ModeBank& bank, double distance_m) {
   return weights;
 }
 
+std::vector<double> pressureWeights(const ModeBank& bank, double reference_distance_m, double output_per_pa) {
+  std::vector<double> weights = radiationWeights(bank, reference_distance_m);
+  for (double& w : weights) w *= output_per_pa;
+  return weights;
+}
+
 std::vector<double> radiationStrengths(const ModeBank& bank) {
   const size_t nv = bank.surfaceVertexCount();
   const size_t modes = bank.modeCount();

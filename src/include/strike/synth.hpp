@@ -338,6 +338,13 @@ constexpr double kFullScalePascal = 20.0;
 /// the approximation and what it leaves out). Returns #modes weights for ModalObjectDesc
 /// that make the output sound pressure in Pa; divide them by kFullScalePascal for full scale.
 std::vector<double> radiationWeights(const ModeBank& bank, double distance_m);
+/// Output units per pascal of a voice at `gain` on an output whose 1.0 is full_scale_pa pascals
+/// (the tools: kFullScalePascal; libstrike: its output_full_scale_pa, the object's gain apart).
+inline double outputPerPascal(double gain, double full_scale_pa = kFullScalePascal) { return gain / full_scale_pa; }
+/// A voice's pressure weights (VoiceDesc::weights, with pressure_scale = output_per_pa): the
+/// radiated pressure at reference_distance_m per unit modal acceleration, radiationWeights, in
+/// output units. The one place the render, `strike hit` and libstrike turn pressure into output.
+std::vector<double> pressureWeights(const ModeBank& bank, double reference_distance_m, double output_per_pa);
 /// The distance-free part of radiationWeights: R_i per mode (m^2 / sqrt(kg)), computed from the
 /// surface and shapes. radiationWeights uses bank.radiation_m2 instead when the bank has it.
 std::vector<double> radiationStrengths(const ModeBank& bank);

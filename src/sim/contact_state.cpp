@@ -20,8 +20,8 @@ double hertzPatchRadius(double force_n, double radius_a_m, double radius_b_m, do
 
 namespace detail {
 
-RollingFriction rollingFriction(double rolling_resistance, double friction, double sphere_radius_a_m,
-                                double sphere_radius_b_m, double patch_radius_m) {
+RollingFriction rollingFriction(double rolling_resistance, double friction, double radius_a_m, double radius_b_m,
+                                double patch_radius_m) {
   // Bullet's rolling friction is a pure torque between the bodies about the two tangent axes whose
   // impulse per substep is at most m_combinedRollingFriction x the point's normal impulse (and at
   // most m_combinedRollingFriction itself, a cap that binds only above 1 N s of normal impulse in
@@ -30,10 +30,14 @@ RollingFriction rollingFriction(double rolling_resistance, double friction, doub
   // The dimensionless c_rr = F / N is the resisting force at the axle of a wheel of radius R, a
   // torque c_rr N R about the contact [Engineering Toolbox, "Rolling resistance": F = c_l W / R
   // with c_l = c R], so Bullet's length is c_rr R with R the rolling radius.
-  // Only spheres roll here: a polyhedral hull's faces and edges touch with several points and
-  // tip over its edges (losing energy in impacts), and a box must not rest differently. Two
-  // spheres roll on each other with the radius of relative curvature R1 R2 / (R1 + R2).
-  const double ra = sphere_radius_a_m, rb = sphere_radius_b_m;
+  // Radii: a sphere's own; a moving exact mesh (GImpact: a fine triangle surface, touching at
+  // single points of a curved surface, such as a round-bottomed bowl rocking on a table) the
+  // sphere of its volume, as its Hertz patch takes it; 0 for a flat static body and the ground.
+  // A polyhedral hull or piece rolls by tipping over its edges, which loses energy in impacts,
+  // and a box must not rest differently (a glass wobbled on its foot's rim 1.5 s longer with a
+  // rolling radius). Two curved bodies roll on each other with the radius of relative curvature
+  // R1 R2 / (R1 + R2).
+  const double ra = radius_a_m, rb = radius_b_m;
   const double rolling_radius_m = ra > 0.0 && rb > 0.0 ? ra * rb / (ra + rb) : std::max(ra, rb);
   if (!(rolling_radius_m > 0.0)) return {};
   RollingFriction r;
@@ -48,12 +52,14 @@ RollingFriction rollingFriction(double rolling_resistance, double friction, doub
 
 void Simulation::setRollingResistance(btPersistentManifold& manifold, const ContactCoefficients& pair) const {
   const int index[2] = {manifold.getBody0()->getUserIndex(), manifold.getBody1()->getUserIndex()};
-  double sphere_radius[2] = {0.0, 0.0}, contact_radius[2] = {0.0, 0.0};
+  double rolling_radius[2] = {0.0, 0.0}, contact_radius[2] = {0.0, 0.0};
   double compliance[2] = {settings_.ground_compliance_per_pa, settings_.ground_compliance_per_pa};
   for (int k = 0; k < 2; ++k) {
     if (index[k] < 0) continue;
     const BodyState& b = *bodies_[size_t(index[k])];
-    sphere_radius[k] = b.sphere_radius_m;
+    rolling_radius[k] = b.sphere_radius_m > 0.0                       ? b.sphere_radius_m
+                        : b.shape_used == SimBodyDesc::Shape::Concave ? b.contact_radius_m
+                                                                      : 0.0;
     contact_radius[k] = b.contact_radius_m;
     compliance[k] = b.compliance_per_pa;
   }
@@ -64,7 +70,7 @@ void Simulation::setRollingResistance(btPersistentManifold& manifold, const Cont
     const double load_n = pt.m_appliedImpulse / settings_.substep_s;
     const double patch_m = hertzPatchRadius(load_n, contact_radius[0], contact_radius[1], compliance[0], compliance[1]);
     const RollingFriction r =
-        rollingFriction(pair.rolling_resistance, pair.friction, sphere_radius[0], sphere_radius[1], patch_m);
+        rollingFriction(pair.rolling_resistance, pair.friction, rolling_radius[0], rolling_radius[1], patch_m);
     pt.m_combinedRollingFriction = r.rolling_m;
     pt.m_combinedSpinningFriction = r.spinning_m;
   }

@@ -45,10 +45,10 @@ inline Vec3 fromBt(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 struct RollingFriction {
   double rolling_m = 0.0, spinning_m = 0.0;
 };
-/// sphere_radius_a/b: a sphere shape's radius, 0 for any other shape; patch_radius_m: the Hertz
-/// patch under the point's load.
-RollingFriction rollingFriction(double rolling_resistance, double friction, double sphere_radius_a_m,
-                                double sphere_radius_b_m, double patch_radius_m);
+/// radius_a/b: each body's rolling radius (a sphere's radius; a moving exact mesh's the sphere of
+/// its volume; 0 for any other shape); patch_radius_m: the Hertz patch under the point's load.
+RollingFriction rollingFriction(double rolling_resistance, double friction, double radius_a_m, double radius_b_m,
+                                double patch_radius_m);
 
 /// A number for a message, "%.9g" (checks.cpp).
 std::string fmt(double value);

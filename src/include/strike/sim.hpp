@@ -35,7 +35,8 @@ struct SimBodyDesc {
   double restitution = 0.5;                            ///< the body's own (its material on itself); see combineContact
   double friction = 0.5;
   /// Coefficient of rolling resistance c_rr = F_resist / N (dimensionless) of its material on
-  /// itself; see combineContact. Acts where a sphere-shaped body touches (docs/contact.md).
+  /// itself; see combineContact. Acts where a sphere-shaped body or a moving exact mesh (Shape::
+  /// Concave: a round-bottomed bowl rocking) touches (docs/contact.md).
   /// 0: none, and a sphere rolls for ever (a render takes it from the material table).
   double rolling_resistance = 0.0;
   /// Radius of the sphere of equal volume, m, for the Hertz contact patch (ContactEvent::

@@ -20,6 +20,7 @@ packages=(
   clang libclang-rt-14-dev # libFuzzer + ASan/UBSan for the fuzz smoke run (tools/fuzz.sh)
   python3-dev pybind11-dev # the strike Python package (python/)
   python3-numpy python3-pytest # its arrays and tests
+  python3-venv python3-pip python3-setuptools python3-wheel # pip install ./python into a venv, offline
   python3-distributed    # strike batch: Dask local or remote clusters (BSD)
   python3-matplotlib     # examples/python spectrogram plots
 )

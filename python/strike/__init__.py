@@ -23,9 +23,24 @@ import json
 import os
 from typing import Any, Mapping, Optional, Sequence, Union
 
-import numpy as np
+import sys as _sys
 
-from . import _strike
+try:
+    import numpy as np
+except ImportError as _missing:  # another python3 first on PATH (pyenv, conda, a bare venv)
+    raise ImportError(
+        f"strike needs numpy, which {_sys.executable} (Python {_sys.version.split()[0]}) cannot import. "
+        "Use Debian's python3 with its numpy (apt install python3-numpy; /usr/bin/python3), or a venv that "
+        "sees it: /usr/bin/python3 -m venv --system-site-packages VENV, then, in the Strike repository, "
+        "VENV/bin/pip install --no-build-isolation ./python (README, Python)") from _missing
+try:
+    from . import _strike
+except ImportError as _missing:
+    raise ImportError(
+        f"strike's compiled module strike._strike does not load in {_sys.executable} "
+        f"(Python {_sys.version.split()[0]}): {_missing}. It is built for the Python that built it; "
+        "install the package with this one: python3 -m pip install --no-build-isolation ./python "
+        "(README, Python)") from _missing
 from ._version import __version__
 
 Bank = _strike.Bank
@@ -304,8 +319,16 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
         scene = dict(scene)
         # Why a file name: it anchors relative paths and names the source in messages.
         anchor = os.path.join(os.path.abspath(os.fspath(base_dir or ".")), "<scene dict>")
-        native = _strike.render_text(json.dumps(scene), anchor, rate_hz, duration_s, gain, cache_dir, max_tets, max_events,
-                                     bool(similar), bool(transfer), session)
+        try:
+            native = _strike.render_text(json.dumps(scene), anchor, rate_hz, duration_s, gain, cache_dir, max_tets,
+                                         max_events, bool(similar), bool(transfer), session)
+        except InputError as error:
+            # The anchor is no file: messages name the dict (and where its paths resolve) instead.
+            message = str(error)
+            if message.startswith(anchor):
+                where = "scene dict" if base_dir is None else f"scene dict (paths from {os.fspath(base_dir)})"
+                message = where + message[len(anchor):]
+            raise InputError(message) from None
         return RenderResult(native, scene)
     path = os.fspath(scene)
     native = _strike.render_file(path, rate_hz, duration_s, gain, cache_dir, max_tets, max_events, bool(similar),
@@ -320,3 +343,8 @@ def write_audio(path: Union[str, os.PathLike], audio: np.ndarray, rate: float, f
     if format is None:
         format = "pcm24" if path.endswith(".flac") else "float"
     _strike.write_audio(path, np.asarray(audio, dtype=np.float32), float(rate), format)
+
+
+def __dir__() -> list:
+    """What the package offers (PEP 562): __all__ and its modules, not the names it imports."""
+    return sorted(__all__ + [name for name in ("batch", "manifest", "random_scenes") if name in globals()])

@@ -39,6 +39,13 @@
 namespace strike {
 namespace {
 
+/// What a bank cost to solve, as it records it: the whole precompute (meshing, assembly, the
+/// eigen-solve and the acoustic transfer), what a cache read saves; older banks that recorded no
+/// total, the eigen-solve and the transfer.
+double solveSeconds(const ModeBank& bank) {
+  return std::max(bank.total_seconds, bank.factorize_seconds + bank.lanczos_seconds + bank.transfer_seconds);
+}
+
 // A velocity change below 1 micrometre per second cannot be heard from any object of audible
 // size; objects struck only that softly get no eigen-solve (a conservative audibility bound).
 constexpr double kInaudibleVelocityChange_m_s = 1e-6;
@@ -113,7 +120,7 @@ bool openCached(const std::string& cache_dir, Body& body, RenderReport& report) 
   body.has_modes = true;
   body.from_cache = true;
   ++report.banks_cached;
-  report.precompute_saved_seconds += body.bank->factorize_seconds + body.bank->lanczos_seconds;
+  report.precompute_saved_seconds += solveSeconds(*body.bank);
   return true;
 }
 
@@ -133,7 +140,7 @@ bool openCachedSolve(const std::string& cache_dir, Body& body, RenderReport& rep
   body.has_modes = true;
   body.from_cache = true;
   ++report.banks_cached;
-  report.precompute_saved_seconds += body.normal_bank.factorize_seconds + body.normal_bank.lanczos_seconds;
+  report.precompute_saved_seconds += solveSeconds(body.normal_bank);
   return true;
 }
 
@@ -199,7 +206,7 @@ void forgetCachedSolve(Body& body, RenderReport& report) {
   body.has_modes = false;
   if (body.from_cache) {
     --report.banks_cached;
-    report.precompute_saved_seconds -= body.normal_bank.factorize_seconds + body.normal_bank.lanczos_seconds;
+    report.precompute_saved_seconds -= solveSeconds(body.normal_bank);
   }
   body.from_cache = false;
 }
@@ -751,7 +758,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       body.has_modes = false;
       if (body.from_cache) {
         --report.banks_cached;
-        report.precompute_saved_seconds -= body.bank->factorize_seconds + body.bank->lanczos_seconds;
+        report.precompute_saved_seconds -= solveSeconds(*body.bank);
       }
       Result<LoadedMesh> loaded = loadMeshFor(body.precompute);
       if (!loaded) return badInput("objects \"" + body.object->name + "\": " + loaded.error().message);
@@ -784,7 +791,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
         continue;
       }
       --report.banks_cached;
-      report.precompute_saved_seconds -= body.bank->factorize_seconds + body.bank->lanczos_seconds;
+      report.precompute_saved_seconds -= solveSeconds(*body.bank);
       body.file.reset();
       body.rows.reset();
       body.has_modes = false;

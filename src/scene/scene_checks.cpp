@@ -171,9 +171,10 @@ double deepestVertexInside(const WorldSurface& a, const WorldSurface& b, const S
     const double* p = &a.probes[candidates[i]];
     const int inside = inside_b.classify(p);
     // The same depth as depthInside's: the distance to the nearest triangle when inside.
-    const double depth = inside < 0   ? depthInside(p, b.positions, b_desc.surface_triangles)
-                         : inside > 0 ? std::sqrt(nearestSquared({p[0], p[1], p[2]}, b.positions, b_desc.surface_triangles))
-                                      : 0.0;
+    const double depth = inside < 0 ? depthInside(p, b.positions, b_desc.surface_triangles)
+                         : inside > 0
+                             ? std::sqrt(nearestSquared({p[0], p[1], p[2]}, b.positions, b_desc.surface_triangles))
+                             : 0.0;
     deepest = std::max(deepest, depth);
   }
   return deepest;
@@ -200,7 +201,8 @@ InsideTest::InsideTest(const std::vector<double>& positions, const std::vector<u
   if (!closed_) return;
   for (int k = 0; k < 3; ++k) low_[k] = INFINITY, high_[k] = -INFINITY;
   for (size_t v = 0; v < nv; ++v)
-    for (int k = 0; k < 3; ++k) low_[k] = std::min(low_[k], positions[3 * v + k]), high_[k] = std::max(high_[k], positions[3 * v + k]);
+    for (int k = 0; k < 3; ++k)
+      low_[k] = std::min(low_[k], positions[3 * v + k]), high_[k] = std::max(high_[k], positions[3 * v + k]);
   for (int k = 0; k < 3; ++k) scale_m_ = std::max({scale_m_, std::abs(low_[k]), std::abs(high_[k])});
   if (!std::isfinite(scale_m_)) {
     closed_ = false;  // NaN or infinite coordinates: depthInside answers
@@ -237,7 +239,7 @@ int InsideTest::cellOf(double x, int k) const {
 int InsideTest::classify(const double p[3]) const {
   if (!closed_) return -1;
   for (int k = 0; k < 3; ++k)
-    if (p[k] < low_[k] || p[k] > high_[k]) return 0;  // outside the box: outside (winding 0)
+    if (p[k] < low_[k] || p[k] > high_[k]) return 0;    // outside the box: outside (winding 0)
   const double tol_area = 1e-10 * scale_m_ * scale_m_;  // ~1e6 x the rounding of a 2D cross product
   const double tol_m = 1e-9 * scale_m_;
   const size_t c = size_t(cellOf(p[0], 0)) * kCells + size_t(cellOf(p[1], 1));
@@ -258,7 +260,7 @@ int InsideTest::classify(const double p[3]) const {
     if (!all_clear) return -1;  // through (or within rounding of) an edge or vertex, or NaN
     const double area = e_ab + e_bd + e_da;
     const double z = (e_bd * a[2] + e_da * b[2] + e_ab * d[2]) / area;  // the face above or below p
-    if (std::abs(z - p[2]) <= tol_m) return -1;                            // p on the face
+    if (std::abs(z - p[2]) <= tol_m) return -1;                         // p on the face
     if (z > p[2]) winding += area > 0.0 ? 1 : -1;
   }
   return winding > 0 ? 1 : 0;
@@ -289,7 +291,8 @@ std::vector<std::string> checkStartingPlacement(const Scene& scene, const std::v
   std::vector<std::unique_ptr<InsideTest>> inside_tests(bodies.size());  // built when a pair needs one
   auto insideTest = [&](size_t i) -> const InsideTest& {
     addWorldPoints(bodies[i], world[i]);
-    if (!inside_tests[i]) inside_tests[i] = std::make_unique<InsideTest>(world[i].positions, bodies[i].surface_triangles);
+    if (!inside_tests[i])
+      inside_tests[i] = std::make_unique<InsideTest>(world[i].positions, bodies[i].surface_triangles);
     return *inside_tests[i];
   };
   auto hasPoints = [&](size_t i) { return bodies[i].surface_positions.size() >= 3; };
@@ -325,7 +328,8 @@ std::vector<std::string> checkStartingPlacement(const Scene& scene, const std::v
         warnings.push_back(
             who +
             format("starts %.3g mm inside the ground (its lowest point is at z = %.4g m, the ground at z = %.4g m); "
-                   "it will be thrown out with a bang",
+                   "the simulation pushes it out at once (a jump, heard as a knock only if it then strikes something "
+                   "hard enough): place it above the ground",
                    depth * 1e3, w.low[2], scene.ground_height_m));
     }
   }
@@ -344,9 +348,10 @@ std::vector<std::string> checkStartingPlacement(const Scene& scene, const std::v
       const double depth = std::max(deepestVertexInside(a, b, bodies[j], limits.max_vertices_tested, inside_j),
                                     deepestVertexInside(b, a, bodies[i], limits.max_vertices_tested, inside_i));
       if (depth > limits.overlap_tolerance_m)
-        warnings.push_back("objects \"" + bodies[i].name + "\" and \"" + bodies[j].name +
-                           format("\" start inside each other (a surface point %.3g mm deep); ", depth * 1e3) +
-                           "they will be pushed apart with a bang: move them apart");
+        warnings.push_back(
+            "objects \"" + bodies[i].name + "\" and \"" + bodies[j].name +
+            format("\" start inside each other (a surface point %.3g mm deep); ", depth * 1e3) +
+            "the simulation pushes them apart at once (a jump that may be heard as a knock): move them apart");
     }
   }
   return warnings;

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 // Strict scene parsing: every key is known, every value checked, every error names the key
 // path ("objects[2].velocity[1]") and the value.
+#include <cctype>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -225,8 +227,7 @@ Result<ContactPairSpec> contactPair(const json& value, const Where& where, const
 /// (the first: [1, 0, 0, 0]).
 Result<std::vector<PathKey>> pathKeys(const json& value, const Where& where) {
   if (!value.is_array() || value.empty())
-    return where.error("expected a list of keyframes like {\"t\": 0, \"position\": [0, 0, 0.1]}, got " +
-                       show(value));
+    return where.error("expected a list of keyframes like {\"t\": 0, \"position\": [0, 0, 0.1]}, got " + show(value));
   std::vector<PathKey> keys;
   for (size_t k = 0; k < value.size(); ++k) {
     const json& item = value[k];
@@ -356,8 +357,7 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
   if (value.contains("path")) {
     Result<std::vector<PathKey>> path_keys = pathKeys(value["path"], where.at("path"));
     if (!path_keys) return path_keys.error();
-    if (o.is_static)
-      return where.at("path").error("a static object never moves: remove \"static\" or the path");
+    if (o.is_static) return where.at("path").error("a static object never moves: remove \"static\" or the path");
     for (const char* key : {"position", "orientation", "velocity", "angular_velocity"})
       if (value.contains(key))
         return where.at(key).error("not used with \"path\", got " + show(value[key]) +
@@ -414,8 +414,27 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
       return badInput(path + ":" + lineColumn(json_text, e.byte > 0 ? e.byte - 1 : 0) +
                       ": error: invalid JSON: " + std::string(e.what()).substr(std::string(e.what()).find(':') + 2));
     } catch (const json::exception& e) {  // e.g. a number too large for a double
-      return badInput(path +
-                      ": error: invalid JSON: " + std::string(e.what()).substr(std::string(e.what()).find(']') + 2));
+      // The library does not say where: find the number it names ("... parsing '1e999'") as a
+      // value of its own in the text.
+      const std::string what = std::string(e.what()).substr(std::string(e.what()).find(']') + 2);
+      std::string where;
+      const size_t open = what.find('\''), close = what.rfind('\'');
+      if (open != std::string::npos && close > open + 1) {
+        const std::string number = what.substr(open + 1, close - open - 1);
+        auto partOfNumber = [](char c) {
+          return std::isdigit(static_cast<unsigned char>(c)) || std::strchr(".eE+-", c);
+        };
+        for (size_t at = json_text.find(number); at != std::string::npos; at = json_text.find(number, at + 1)) {
+          const bool starts = at == 0 || !partOfNumber(json_text[at - 1]) || json_text[at - 1] == '-';
+          const size_t end = at + number.size();
+          if (starts && (end == json_text.size() || !partOfNumber(json_text[end]))) {
+            where = ":" + lineColumn(json_text, at);
+            break;
+          }
+        }
+      }
+      return badInput(path + where + ": error: invalid JSON: " + what +
+                      (what.find("overflow") != std::string::npos ? " (larger than any double, ~1.8e308)" : ""));
     }
     return badInput(path + ": error: invalid JSON");
   }

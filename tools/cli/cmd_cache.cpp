@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // `strike cache list|size|prune`: the bank cache of `strike render` (strike/bank_cache.hpp).
+#include <algorithm>
 #include <cstdio>
 #include <ctime>
 
@@ -40,7 +41,10 @@ CommandSpec cacheSpec() {
 
 std::string megabytes(uint64_t bytes) {
   char text[32];
-  std::snprintf(text, sizeof text, "%.1f MB", double(bytes) / 1e6);
+  if (bytes < 100000)
+    std::snprintf(text, sizeof text, "%.1f KB", double(bytes) / 1e3);
+  else
+    std::snprintf(text, sizeof text, "%.1f MB", double(bytes) / 1e6);
   return text;
 }
 
@@ -82,16 +86,28 @@ int runCache(const std::vector<std::string>& raw_args) {
     for (const CacheEntry& e : *entries) total += e.bytes;
     if (action == "list") {
       std::printf("%-24s %10s  %-14s  %s\n", "bank", "size", "last used", "mesh, material, modes");
+      // Hulls are many and tiny (a few hundred bytes each, one per distinct body): one row for all.
+      size_t hulls = 0;
+      uint64_t hull_bytes = 0;
+      std::time_t hull_last_used = 0;
       for (const CacheEntry& e : *entries) {
         const std::string name = e.path.substr(e.path.find_last_of('/') + 1);
+        if (name.size() > 5 && name.compare(name.size() - 5, 5, ".hull") == 0) {
+          ++hulls;
+          hull_bytes += e.bytes;
+          hull_last_used = std::max(hull_last_used, e.last_used);
+        }
+      }
+      if (hulls > 0)
+        std::printf("%-24s %10s  %-14s  %s\n", ("(" + std::to_string(hulls) + " x .hull)").c_str(),
+                    megabytes(hull_bytes).c_str(), age(hull_last_used, now).c_str(),
+                    "convex hulls of bodies' surfaces, one per distinct body (docs/contact.md)");
+      for (const CacheEntry& e : *entries) {
+        const std::string name = e.path.substr(e.path.find_last_of('/') + 1);
+        if (name.size() > 5 && name.compare(name.size() - 5, 5, ".hull") == 0) continue;
         if (name.size() > 7 && name.compare(name.size() - 7, 7, ".pieces") == 0) {
           std::printf("%-24s %10s  %-14s  %s\n", name.c_str(), megabytes(e.bytes).c_str(),
                       age(e.last_used, now).c_str(), "convex pieces of a concave moving body (docs/contact.md)");
-          continue;
-        }
-        if (name.size() > 5 && name.compare(name.size() - 5, 5, ".hull") == 0) {
-          std::printf("%-24s %10s  %-14s  %s\n", name.c_str(), megabytes(e.bytes).c_str(),
-                      age(e.last_used, now).c_str(), "convex hull of a body's surface (docs/contact.md)");
           continue;
         }
         Result<BankFile> bank = BankFile::open(e.path);  // the header only: shapes are not read

@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: MIT
 // `strike modes MESH -o BANK.modes`: precompute an object's vibration modes.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "args.hpp"
 #include "commands.hpp"
@@ -110,14 +113,27 @@ CommandSpec modesSpec() {
 
 int listMaterials() {
   const MaterialTable& table = builtinMaterials();
+  // The sources are long (a citation each): numbered notes under the table keep its rows short.
   std::printf("%-14s %11s %7s %9s %11s %11s %6s %6s %7s  %s\n", "material", "E (Pa)", "nu", "rho", "a1 (s)", "a2 (1/s)",
               "e", "mu", "c_rr", "source");
+  std::vector<std::string> sources;
   for (const auto& [name, m] : table.materials) {
     auto source = table.sources.find(name);
+    std::string note;
+    if (source != table.sources.end() && !source->second.empty()) {
+      auto known = std::find(sources.begin(), sources.end(), source->second);
+      if (known == sources.end()) known = sources.insert(sources.end(), source->second);
+      note = "[" + std::to_string(known - sources.begin() + 1) + "]";
+    }
     const ContactProperties contact = table.contactProperties(name);
     std::printf("%-14s %11.3g %7.3f %9.0f %11.3g %11.3g %6.2f %6.2f %7.4f  %s\n", name.c_str(), m.youngs_pa, m.poisson,
                 m.density_kg_m3, m.rayleigh_stiffness, m.rayleigh_mass, contact.restitution, contact.friction,
-                contact.rolling_resistance, source == table.sources.end() ? "" : source->second.c_str());
+                contact.rolling_resistance, note.c_str());
+  }
+  std::printf("\nsources:\n");
+  for (size_t i = 0; i < sources.size(); ++i) {
+    const std::string number = "[" + std::to_string(i + 1) + "]";
+    std::printf("%-5s%s\n", number.c_str(), wrapHelp(sources[i], 5, kHelpWidth).c_str());
   }
   std::printf(
       "\ne, mu: restitution and friction of the material on itself (rigid-body simulation only; rough typical\n"

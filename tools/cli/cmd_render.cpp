@@ -11,8 +11,8 @@
 #include "strike/audio.hpp"
 #include "strike/bank_cache.hpp"
 #include "strike/render.hpp"
-#include "strike/synth.hpp"
 #include "strike/scene.hpp"
+#include "strike/synth.hpp"
 #include "via_library.hpp"
 
 namespace strike::cli {
@@ -163,7 +163,8 @@ void printSummary(const RenderResult& result, const std::string& output, double 
                  r.cache_pruned, double(r.cache_pruned_bytes) / 1e6);
   for (const std::string& note : r.collision_notes) std::fprintf(stderr, "  collision   %s\n", note.c_str());
   if (r.precompute_saved_seconds > 0)
-    std::fprintf(stderr, "  saved       %.2f s of eigen-solves answered by the cache\n", r.precompute_saved_seconds);
+    std::fprintf(stderr, "  saved       %.2f s of solves (meshing, eigen-solve and transfer) answered by the cache\n",
+                 r.precompute_saved_seconds);
   if (r.transfer_saved_seconds > 0)
     std::fprintf(stderr, "  saved       %.2f s of transfer solves answered by the cache\n", r.transfer_saved_seconds);
 }

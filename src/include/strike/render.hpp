@@ -158,7 +158,7 @@ struct RenderReport {
   double peak = 0.0;
   size_t clipped_samples = 0;
   double load_seconds = 0, simulate_seconds = 0, precompute_seconds = 0, synthesize_seconds = 0, total_seconds = 0;
-  double precompute_saved_seconds = 0;  ///< eigen-solve time the cache answered (as recorded in the banks)
+  double precompute_saved_seconds = 0;  ///< solve time (meshing, eigen-solve, transfer) the cache answered, as the banks record it
   double transfer_saved_seconds = 0;    ///< unit transfer solves the cache answered (as recorded in them)
   size_t cache_pruned = 0;              ///< banks removed from the cache by its size cap after this render
   uint64_t cache_pruned_bytes = 0;

@@ -193,5 +193,19 @@ TEST(FirstHourMessages, ABankNotNamedModesIsWarnedAndNoNumberPrintsAsMinusZero) 
   EXPECT_NE(printed.find("0, 0"), std::string::npos) << printed;
 }
 
+TEST(FirstHourMessages, TheMaterialTableFitsATerminalWithItsSourcesAsNotes) {
+  const CliResult table = runCli("modes --list-materials");
+  ASSERT_EQ(table.exit_code, 0) << table.err;
+  std::istringstream lines(table.out);
+  std::string line;
+  size_t rows = 0;
+  while (std::getline(lines, line) && !line.empty()) {
+    EXPECT_LE(line.size(), 100u) << line;
+    ++rows;
+  }
+  EXPECT_GT(rows, 10u);
+  EXPECT_NE(table.out.find("\nsources:\n[1]  "), std::string::npos) << table.out;
+}
+
 }  // namespace
 }  // namespace strike

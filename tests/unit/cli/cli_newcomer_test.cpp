@@ -2,12 +2,12 @@
 // Issue 15, "A newcomer's first hour": outputs checked before any work (item 9), scenes that
 // cannot be right named (10), silent results flagged (11), `hit --at` and the events summary
 // (13), the bank cache tool (14), and the CLI reference in docs/cli.md (5).
-#include <chrono>
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <utime.h>
+#include <chrono>
 
 #include <cmath>
 #include <ctime>
@@ -354,9 +354,16 @@ TEST(NewcomerCache, ListSizeAndPruneByAgeAndSize) {
   makeEntry(cache + "/notes.txt", 500, 9 * 86400.0);  // not an entry: never touched
   CliResult size = runCli("cache size --cache '" + cache + "'");
   ASSERT_EQ(size.exit_code, 0) << size.err;
-  EXPECT_NE(size.out.find("3 files, 0.0 MB (6000 bytes)"), std::string::npos) << size.out;
+  EXPECT_NE(size.out.find("3 files, 6.0 KB (6000 bytes)"), std::string::npos) << size.out;
+  // Hulls, many and tiny, are one row of the list.
+  for (const char* hull : {"00000000000000a1.hull", "00000000000000a2.hull", "00000000000000a3.hull"})
+    makeEntry(cache + "/" + hull, 300, 60.0);
   CliResult list = runCli("cache list --cache '" + cache + "'");
   ASSERT_EQ(list.exit_code, 0) << list.err;
+  EXPECT_TRUE(std::regex_search(list.out, std::regex(R"(\n\(3 x \.hull\) +0\.9 KB )"))) << list.out;
+  EXPECT_EQ(list.out.find("00000000000000a1.hull"), std::string::npos) << list.out;
+  for (const char* hull : {"00000000000000a1.hull", "00000000000000a2.hull", "00000000000000a3.hull"})
+    fs::remove(cache + "/" + hull);
   EXPECT_LT(list.out.find("0000000000000001"), list.out.find("0000000000000003"))
       << list.out;  // least recently used first
   EXPECT_NE(list.out.find("unreadable"), std::string::npos) << list.out;

@@ -7,11 +7,15 @@
 // and the material's constants, not taken from the engine.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
+#include "strike/bank.hpp"
 #include "strike/listener.hpp"
 #include "strike/materials.hpp"
 #include "strike/render.hpp"
@@ -84,6 +88,36 @@ TEST(GroundDefault, AConcreteGroundReflectsAtTheDelayAndLevelOfItsImage) {
       parseScene(R"({"objects": [{"name": "a", "mesh": "sphere:0.01", "material": "glass"}]})", "a.json");
   ASSERT_TRUE(unnamed);
   EXPECT_TRUE(unnamed->has_ground && unnamed->ground_reflects && std::isnan(unnamed->ground_reflection));
+}
+
+// A warm render's "saved" is what the cached banks cost to solve as they record it, the acoustic
+// transfer included (it was the eigen-solve alone).
+TEST(CacheSavings, AWarmRenderSavesTheBanksWholeSolveTransferIncluded) {
+  const std::string cache = testing::TempDir() + "/saved-" + std::to_string(::getpid());
+  std::filesystem::remove_all(cache);
+  Result<Scene> scene = parseScene(beads(R"({"material": "concrete"})"), "beads.json");
+  ASSERT_TRUE(scene) << scene.error().message;
+  RenderSettings settings;
+  settings.cache_dir = cache;
+  settings.acoustic_transfer = true;
+  Result<RenderResult> cold = renderScene(*scene, settings);
+  ASSERT_TRUE(cold) << cold.error().message;
+  Result<RenderResult> warm = renderScene(*scene, settings);
+  ASSERT_TRUE(warm) << warm.error().message;
+  ASSERT_EQ(warm->report.banks_cached, 1u);
+  // The two beads are one bank (identical objects), read once: read it from the cache.
+  double recorded = 0.0, transfer = 0.0;
+  for (const auto& entry : std::filesystem::directory_iterator(cache)) {
+    if (entry.path().extension() != ".modes") continue;
+    Result<ModeBank> bank = readBank(entry.path().string());
+    ASSERT_TRUE(bank) << bank.error().message;
+    recorded += bank->total_seconds;
+    transfer += bank->transfer_seconds;
+  }
+  ASSERT_GT(transfer, 0.0);
+  EXPECT_NEAR(warm->report.precompute_saved_seconds, recorded, 1e-9);
+  EXPECT_GT(warm->report.precompute_saved_seconds, transfer);
+  std::filesystem::remove_all(cache);
 }
 
 }  // namespace

@@ -122,7 +122,8 @@ TEST(SceneFile, PathKeyframesAreReadAndCheckedNamingTheKey) {
        "objects[0].path[0].position: expected an array of 3 numbers, got [0,0]"},
       {R"({"objects": [{)" + obj + R"(, "path": [{"t": 0, "position": [0, null, 0]}]}]})",
        "objects[0].path[0].position[1]: expected a number, got null"},
-      {R"({"objects": [{)" + obj + R"(, "path": [)" + key0 + R"(, {"t": 1, "position": [0, 0, 0], "orientation": [1, 1, 0, 0]}]}]})",
+      {R"({"objects": [{)" + obj + R"(, "path": [)" + key0 +
+           R"(, {"t": 1, "position": [0, 0, 0], "orientation": [1, 1, 0, 0]}]}]})",
        "objects[0].path[1].orientation: expected a unit quaternion [w, x, y, z], got [1,1,0,0]"},
       {R"({"objects": [{)" + obj + R"(, "path": [{"t": 0, "position": [0, 0, 0], "speed": 1}]}]})",
        "objects[0].path[0].speed: unknown key (known keys here: t, position, orientation)"},
@@ -146,6 +147,18 @@ TEST(SceneFile, GroundCanBeRemovedOrRaised) {
   ASSERT_TRUE(raised) << raised.error().message;
   EXPECT_EQ(raised->ground_height_m, 0.75);
   EXPECT_EQ(raised->ground_material.name, "wood");
+}
+
+TEST(SceneFile, ANumberTooLargeForADoubleIsNamedWithItsLineAndColumn) {
+  const std::string text =
+      "{\"objects\": [\n  {\"name\": \"a\", \"mesh\": \"sphere:0.01\", \"material\": \"steel\",\n"
+      "   \"position\": [0, 0, 1e999]}]}";
+  Result<Scene> scene = parseScene(text, "big.json");
+  ASSERT_FALSE(scene);
+  // Line 3, column 23: where 1e999 starts.
+  EXPECT_NE(scene.error().message.find("big.json:3:23: error: invalid JSON: number overflow parsing '1e999'"),
+            std::string::npos)
+      << scene.error().message;
 }
 
 }  // namespace

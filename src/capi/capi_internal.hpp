@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <variant>
 #include <vector>
 
 #include "ring.hpp"
@@ -39,25 +40,26 @@ struct Command {
   size_t steps_mark;
 };
 
-/// One record of a physics step in the step queue: its start, a body state, a contact, its end.
-struct StepRecord {
-  enum class Kind : uint32_t { Begin, State, Contact, End } kind;
-  strike_object_id object;
-  strike_object_id partner;
-  int32_t flag;             ///< State: asleep; Contact: frame
-  double a[3];              ///< State: position; Contact: point
-  double b[4];              ///< State: orientation; Contact: impulse (3)
-  double time_s;            ///< Begin: end of the step; Contact: time
-  double value;             ///< Begin: step length; Contact: normal speed
-  double partner_props[4];  ///< Contact: youngs, poisson, radius, mass
-  // Contact, continuous (0.4; all 0 from a 0.3 element): normal force, track speed over the
-  // object and over the partner, patch radius; the point on the partner; the partner's surface
-  // (rms, correlation length, restitution) and its seed.
-  double continuous[4];
-  double partner_point[3];
-  double partner_surface[3];
-  uint64_t partner_seed;
+/// The records of a physics step in the step queue, typed: its start, a body's state, one
+/// contact (the sound engine's own record, filled from strike_contact when it is queued; only the
+/// object ids wait for the audio thread to name their voices), its end.
+struct StepBegin {
+  double end_time_s;
+  double duration_s;
 };
+struct StepBodyState {
+  strike_object_id object;
+  double position[3];
+  double orientation[4];
+  bool asleep;
+};
+struct StepContact {
+  strike_object_id object;
+  strike_object_id partner;  ///< {0, 0}: not an object (contact.partner is the partner then)
+  EngineContact contact;     ///< voice and partner.voice set on the audio thread
+};
+struct StepEnd {};
+using StepRecord = std::variant<StepBegin, StepBodyState, StepContact, StepEnd>;
 
 struct AudioSlot {
   Voice* voice;

@@ -16,8 +16,6 @@ namespace {
 
 bool finite3(const double* v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
 
-double length3(const double* v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
-
 // strike_contact's layouts: 0.3's ends before the continuous-contact fields; 0.4's after them.
 constexpr size_t kContactSize03 = offsetof(strike_contact, normal_force_n);
 constexpr size_t kContactSize04 = offsetof(strike_contact, partner_restitution) + sizeof(double);
@@ -88,49 +86,52 @@ void applyImpact(strike_context ctx, const strike_impact_desc& d) {
 
 void applyStepRecord(strike_context ctx, const StepRecord& r) {
   SoundEngine& engine = *ctx->engine;
-  switch (r.kind) {
-    case StepRecord::Kind::Begin: engine.beginStep(r.time_s, r.value); break;
-    case StepRecord::Kind::State: {
-      const uint32_t slot = audioSlot(ctx, r.object);
-      Pose pose;
-      if (slot != kNoVoice && pose.set(r.a, r.b)) engine.setPose(slot, pose, r.flag != 0);
-      break;
+  if (const StepBegin* begin = std::get_if<StepBegin>(&r)) {
+    engine.beginStep(begin->end_time_s, begin->duration_s);
+  } else if (const StepBodyState* state = std::get_if<StepBodyState>(&r)) {
+    const uint32_t slot = audioSlot(ctx, state->object);
+    Pose pose;
+    if (slot != kNoVoice && pose.set(state->position, state->orientation)) engine.setPose(slot, pose, state->asleep);
+  } else if (const StepContact* queued = std::get_if<StepContact>(&r)) {
+    const uint32_t slot = audioSlot(ctx, queued->object);
+    if (slot == kNoVoice) {
+      ctx->counters.contacts_stale.fetch_add(1, std::memory_order_relaxed);
+      return;
     }
-    case StepRecord::Kind::Contact: {
-      const uint32_t slot = audioSlot(ctx, r.object);
-      if (slot == kNoVoice) {
-        ctx->counters.contacts_stale.fetch_add(1, std::memory_order_relaxed);
-        break;
-      }
-      EngineContact c;
-      c.voice = slot;
-      c.world_frame = r.flag == STRIKE_FRAME_WORLD;
-      std::copy(r.a, r.a + 3, c.point.begin());
-      std::copy(r.b, r.b + 3, c.impulse.begin());
-      c.normal_speed_m_s = r.value;
-      c.time_s = r.time_s;
-      c.partner.youngs_pa = r.partner_props[0];
-      c.partner.poisson = r.partner_props[1];
-      c.partner.radius_m = r.partner_props[2];
-      c.partner.mass_kg = r.partner_props[3];
-      c.partner.voice = audioSlot(ctx, r.partner);
-      c.normal_force_n = r.continuous[0];
-      c.track_speed_m_s = r.continuous[1];
-      c.partner_track_speed_m_s = r.continuous[2];
-      c.patch_radius_m = r.continuous[3];
-      std::copy(r.partner_point, r.partner_point + 3, c.partner_point.begin());
-      c.partner.roughness.rms_m = r.partner_surface[0];
-      c.partner.roughness.correlation_m = r.partner_surface[1];
-      c.partner.roughness.seed = r.partner_seed;
-      c.partner.restitution = r.partner_surface[2];
-      engine.contact(c);
-      break;
-    }
-    case StepRecord::Kind::End:
-      engine.endStep();
-      ctx->counters.steps.fetch_add(1, std::memory_order_relaxed);
-      break;
+    EngineContact c = queued->contact;
+    c.voice = slot;
+    c.partner.voice = audioSlot(ctx, queued->partner);
+    engine.contact(c);
+  } else {
+    engine.endStep();
+    ctx->counters.steps.fetch_add(1, std::memory_order_relaxed);
   }
+}
+
+/// strike_contact as the sound engine's contact record (the same quantities, field for field);
+/// `continuous`: the element is 0.4's or larger and has the rolling and sliding fields.
+EngineContact engineContact(const strike_contact& c, bool continuous, double step_start_s) {
+  EngineContact e;
+  e.world_frame = c.frame == STRIKE_FRAME_WORLD;
+  std::copy(c.point, c.point + 3, e.point.begin());
+  std::copy(c.impulse, c.impulse + 3, e.impulse.begin());
+  e.normal_speed_m_s = c.normal_speed_m_s;
+  e.time_s = c.time_s >= 0.0 ? c.time_s : step_start_s;
+  e.partner.youngs_pa = c.partner_youngs_pa;
+  e.partner.poisson = c.partner_poisson;
+  e.partner.radius_m = c.partner_radius_m;
+  e.partner.mass_kg = c.partner_mass_kg;
+  if (!continuous) return e;  // a 0.3 element: no continuous contact, the defaults
+  e.normal_force_n = c.normal_force_n;
+  std::copy(c.slip_velocity_m_s, c.slip_velocity_m_s + 3, e.slip_velocity_m_s.begin());
+  std::copy(c.rolling_velocity_m_s, c.rolling_velocity_m_s + 3, e.rolling_velocity_m_s.begin());
+  std::copy(c.partner_point, c.partner_point + 3, e.partner_point.begin());
+  e.patch_radius_m = c.patch_radius_m;
+  e.partner.roughness.rms_m = c.partner_roughness_rms_m;
+  e.partner.roughness.correlation_m = c.partner_roughness_correlation_m;
+  e.partner.roughness.seed = c.partner_roughness_seed;
+  e.partner.restitution = c.partner_restitution;
+  return e;
 }
 
 // The engine's counters into the context's atomics (read by strike_context_get_stats).
@@ -256,13 +257,8 @@ STRIKE_API strike_status STRIKE_CALL strike_step(strike_context ctx, const strik
          !std::isfinite(c.partner_roughness_correlation_m) || !std::isfinite(c.partner_restitution)))
       return STRIKE_ERR_INVALID_ARG;
   }
-  StepRecord r;
-  std::memset(&r, 0, sizeof r);
-  r.kind = StepRecord::Kind::Begin;
-  r.time_s = d.end_time_s;
-  r.value = d.duration_s;
   const uint64_t items = uint64_t(d.state_count) + d.contact_count;
-  if (!ctx->steps.push(r)) {
+  if (!ctx->steps.push(StepBegin{d.end_time_s, d.duration_s})) {
     ctx->counters.contacts_dropped_full.fetch_add(items, std::memory_order_relaxed);
     return STRIKE_ERR_QUEUE_FULL;
   }
@@ -270,54 +266,19 @@ STRIKE_API strike_status STRIKE_CALL strike_step(strike_context ctx, const strik
   bool full = false;
   for (uint32_t i = 0; i < d.state_count && !full; ++i, ++pushed) {
     const strike_body_state& s = *stateAt(i);
-    r.kind = StepRecord::Kind::State;
-    r.object = s.object;
-    r.flag = s.asleep;
-    std::copy(s.position, s.position + 3, r.a);
-    std::copy(s.orientation, s.orientation + 4, r.b);
-    full = !ctx->steps.push(r);
+    StepBodyState state{s.object, {}, {}, s.asleep != 0};
+    std::copy(s.position, s.position + 3, state.position);
+    std::copy(s.orientation, s.orientation + 4, state.orientation);
+    full = !ctx->steps.push(state);
   }
   for (uint32_t i = 0; i < d.contact_count && !full; ++i, ++pushed) {
     const strike_contact& c = *contactAt(i);
-    r.kind = StepRecord::Kind::Contact;
-    r.object = c.object;
-    r.partner = c.partner;
-    r.flag = c.frame;
-    std::copy(c.point, c.point + 3, r.a);
-    std::copy(c.impulse, c.impulse + 3, r.b);
-    r.time_s = c.time_s >= 0.0 ? c.time_s : d.end_time_s - d.duration_s;
-    r.value = c.normal_speed_m_s;
-    r.partner_props[0] = c.partner_youngs_pa;
-    r.partner_props[1] = c.partner_poisson;
-    r.partner_props[2] = c.partner_radius_m;
-    r.partner_props[3] = c.partner_mass_kg;
-    if (continuous) {
-      // The point travels |rolling| over the object and |rolling + slip| over the partner.
-      const double over_partner[3] = {c.rolling_velocity_m_s[0] + c.slip_velocity_m_s[0],
-                                      c.rolling_velocity_m_s[1] + c.slip_velocity_m_s[1],
-                                      c.rolling_velocity_m_s[2] + c.slip_velocity_m_s[2]};
-      r.continuous[0] = c.normal_force_n;
-      r.continuous[1] = length3(c.rolling_velocity_m_s);
-      r.continuous[2] = length3(over_partner);
-      r.continuous[3] = c.patch_radius_m;
-      std::copy(c.partner_point, c.partner_point + 3, r.partner_point);
-      r.partner_surface[0] = c.partner_roughness_rms_m;
-      r.partner_surface[1] = c.partner_roughness_correlation_m;
-      r.partner_surface[2] = c.partner_restitution;
-      r.partner_seed = c.partner_roughness_seed;
-    } else {
-      std::fill(r.continuous, r.continuous + 4, 0.0);
-      std::fill(r.partner_point, r.partner_point + 3, 0.0);
-      r.partner_surface[0] = r.partner_surface[1] = 0.0;
-      r.partner_surface[2] = 0.5;
-      r.partner_seed = 0;
-    }
-    full = !ctx->steps.push(r);
+    full =
+        !ctx->steps.push(StepContact{c.object, c.partner, engineContact(c, continuous, d.end_time_s - d.duration_s)});
     if (!full) ctx->counters.contacts_queued.fetch_add(1, std::memory_order_relaxed);
   }
   if (full) --pushed;
-  r.kind = StepRecord::Kind::End;
-  if (full || !ctx->steps.push(r)) {
+  if (full || !ctx->steps.push(StepEnd{})) {
     // What did not fit is dropped; the step still closes at the next Begin.
     ctx->counters.contacts_dropped_full.fetch_add(items - pushed, std::memory_order_relaxed);
     return STRIKE_ERR_QUEUE_FULL;

@@ -109,8 +109,13 @@ Status play(const Playback& p, SoundOutput& output, AudioBuffer& audio, const Pr
         contact.partner = other == kGroundBody ? p.ground : p.partners[other];
         // Continuous contact state (rolling, sliding, scraping: contact_sources.cpp).
         contact.normal_force_n = event.normal_force_n;
-        contact.track_speed_m_s = side == 0 ? event.track_speed_a_m_s : event.track_speed_b_m_s;
-        contact.partner_track_speed_m_s = side == 0 ? event.track_speed_b_m_s : event.track_speed_a_m_s;
+        // a's surface moves at slip relative to b's, and the point travels track_velocity_a over a,
+        // so track_velocity_a + slip over b.
+        for (int axis = 0; axis < 3; ++axis) {
+          const double slip = event.slip_velocity_m_s[axis], over_a = event.track_velocity_a_m_s[axis];
+          contact.slip_velocity_m_s[axis] = side == 0 ? slip : -slip;
+          contact.rolling_velocity_m_s[axis] = side == 0 ? over_a : over_a + slip;
+        }
         contact.partner_point = side == 0 ? event.point_b_mesh : event.point_a_mesh;
         contact.patch_radius_m = event.patch_radius_m;
         output.contact(contact);

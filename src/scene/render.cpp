@@ -600,8 +600,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   // No mode above the audible band or what the sample rate can carry is ever computed.
   const double max_freq_hz = synthesizedTopHz(scene.max_freq_hz, rate);
   // ...and only the modes the engine plays get an acoustic transfer.
-  const double heard_hz =
-      synthesizedTopHz(renderEngineSettings(scene, settings, rate, max_freq_hz).synth.max_freq_hz, rate);
+  const EngineSettings engine_settings = renderEngineSettings(scene, settings, rate, max_freq_hz);
+  const double heard_hz = synthesizedTopHz(engine_settings.synth.max_freq_hz, rate);
   RenderResult result;
   RenderReport& report = result.report;
   report.objects = scene.objects.size();
@@ -660,7 +660,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   sim.substep_s = substep;
   sim.max_events = settings.max_events;
   sim.record_states = true;                 // the sound engine follows each body as it moves
-  sim.impact_speed_m_s = kImpactSpeed_m_s;  // impacts are timed within the step (ContactEvent::time_s)
+  // The engine's impact rule: the simulation times impacts within the step by it (ContactEvent::time_s).
+  sim.impact_speed_m_s = engine_settings.impact_speed_m_s;
   sim.ground = scene.has_ground;
   sim.ground_height_m = scene.ground_height_m;
   const SurfaceProperties ground_surface = groundSurface(scene);  // for the simulation and the sound
@@ -709,7 +710,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   result.events = std::move(simulated->events);
   report.events = result.events.size();
   for (const ContactEvent& event : result.events)
-    ++(event.normal_speed_m_s > kImpactSpeed_m_s ? report.impact_events : report.sustained_events);
+    ++(engine_settings.isImpact(event.normal_speed_m_s) ? report.impact_events : report.sustained_events);
 
   // ---- Phase 2: banks only for objects struck hard enough to hear ----------------------------
   for (const ContactEvent& event : result.events) {
@@ -856,7 +857,6 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
 
   // ---- Phase 3: the simulation, step by step, into the sound engine -------------------------
   const auto synth_start = std::chrono::steady_clock::now();
-  const EngineSettings engine_settings = renderEngineSettings(scene, settings, rate, max_freq_hz);
   std::unique_ptr<SoundOutput> output;
   if (settings.output) {
     Result<std::unique_ptr<SoundOutput>> made = settings.output(engine_settings);

@@ -121,7 +121,9 @@ void Simulation::contactState(ContactEvent& ev, const int index[2], const btVect
   auto tangential = [&](const btVector3& v) { return v - normal * normal.dot(v); };
   const btVector3 slip = tangential(material[0] - material[1]);
   ev.slip_velocity_m_s = fromBt(slip);
-  ev.track_speed_a_m_s = tangential(point_velocity - material[0]).length();
+  const btVector3 track_a = tangential(point_velocity - material[0]);
+  ev.track_velocity_a_m_s = fromBt(track_a);
+  ev.track_speed_a_m_s = track_a.length();
   ev.track_speed_b_m_s = tangential(point_velocity - material[1]).length();
   ev.rolling_speed_m_s = std::min(ev.track_speed_a_m_s, ev.track_speed_b_m_s);
   ev.normal_force_n = ev.normal_impulse_n_s / settings_.substep_s;

@@ -48,6 +48,18 @@ double tapSpeed(double j_normal_n_s, double striker_kg, double object_kg) {
   return reduced_mass > 0.0 ? j_normal_n_s / (2.0 * reduced_mass) : 0.0;
 }
 
+double trackSpeed(const EngineContact& c) {
+  const std::array<double, 3>& r = c.rolling_velocity_m_s;
+  return std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+}
+
+double partnerTrackSpeed(const EngineContact& c) {
+  const std::array<double, 3>& r = c.rolling_velocity_m_s;
+  const std::array<double, 3>& s = c.slip_velocity_m_s;
+  const double x = r[0] + s[0], y = r[1] + s[1], z = r[2] + s[2];
+  return std::sqrt(x * x + y * y + z * z);
+}
+
 double SoundEngine::contactDuration(uint32_t slot, const ContactPartner& partner, double normal_speed_m_s) const {
   const Voice* v = voice(slot);
   return v ? hertzDuration(*v, partner, normal_speed_m_s) : 0.0;
@@ -92,7 +104,7 @@ void SoundEngine::contact(const EngineContact& c) {
   const std::array<double, 3> impulse = c.world_frame ? v->pose_.toLocalDirection(c.impulse) : c.impulse;
   const std::array<double, 3> world = c.world_frame ? c.point : v->pose_.toWorld(c.point);
   const double now = time();
-  const bool impact = c.normal_speed_m_s > kImpactSpeed_m_s;
+  const bool impact = settings_.isImpact(c.normal_speed_m_s);
   // A resting body's contacts come back to the same points step after step: remember them.
   if (impact)
     v->projector_.projectOnce(point.data(), impulse.data(), v->modal_.data());

@@ -43,7 +43,7 @@ void SoundEngine::continuousContact(Voice& v, const EngineContact& c, const std:
     if (s.used && s.key == key) source = &s;
   if (!source) {
     // A new pair starts only when its surfaces move: resting contacts never start a generator.
-    if (std::max(c.track_speed_m_s, c.partner_track_speed_m_s) < RoughContact::kStillSpeed_m_s) return;
+    if (std::max(trackSpeed(c), partnerTrackSpeed(c)) < RoughContact::kStillSpeed_m_s) return;
     for (Voice::Source& s : v.sources_)
       if (!s.used) {
         source = &s;
@@ -93,8 +93,8 @@ void SoundEngine::continuousContact(Voice& v, const EngineContact& c, const std:
   }
   const double n = c.normal_force_n;
   s.force_n += n;
-  s.speed_n += n * c.track_speed_m_s;
-  s.partner_speed_n += n * c.partner_track_speed_m_s;
+  s.speed_n += n * trackSpeed(c);
+  s.partner_speed_n += n * partnerTrackSpeed(c);
   s.patch_n += n * c.patch_radius_m;
   const std::array<double, 3> own = c.world_frame ? v.pose_.toLocalPoint(c.point) : c.point;
   for (int k = 0; k < 3; ++k) {

@@ -117,11 +117,11 @@ class LibraryOutput final : public SoundOutput {
     c.partner_poisson = from.partner.poisson;
     c.partner_radius_m = from.partner.radius_m;
     c.partner_mass_kg = from.partner.mass_kg;
-    // Rolling, sliding and scraping. A physics engine gives velocities; the render has the speeds
-    // at which the point travels over each surface, which are these vectors' lengths.
+    // Rolling, sliding and scraping: the same velocities (the sound engine's contact record is
+    // strike_contact's, field for field).
     c.normal_force_n = from.normal_force_n;
-    c.rolling_velocity_m_s[0] = from.track_speed_m_s;
-    c.slip_velocity_m_s[0] = from.partner_track_speed_m_s - from.track_speed_m_s;
+    for (int k = 0; k < 3; ++k)
+      c.slip_velocity_m_s[k] = from.slip_velocity_m_s[k], c.rolling_velocity_m_s[k] = from.rolling_velocity_m_s[k];
     for (int k = 0; k < 3; ++k) c.partner_point[k] = from.partner_point[k];
     c.patch_radius_m = from.patch_radius_m;
     c.partner_roughness_rms_m = from.partner.roughness.rms_m;

@@ -99,6 +99,11 @@ struct EngineSettings {
   /// Extra modal decay while in sustained contact, 1/s (amplitude); 0 = none. [scene file
   /// "contact_damping"]
   double contact_damping_per_s = 0.0;
+  /// The impact rule, decided here and nowhere else: a contact whose surfaces approach faster
+  /// than this is an impact (a Hertz pulse), slower a part of its body's load. The render hands
+  /// it to the simulation, which times impacts within the step by it.
+  double impact_speed_m_s = kImpactSpeed_m_s;
+  bool isImpact(double normal_speed_m_s) const { return normal_speed_m_s > impact_speed_m_s; }
   /// No allocation after makeVoice/install: impacts, force steps and damping changes beyond the
   /// reserve are dropped and counted. false (offline renders): the reserve grows.
   bool realtime = true;
@@ -183,13 +188,24 @@ struct EngineContact {
   ContactPartner partner;
   // Continuous contact (rolling, sliding, scraping; contact_sources.cpp). normal_force_n 0: none.
   double normal_force_n = 0.0;           ///< this point's normal load over the step, N
-  double track_speed_m_s = 0.0;          ///< how fast the point moves over this body's surface, m/s
-  double partner_track_speed_m_s = 0.0;  ///< ...and over the partner's
+  /// Velocity of this body's surface relative to the partner's at the point, in the tangent
+  /// plane, m/s: 0 while they stick (strike_contact::slip_velocity_m_s).
+  std::array<double, 3> slip_velocity_m_s{};
+  /// Velocity at which the point travels over this body's surface, in the tangent plane, m/s
+  /// (strike_contact::rolling_velocity_m_s): a ball rolling at v, v; a block sliding, 0. Only
+  /// lengths are used, so any frame: the point travels trackSpeed() over this body and
+  /// partnerTrackSpeed() = |rolling + slip| over the partner.
+  std::array<double, 3> rolling_velocity_m_s{};
   /// The point in the partner's mesh frame (the world for the ground or a non-voice body), m:
   /// where the partner's roughness is read.
   std::array<double, 3> partner_point{};
   double patch_radius_m = 0.0;  ///< Hertz contact radius, m; 0: from the load
 };
+
+/// How fast a contact's point travels over its body's surface, m/s: |rolling_velocity_m_s|.
+double trackSpeed(const EngineContact& contact);
+/// ...and over the partner's: |rolling_velocity_m_s + slip_velocity_m_s|.
+double partnerTrackSpeed(const EngineContact& contact);
 
 /// An explicit contact pulse (strike_impact, `strike hit`): no scheduling, no load tracking.
 struct EngineImpact {

@@ -105,7 +105,8 @@ struct SimSettings {
   /// with the restitution that gives the rebound speed at the meeting and no speculative or
   /// penetration term, and a body whose only loaded contacts are such impacts is then moved to
   /// where that rebound takes it. The event is stamped with the meeting (ContactEvent::time_s).
-  /// A CCD predictive contact is left to Bullet; only its event time is estimated. m/s.
+  /// A CCD predictive contact is left to Bullet; only its event time is estimated. m/s. The sound
+  /// engine owns this rule (EngineSettings::impact_speed_m_s) and the render hands it over.
   double impact_speed_m_s = 0.05;
   /// Maximum sequential-impulse iterations per substep. An impact through a 1000:1 mass ratio
   /// needs ~1000 (with 100 a heavy box squeezes a light one out from under it); the solver stops
@@ -209,6 +210,10 @@ struct ContactEvent {
   /// How fast the contact point travels over each body's surface, m/s: a ball rolling at speed v
   /// on the ground, v over both; a block sliding at v, 0 over the block and v over the ground.
   double track_speed_a_m_s = 0.0, track_speed_b_m_s = 0.0;
+  /// The velocity whose length is track_speed_a_m_s: the point's travel over a's surface, in the
+  /// tangent plane, world, m/s. It travels over b's at this + slip_velocity_m_s (the sound
+  /// engine's and strike_contact's rolling_velocity_m_s of a's side).
+  std::array<double, 3> track_velocity_a_m_s{};
   /// The rolling speed: the part of the contact point's travel common to both surfaces,
   /// min(track_speed_a, track_speed_b), m/s. A ball rolling without slip: v; sliding: 0.
   double rolling_speed_m_s = 0.0;

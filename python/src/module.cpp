@@ -240,7 +240,7 @@ py::object eventsArray(const RenderResult& r) {
 
 PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration, double gain,
                             const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
-                            bool transfer, std::shared_ptr<RenderSession> session) {
+                            bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads) {
   Scene scene = take(std::move(parsed));
   RenderSettings settings;
   settings.sample_rate_hz = rate;
@@ -252,6 +252,7 @@ PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration
   settings.similar_reuse = similar;
   settings.acoustic_transfer = transfer;
   settings.session = session.get();  // `session` holds it through the render
+  settings.solve_threads = solve_threads;
   std::optional<Result<RenderResult>> result;
   {
     py::gil_scoped_release released;
@@ -437,15 +438,15 @@ PYBIND11_MODULE(_strike, m) {
       .def("clear", &RenderSession::clear);
   m.def("render_file", [](const std::string& path, double rate, double duration, double gain,
                           const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
-                          bool transfer, std::shared_ptr<RenderSession> session) {
+                          bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads) {
     return renderParsed(loadScene(path), rate, duration, gain, cache_dir, max_tets, max_events, similar,
-                        transfer, std::move(session));
+                        transfer, std::move(session), solve_threads);
   });
   m.def("render_text", [](const std::string& text, const std::string& path, double rate, double duration, double gain,
                           const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
-                          bool transfer, std::shared_ptr<RenderSession> session) {
+                          bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads) {
     return renderParsed(parseScene(text, path), rate, duration, gain, cache_dir, max_tets, max_events, similar,
-                        transfer, std::move(session));
+                        transfer, std::move(session), solve_threads);
   });
   m.def("default_cache_dir", &defaultCacheDir);
   m.def("default_max_tets", []() { return static_cast<int64_t>(kDefaultMaxTets); });

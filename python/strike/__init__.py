@@ -280,7 +280,7 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
            duration: Optional[float] = None, gain: float = 1.0, cache: Union[str, os.PathLike, None, bool] = True,
            base_dir: Union[str, os.PathLike, None] = None, max_tets: Optional[int] = None,
            max_events: Optional[int] = None, similar: bool = False, session: Optional[Session] = None,
-           transfer: bool = True) -> RenderResult:
+           transfer: bool = True, solve_threads: int = 0) -> RenderResult:
     """Renders a collision scene, as ``strike render SCENE.json -o OUT.wav`` does (same engine,
     same samples; :meth:`RenderResult.save` writes the CLI's bytes).
 
@@ -296,6 +296,9 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
         ``--no-transfer``). Banks given in the scene are used as they are.
     session: a :class:`Session` whose hulls and bank surfaces this render reuses and adds to
         (renders in a loop: ~3 ms each of a small scene); the same bytes without it.
+    solve_threads: how many of the banks this render computes are solved at once, each on a thread
+        (0, default: one per core, as far as the memory forecast allows; 1: one after another, as
+        the batch's workers do, which use every core already). The same bytes either way.
     The GIL is released during the render.
     """
     rate_hz = 0.0 if rate is None else _number("rate", rate, 8000, 384000, "must be 8000 to 384000 Hz")
@@ -315,13 +318,15 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
         raise _bad(f"max_tets = {max_tets!r} (must be >= 1)")
     if not isinstance(max_events, int) or max_events < 1:
         raise _bad(f"max_events = {max_events!r} (must be >= 1)")
+    if not isinstance(solve_threads, int) or isinstance(solve_threads, bool) or not 0 <= solve_threads <= 1024:
+        raise _bad(f"solve_threads = {solve_threads!r} (must be 0 to 1024)")
     if isinstance(scene, Mapping):
         scene = dict(scene)
         # Why a file name: it anchors relative paths and names the source in messages.
         anchor = os.path.join(os.path.abspath(os.fspath(base_dir or ".")), "<scene dict>")
         try:
             native = _strike.render_text(json.dumps(scene), anchor, rate_hz, duration_s, gain, cache_dir, max_tets,
-                                         max_events, bool(similar), bool(transfer), session)
+                                         max_events, bool(similar), bool(transfer), session, solve_threads)
         except InputError as error:
             # The anchor is no file: messages name the dict (and where its paths resolve) instead.
             message = str(error)
@@ -332,7 +337,7 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
         return RenderResult(native, scene)
     path = os.fspath(scene)
     native = _strike.render_file(path, rate_hz, duration_s, gain, cache_dir, max_tets, max_events, bool(similar),
-                                 bool(transfer), session)
+                                 bool(transfer), session, solve_threads)
     return RenderResult(native, path)
 
 

@@ -112,8 +112,9 @@ def _render(job, out_dir: str, cache_dir: str, similar: bool):
     if is_done(job, out_dir, similar):
         return {"id": job.id, "status": "skipped", "seconds": 0.0}
     try:
+        # One solve at a time: the workers are one per core already, and each forecasts its memory alone.
         result = strike.render(job.scene, rate=job.rate, duration=job.duration, gain=job.gain, cache=cache_dir,
-                               base_dir=job.base_dir, similar=similar, session=_session())
+                               base_dir=job.base_dir, similar=similar, session=_session(), solve_threads=1)
     except strike.InputError as e:
         return {"id": job.id, "status": "failed", "error": f"line {job.line} (id {job.id}): {e}",
                 "seconds": time.perf_counter() - start}

@@ -210,6 +210,24 @@ TEST_F(OutputLevel, DefaultTapSoundsTheSameThroughStrikeHitAndTheCApi) {
   EXPECT_NEAR(centroid_capi / centroid_cli, 1.0, 0.05);
 }
 
+// examples/c/tap.c, the docs' minimal C program, taps the bank as `strike hit` does: the same
+// level and brightness (the default striker, 0.01 N s along the inward normal, 1 m away).
+TEST_F(OutputLevel, TheMinimalCExampleSoundsLikeStrikeHit) {
+  const std::string wav = testing::TempDir() + "/capi_example_tap.wav", cli_wav = testing::TempDir() + "/capi_hit.wav";
+  const std::string command =
+      std::string("'") + STRIKE_EXAMPLE_TAP + "' '" + bank_ + "' " + std::to_string(kVertex) + " '" + wav + "'";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  const test::CliResult r = test::runCli("hit '" + bank_ + "' -o '" + cli_wav + "' --vertex " +
+                                         std::to_string(kVertex) + " --distance 1 --duration 1 --rate 48000 --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  Result<AudioBuffer> example = readAudio(wav), cli = readAudio(cli_wav);
+  ASSERT_TRUE(example) << example.error().message;
+  ASSERT_TRUE(cli) << cli.error().message;
+  ASSERT_EQ(example->sample_rate_hz, 48000.0);
+  EXPECT_NEAR(20 * std::log10(levelOf(example->samples).peak / levelOf(cli->samples).peak), 0.0, 1.0);
+  EXPECT_NEAR(spectralCentroidHz(example->samples, kRate) / spectralCentroidHz(cli->samples, kRate), 1.0, 0.05);
+}
+
 // The library's striker is steel as the material table has it (`strike hit --striker steel`).
 TEST(DefaultStriker, IsTheMaterialTablesSteel) {
   const strike_impact_desc d = strike_impact_desc_default();

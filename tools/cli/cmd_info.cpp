@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 // `strike info BANK.modes [--json]`: what a mode bank holds.
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "args.hpp"
 #include "commands.hpp"
@@ -18,12 +20,17 @@ double transferLevelDb(double e) { return e >= 0.999 ? 60.0 : -20.0 * std::log10
 
 CommandSpec infoSpec() {
   CommandSpec spec;
-  spec.usage = "strike info BANK.modes [--json]";
+  spec.usage = "strike info BANK.modes [--json] [--vertices]";
   spec.summary =
       "Shows a mode bank: material, mesh, mass properties, and per mode the undamped frequency,\n"
       "the amplitude decay rate d = (a1 lambda + a2) / 2 and T60 = ln(1000) / d (time to fall by 60 dB).";
-  spec.options = {{"--json", "", "print one JSON object on stdout (the contract in docs/cli.md)"}};
-  spec.examples = "  strike info bar.modes\n  strike info bar.modes --json | jq '.frequencies_hz[:5]'\n";
+  spec.options = {{"--json", "", "print one JSON object on stdout (the contract in docs/cli.md)"},
+                  {"--vertices", "",
+                   "also list the surface vertices (index, position in m, outward unit normal): the numbers "
+                   "`strike hit --vertex` takes; with --json, as surface_vertices_m and surface_normals"}};
+  spec.examples =
+      "  strike info bar.modes\n  strike info bar.modes --json | jq '.frequencies_hz[:5]'\n"
+      "  strike info bar.modes --vertices | grep ' 1.000$'   # vertices whose normal is +z (top faces)\n";
   spec.min_positional = 1;
   spec.max_positional = 1;
   return spec;
@@ -165,10 +172,32 @@ int runInfo(const std::vector<std::string>& raw_args) {
   const std::string path = args->positional[0];
   Result<ModeBank> bank = readBank(path);
   if (!bank) return reportError("info", bank.error());
-  if (args->has("--json"))
-    std::printf("%s\n", bankJson(*bank).dump(2).c_str());
-  else
-    printTable(path, *bank);
+  const size_t vertices = bank->surfaceVertexCount();
+  if (args->has("--json")) {
+    nlohmann::json j = bankJson(*bank);
+    if (args->has("--vertices")) {
+      std::vector<std::array<double, 3>> positions(vertices), normals(vertices);
+      for (size_t v = 0; v < vertices; ++v)
+        for (size_t a = 0; a < 3; ++a) {
+          positions[v][a] = bank->surface_positions[3 * v + a];
+          normals[v][a] = bank->surface_normals[3 * v + a];
+        }
+      j["surface_vertices_m"] = positions;
+      j["surface_normals"] = normals;
+    }
+    std::printf("%s\n", j.dump(2).c_str());
+    return 0;
+  }
+  printTable(path, *bank);
+  if (args->has("--vertices")) {
+    // Adding 0.0 prints a -0.0 as 0.
+    std::printf("\n%6s %10s %10s %10s %7s %7s %7s\n", "vertex", "x m", "y m", "z m", "nx", "ny", "nz");
+    for (size_t v = 0; v < vertices; ++v)
+      std::printf("%6zu %10.5f %10.5f %10.5f %7.3f %7.3f %7.3f\n", v, bank->surface_positions[3 * v] + 0.0,
+                  bank->surface_positions[3 * v + 1] + 0.0, bank->surface_positions[3 * v + 2] + 0.0,
+                  bank->surface_normals[3 * v] + 0.0, bank->surface_normals[3 * v + 1] + 0.0,
+                  bank->surface_normals[3 * v + 2] + 0.0);
+  }
   return 0;
 }
 

@@ -8,12 +8,15 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "run_cli.hpp"
 
@@ -205,6 +208,39 @@ TEST(FirstHourMessages, TheMaterialTableFitsATerminalWithItsSourcesAsNotes) {
   }
   EXPECT_GT(rows, 10u);
   EXPECT_NE(table.out.find("\nsources:\n[1]  "), std::string::npos) << table.out;
+}
+
+TEST(FirstHourInfo, VerticesListsEverySurfaceVertexWithItsOutwardNormal) {
+  const std::string dir = folder("vertices");
+  const CliResult modes =
+      runCli("modes box:0.1,0.05,0.02 --material steel --no-transfer --no-error-estimate -o " + dir + "/box.modes");
+  ASSERT_EQ(modes.exit_code, 0) << modes.err;
+  const CliResult json = runCli("info " + dir + "/box.modes --json --vertices");
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const nlohmann::json j = nlohmann::json::parse(json.out);
+  const auto& positions = j.at("surface_vertices_m");
+  const auto& normals = j.at("surface_normals");
+  ASSERT_EQ(positions.size(), j.at("mesh").at("surface_vertices").get<size_t>());
+  ASSERT_EQ(normals.size(), positions.size());
+  size_t top = 0;
+  for (size_t v = 0; v < positions.size(); ++v) {
+    const double nx = normals[v][0], ny = normals[v][1], nz = normals[v][2];
+    EXPECT_NEAR(nx * nx + ny * ny + nz * nz, 1.0, 1e-6) << v;
+    // On the box's top face (z = 0.01, away from its edges) the normal is +z.
+    const double x = positions[v][0], y = positions[v][1], z = positions[v][2];
+    if (std::fabs(z - 0.01) < 1e-9 && std::fabs(x) < 0.049 && std::fabs(y) < 0.024) {
+      EXPECT_NEAR(nz, 1.0, 1e-6) << v;
+      ++top;
+    }
+  }
+  EXPECT_GT(top, 0u);
+  const CliResult table = runCli("info " + dir + "/box.modes --vertices");
+  ASSERT_EQ(table.exit_code, 0) << table.err;
+  EXPECT_NE(table.out.find("vertex        x m        y m        z m      nx      ny      nz"), std::string::npos)
+      << table.out;
+  EXPECT_NE(table.out.find("\n" + std::string(6 - std::to_string(positions.size() - 1).size(), ' ') +
+                           std::to_string(positions.size() - 1) + " "),
+            std::string::npos);
 }
 
 }  // namespace

@@ -72,6 +72,9 @@ TEST(CliModes, BadMaterialNumbersNameTheOption) {
       {"--material steel --max-freq -5", "--max-freq = -5"},
       {"--material steel --size abc", "--size = 'abc'"},
       {"--material steel --bogus 1", "unknown option '--bogus'"},
+      {"--material steel --transfer-tolerance 0.5", "--transfer-tolerance = 0.5 is ambiguous"},
+      {"--material steel --transfer-tolerance 0%", "--transfer-tolerance = 0%"},
+      {"--material steel --transfer-max-elements 8", "--transfer-max-elements = 8"},
   };
   std::filesystem::remove(temp("bad.modes"));
   for (const Case& c : cases) {

@@ -457,10 +457,31 @@ TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
         stats[i].far_field_seconds, stats[i].iterations);
   // Against a reference transfer of the same modes (a bank solved tighter): the true error of
   // each mode's far field (rms over directions, Parseval), beside its estimate.
-  if (const char* reference_path = std::getenv("STRIKE_TRANSFER_REFERENCE")) {
-    Result<ModeBank> reference = readBank(reference_path);
-    ASSERT_TRUE(reference) << reference.error().message;
-    const AcousticTransfer& r = reference->transfer;
+  // (STRIKE_TRANSFER_REFERENCE: a bank file holding it; STRIKE_TRANSFER_REFERENCE_ELEMENTS: solved
+  // here with that budget and a tenth of the target.)
+  AcousticTransfer solved_reference;
+  if (const char* elements = std::getenv("STRIKE_TRANSFER_REFERENCE_ELEMENTS")) {
+    TransferSettings tighter = settings;
+    tighter.max_elements = std::atoi(elements);
+    tighter.target_relative_error = 0.1 * settings.target_relative_error;
+    const std::clock_t reference_start = std::clock();
+    Result<AcousticTransfer> r = solveAcousticTransfer(*bank, tighter);
+    ASSERT_TRUE(r) << r.error().message;
+    std::printf("reference: %d elements, processor %.2f s\n", tighter.max_elements,
+                static_cast<double>(std::clock() - reference_start) / CLOCKS_PER_SEC);
+    solved_reference = *r;
+  }
+  const char* reference_path = std::getenv("STRIKE_TRANSFER_REFERENCE");
+  if (reference_path || !solved_reference.empty()) {
+    ModeBank reference;
+    if (reference_path) {
+      Result<ModeBank> read = readBank(reference_path);
+      ASSERT_TRUE(read) << read.error().message;
+      reference = std::move(*read);
+    } else {
+      reference.transfer = solved_reference;
+    }
+    const AcousticTransfer& r = reference.transfer;
     ASSERT_EQ(r.modeCount(), t->modeCount());
     size_t within = 0, over3 = 0;
     for (size_t i = 0; i < t->modeCount(); ++i) {

@@ -240,9 +240,13 @@ py::object eventsArray(const RenderResult& r) {
 
 PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration, double gain,
                             const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
-                            bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads) {
+                            bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads,
+                            const std::string& output) {
   Scene scene = take(std::move(parsed));
   RenderSettings settings;
+  const std::optional<OutputFormat> format = parseOutputFormat(output);
+  if (!format) raise(badInput("output = '" + output + "' (must be mono, stereo, ambix1, ambix2 or ambix3)"));
+  settings.output_format = *format;
   settings.sample_rate_hz = rate;
   settings.duration_s = duration;
   settings.gain = gain;
@@ -438,15 +442,17 @@ PYBIND11_MODULE(_strike, m) {
       .def("clear", &RenderSession::clear);
   m.def("render_file", [](const std::string& path, double rate, double duration, double gain,
                           const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
-                          bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads) {
+                          bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads,
+                            const std::string& output) {
     return renderParsed(loadScene(path), rate, duration, gain, cache_dir, max_tets, max_events, similar,
-                        transfer, std::move(session), solve_threads);
+                        transfer, std::move(session), solve_threads, output);
   });
   m.def("render_text", [](const std::string& text, const std::string& path, double rate, double duration, double gain,
                           const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
-                          bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads) {
+                          bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads,
+                            const std::string& output) {
     return renderParsed(parseScene(text, path), rate, duration, gain, cache_dir, max_tets, max_events, similar,
-                        transfer, std::move(session), solve_threads);
+                        transfer, std::move(session), solve_threads, output);
   });
   m.def("default_cache_dir", &defaultCacheDir);
   m.def("default_max_tets", []() { return static_cast<int64_t>(kDefaultMaxTets); });

@@ -252,7 +252,12 @@ STRIKE_API strike_context_config STRIKE_CALL strike_context_config_default(void)
   return c;
 }
 
-STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_config* config, strike_context* out) {
+namespace {
+
+/// strike_context_create with the output's format: from config->channels (mono or stereo), or
+/// from a strike_output_desc.
+strike_status createContext(const strike_context_config* config, const strike_output_desc* output,
+                            strike_context* out) {
   if (!config || !out) return STRIKE_ERR_INVALID_ARG;
   if (config->internal_cookie != kContextCookie) return STRIKE_ERR_NOT_INITIALIZED;
   const uint32_t caller = config->api_version;
@@ -276,6 +281,25 @@ STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_
   }
   strike_context_config cfg = c;
   if (!cfg.alloc) cfg.alloc = defaultAlloc, cfg.free = defaultFree;
+  OutputFormat format = cfg.channels == 2 ? OutputFormat::Stereo : OutputFormat::Mono;
+  if (output) {
+    if (output->struct_size < offsetof(strike_output_desc, format) + sizeof output->format) {
+      logRejected(c, "output: struct_size = " + std::to_string(output->struct_size) +
+                         " (set it to sizeof(strike_output_desc))");
+      return STRIKE_ERR_INVALID_ARG;
+    }
+    switch (output->format) {
+      case STRIKE_OUTPUT_MONO: format = OutputFormat::Mono; break;
+      case STRIKE_OUTPUT_STEREO: format = OutputFormat::Stereo; break;
+      case STRIKE_OUTPUT_AMBIX1: format = OutputFormat::Ambix1; break;
+      case STRIKE_OUTPUT_AMBIX2: format = OutputFormat::Ambix2; break;
+      case STRIKE_OUTPUT_AMBIX3: format = OutputFormat::Ambix3; break;
+      default:
+        logRejected(c, "output: format = " + std::to_string(output->format) + " (must be a STRIKE_OUTPUT_* value)");
+        return STRIKE_ERR_INVALID_ARG;
+    }
+  }
+  cfg.channels = outputChannels(format);  // what strike_render() checks
 
   void* mem = cfg.alloc(cfg.user, sizeof(strike_context_s), alignof(strike_context_s));
   if (!mem) return STRIKE_ERR_OUT_OF_MEMORY;
@@ -307,6 +331,7 @@ STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_
     e.synth.min_freq_hz = cfg.min_freq_hz;
     e.synth.max_freq_hz = cfg.max_freq_hz;
     e.synth.audibility_threshold = cfg.audibility_threshold;
+    e.output = format;
     e.channels = cfg.channels;
     e.max_voices = cfg.max_objects;
     e.max_block_frames = cfg.max_block_frames;
@@ -337,6 +362,27 @@ STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_
   }
   *out = ctx;
   return STRIKE_OK;
+}
+
+}  // namespace
+
+STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_config* config, strike_context* out) {
+  return createContext(config, nullptr, out);
+}
+
+STRIKE_API strike_output_desc STRIKE_CALL strike_output_desc_default(void) {
+  strike_output_desc d;
+  std::memset(&d, 0, sizeof d);
+  d.struct_size = sizeof d;
+  d.format = STRIKE_OUTPUT_MONO;
+  return d;
+}
+
+STRIKE_API strike_status STRIKE_CALL strike_context_create_with_output(const strike_context_config* config,
+                                                                       const strike_output_desc* output,
+                                                                       strike_context* out) {
+  if (!output) return STRIKE_ERR_INVALID_ARG;
+  return createContext(config, output, out);
 }
 
 STRIKE_API void STRIKE_CALL strike_context_destroy(strike_context ctx) {

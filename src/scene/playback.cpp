@@ -14,7 +14,9 @@ namespace {
 /// The built-in sound engine as a SoundOutput.
 class EngineOutput final : public SoundOutput {
  public:
-  explicit EngineOutput(const EngineSettings& settings) : engine_(settings) {}
+  explicit EngineOutput(const EngineSettings& settings) : engine_(settings) {
+    planar_.assign(static_cast<size_t>(engine_.settings().channels) * engine_.settings().max_block_frames, 0.0f);
+  }
   Status addVoice(uint32_t slot, const VoiceDesc& desc, const std::array<double, 3>& position_m,
                   const std::array<double, 4>& orientation_wxyz, const std::string&) override {
     VoiceDesc placed = desc;
@@ -23,10 +25,9 @@ class EngineOutput final : public SoundOutput {
     engine_.install(slot, voices_.back().get());
     return {};
   }
-  void setListener(const std::array<double, 3>& position_m) override {
+  void setListener(const std::array<double, 3>& position_m, const std::array<double, 4>& orientation_wxyz) override {
     Pose listener;
-    listener.position_m = position_m;
-    engine_.setListener(listener);
+    if (listener.set(position_m.data(), orientation_wxyz.data())) engine_.setListener(listener);
   }
   void beginStep(double step_end_s, double step_s) override { engine_.beginStep(step_end_s, step_s); }
   void setPose(uint32_t slot, const std::array<double, 3>& position_m, const std::array<double, 4>& orientation_wxyz,
@@ -36,9 +37,18 @@ class EngineOutput final : public SoundOutput {
   }
   void contact(const EngineContact& contact) override { engine_.contact(contact); }
   void endStep() override { engine_.endStep(); }
-  Status render(float* mono, size_t frames) override {
-    float* channels[1] = {mono};
+  Status render(float* interleaved, size_t frames) override {
+    const uint32_t count = engine_.settings().channels;
+    if (count == 1) {
+      float* channels[1] = {interleaved};
+      engine_.render(channels, frames);
+      return {};
+    }
+    float* channels[kMaxOutputChannels] = {};
+    for (uint32_t c = 0; c < count; ++c) channels[c] = planar_.data() + c * engine_.settings().max_block_frames;
     engine_.render(channels, frames);
+    for (size_t n = 0; n < frames; ++n)
+      for (uint32_t c = 0; c < count; ++c) interleaved[n * count + c] = channels[c][n];
     return {};
   }
   EngineStats stats() const override { return engine_.stats(); }
@@ -46,6 +56,7 @@ class EngineOutput final : public SoundOutput {
  private:
   SoundEngine engine_;
   std::vector<std::unique_ptr<Voice>> voices_;
+  std::vector<float> planar_;  ///< channels x max_block_frames, for more than one channel
 };
 
 }  // namespace
@@ -73,13 +84,15 @@ Status play(const Playback& p, SoundOutput& output, AudioBuffer& audio, const Pr
     }
   }
   const double rate = audio.sample_rate_hz;
+  const size_t channels = static_cast<size_t>(std::max(audio.channels, 1));
+  const size_t total = audio.frames();
   size_t rendered = 0;
   // Blocks whose end lies a physics step behind the step just fed: nothing later can land in them.
   auto renderUpTo = [&](size_t frame_end) -> Status {
-    frame_end = std::min(frame_end, audio.samples.size());
-    while (rendered + kRenderBlockFrames <= frame_end || (frame_end == audio.samples.size() && rendered < frame_end)) {
-      const size_t frames = std::min(kRenderBlockFrames, audio.samples.size() - rendered);
-      if (Status ok = output.render(audio.samples.data() + rendered, frames); !ok) return ok;
+    frame_end = std::min(frame_end, total);
+    while (rendered + kRenderBlockFrames <= frame_end || (frame_end == total && rendered < frame_end)) {
+      const size_t frames = std::min(kRenderBlockFrames, total - rendered);
+      if (Status ok = output.render(audio.samples.data() + rendered * channels, frames); !ok) return ok;
       rendered += frames;
     }
     return {};
@@ -124,13 +137,13 @@ Status play(const Playback& p, SoundOutput& output, AudioBuffer& audio, const Pr
     output.endStep();
     const double safe_s = step_end - substep;  // the next step's contacts start no earlier
     if (Status ok = renderUpTo(safe_s > 0 ? static_cast<size_t>(std::floor(safe_s * rate)) : 0); !ok) return ok;
-    const double fraction = static_cast<double>(rendered) / std::max<size_t>(audio.samples.size(), 1);
+    const double fraction = static_cast<double>(rendered) / std::max<size_t>(total, 1);
     if (progress && fraction - last_progress >= 0.01) {
       progress("synthesize", fraction);
       last_progress = fraction;
     }
   }
-  if (Status ok = renderUpTo(audio.samples.size()); !ok) return ok;
+  if (Status ok = renderUpTo(total); !ok) return ok;
   return {};
 }
 

@@ -570,7 +570,8 @@ EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& se
     engine.synth.max_freq_hz = max_freq_hz;
     engine.synth.audibility_threshold = 0.0;
   }
-  engine.channels = 1;
+  engine.output = settings.output_format;
+  engine.channels = outputChannels(settings.output_format);
   engine.max_voices = static_cast<uint32_t>(scene.objects.size());
   engine.max_block_frames = kRenderBlockFrames;
   engine.max_active_modes = 0;  // a render keeps every audible mode
@@ -898,7 +899,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
       return added.error();
     has_voice[index] = true;
   }
-  output->setListener(scene.listener_position_m);
+  output->setListener(scene.listener_position_m, scene.listener_orientation_wxyz);
 
   // The other bodies as the Hertz contact time needs them: a sounding body by its voice, the
   // ground and anything else by its material, size and mass.
@@ -923,8 +924,9 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   ground.roughness = ground_surface.roughness;
   ground.restitution = ground_surface.restitution;
   result.audio.sample_rate_hz = rate;
-  result.audio.channels = 1;
-  result.audio.samples.assign(static_cast<size_t>(std::llround(duration * rate)), 0.0f);
+  result.audio.channels = static_cast<int>(outputChannels(settings.output_format));
+  result.audio.samples.assign(
+      static_cast<size_t>(std::llround(duration * rate)) * outputChannels(settings.output_format), 0.0f);
   const Playback playback{result.events, simulated->states, simulated->substeps, substep, has_voice, partners, ground};
   if (Status played = play(playback, *output, result.audio, settings.progress); !played) return played.error();
   const EngineStats engine_stats = output->stats();

@@ -13,6 +13,7 @@
 #include "strike/materials.hpp"
 #include "strike/mesh.hpp"
 #include "strike/scene.hpp"
+#include "strike/spatializer.hpp"
 
 namespace strike {
 namespace {
@@ -386,7 +387,7 @@ const std::vector<SceneKeyTable>& sceneKeyTables() {
       {"top level",
        {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes",
         "contact_damping", "contacts"}},
-      {"listener", {"position"}},
+      {"listener", {"position", "orientation", "look_at"}},
       {"contacts[]", {"objects", "restitution", "friction", "rolling_resistance"}},
       {"ground", {"material", "height", "restitution", "friction", "rolling_resistance", "reflection"}},
       {"objects[]",
@@ -488,6 +489,24 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
       Result<std::array<double, 3>> p = vector<3>(doc["listener"]["position"], where.at("position"));
       if (!p) return p.error();
       scene.listener_position_m = *p;
+    }
+    if (doc["listener"].contains("orientation") && doc["listener"].contains("look_at"))
+      return where.at("look_at").error("give either orientation or look_at, not both");
+    if (doc["listener"].contains("orientation")) {
+      Result<std::array<double, 4>> q = unitQuaternion(doc["listener"]["orientation"], where.at("orientation"));
+      if (!q) return q.error();
+      scene.listener_orientation_wxyz = *q;
+    }
+    if (doc["listener"].contains("look_at")) {
+      Result<std::array<double, 3>> target = vector<3>(doc["listener"]["look_at"], where.at("look_at"));
+      if (!target) return target.error();
+      const std::optional<std::array<double, 4>> q = lookAtOrientation(scene.listener_position_m, *target);
+      if (!q)
+        return where.at("look_at").error(
+            "must be a point beside the listener's position (not on it, nor straight above "
+            "or below it), got " +
+            show(doc["listener"]["look_at"]));
+      scene.listener_orientation_wxyz = *q;
     }
   }
   scene.ground_material = *builtinMaterials().find("concrete");

@@ -142,10 +142,7 @@ void SoundEngine::contact(const EngineContact& c) {
     }
     const double t = c.time_s >= 0.0 ? c.time_s : now;
     if (settings_.contact_damping_per_s > 0.0 && !v->span_open_) {
-      if (settings_.realtime)
-        (void)v->synth_.setExtraDampingNoAlloc(0, t + delayTo(world), settings_.contact_damping_per_s);
-      else
-        v->synth_.setExtraDamping(0, t + delayTo(world), settings_.contact_damping_per_s);
+      setExtraDamping(*v, t, world, settings_.contact_damping_per_s);
       v->span_open_ = true;
     }
     v->last_sustained_s_ = t;
@@ -211,11 +208,7 @@ void SoundEngine::endStepFor(Voice& v) {
     }
   }
   if (v.span_open_ && !keep && step_start_s - v.last_sustained_s_ > kContactGap_s) {
-    const double t = v.last_sustained_s_ + kContactGap_s + delayTo(centre);
-    if (settings_.realtime)
-      (void)v.synth_.setExtraDampingNoAlloc(0, t, 0.0);
-    else
-      v.synth_.setExtraDamping(0, t, 0.0);
+    setExtraDamping(v, v.last_sustained_s_ + kContactGap_s, centre, 0.0);
     v.span_open_ = false;
   }
 }
@@ -263,6 +256,7 @@ void SoundEngine::reset() {
     if (!v) continue;
     v->synth_.reset();
     v->click_synth_.reset();
+    if (v->image_) v->image_->synth.reset(), v->image_->click_synth.reset();
     std::fill(v->step_force_.begin(), v->step_force_.end(), 0.0);
     std::fill(v->held_force_.begin(), v->held_force_.end(), 0.0);
     v->step_load_ = {};

@@ -23,7 +23,8 @@ uint32_t histogramBin(float level2) {
 }  // namespace
 
 SoundEngine::SoundEngine(const EngineSettings& settings) : settings_(settings) {
-  settings_.channels = settings_.channels == 2 ? 2 : 1;
+  if (settings_.output == OutputFormat::Mono && settings_.channels == 2) settings_.output = OutputFormat::Stereo;
+  settings_.channels = outputChannels(settings_.output);
   settings_.max_block_frames = std::max<uint32_t>(settings_.max_block_frames, 1);
   slots_.assign(settings_.max_voices, nullptr);
   histogram_.assign(kHistogramBins, 0);
@@ -40,6 +41,10 @@ bool SoundEngine::install(uint32_t slot, Voice* voice) {
   if (frames_ > at) {
     voice->synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
     voice->click_synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
+    if (voice->image_) {
+      voice->image_->synth.skip(nullptr, static_cast<size_t>(frames_ - at));
+      voice->image_->click_synth.skip(nullptr, static_cast<size_t>(frames_ - at));
+    }
   }
   return true;
 }
@@ -68,25 +73,50 @@ double SoundEngine::delayTo(const std::array<double, 3>& world_point) const {
 }
 
 // The listener model (listener.hpp): the level from the distance of the body's centre of mass
-// now; the pan from its direction in the listener's frame (+x to the right).
+// now; each path's channel gains from its direction in the listener's frame (spatializer.hpp):
+// the direct sound from the centre of mass, the ground's image from its mirror image.
 void SoundEngine::updateGains(Voice& v) {
   const std::array<double, 3> centre = v.pose_.toWorld(v.centre_m_);
   const double d = distance(centre, listener_.position_m);
   const double g =
       static_cast<double>(v.gain_) * distanceGain(d, settings_.reference_distance_m, settings_.min_distance_m);
   v.level_gain2_ = static_cast<float>(g * g);
-  if (settings_.channels == 1) {
+  const OutputFormat format = settings_.output;
+  if (format == OutputFormat::Mono)
     v.target_gain_[0] = static_cast<float>(g);
-  } else {
-    const std::array<double, 3> local = listener_.toLocalPoint(centre);
-    const double pan = d > 1e-9 ? std::clamp(local[0] / d, -1.0, 1.0) : 0.0;
-    const double theta = (pan + 1.0) * (M_PI / 4.0);  // constant power: gl^2 + gr^2 = g^2
-    v.target_gain_[0] = static_cast<float>(g * std::cos(theta));
-    v.target_gain_[1] = static_cast<float>(g * std::sin(theta));
-  }
+  else
+    spatialGains(format, listener_.toLocalPoint(centre), d, g, v.target_gain_);
+  std::array<double, 3> image;
+  if (v.image_ && imageOf(centre, image))
+    spatialGains(format, listener_.toLocalPoint(image), distance(image, listener_.position_m), g,
+                 v.image_->target_gain);
   if (v.fresh_) {
-    v.cur_gain_[0] = v.target_gain_[0], v.cur_gain_[1] = v.target_gain_[1];
+    std::copy(v.target_gain_, v.target_gain_ + settings_.channels, v.cur_gain_);
+    if (v.image_) std::copy(v.image_->target_gain, v.image_->target_gain + settings_.channels, v.image_->cur_gain);
     v.fresh_ = false;
+  }
+}
+
+bool SoundEngine::imageOf(const std::array<double, 3>& point, std::array<double, 3>& image) const {
+  const GroundReflection& ground = settings_.ground;
+  if (!ground.enabled) return false;
+  const std::array<double, 3>& n = ground.normal;
+  const double height = n[0] * point[0] + n[1] * point[1] + n[2] * point[2] - ground.height_m;
+  for (int k = 0; k < 3; ++k) image[k] = point[k] - 2.0 * height * n[k];
+  return true;
+}
+
+void SoundEngine::mixPath(const float* m, float* cur, const float* target, float* const* out, size_t frames) const {
+  const float inv = 1.0f / static_cast<float>(frames);
+  for (uint32_t c = 0; c < settings_.channels; ++c) {
+    const float g0 = cur[c], dg = (target[c] - g0) * inv;
+    float* o = out[c];
+    if (dg == 0.0f) {
+      for (size_t n = 0; n < frames; ++n) o[n] += g0 * m[n];
+    } else {
+      for (size_t n = 0; n < frames; ++n) o[n] += (g0 + dg * static_cast<float>(n + 1)) * m[n];
+    }
+    cur[c] = target[c];
   }
 }
 
@@ -99,10 +129,28 @@ void SoundEngine::render(float* const* out, size_t frames) {
     if (!v) continue;
     updateGains(*v);
     if (frames == 0) continue;
-    const bool driven = renderContactForces(*v, frames);  // issue 18: continuous contacts' forces
+    if (Voice::ImagePath* image = v->image_.get()) {
+      const bool clicking = !image->click_synth.idle();
+      if (image->synth.idle() && !clicking) {
+        std::copy(image->target_gain, image->target_gain + channels, image->cur_gain);
+        image->synth.skip(nullptr, frames);
+        image->click_synth.skip(nullptr, frames);
+      } else {
+        image->synth.skip(v->mono_.data(), frames);
+        if (clicking) {
+          image->click_synth.render(v->click_mono_.data(), frames);
+          for (size_t n = 0; n < frames; ++n) v->mono_[n] += v->click_mono_[n];
+        } else {
+          image->click_synth.skip(nullptr, frames);
+        }
+        mixPath(v->mono_.data(), image->cur_gain, image->target_gain, out, frames);
+        active += image->synth.activeModeCount();
+      }
+    }
+    const bool driven = renderContactForces(*v, frames);  // continuous contacts' forces
     const bool clicking = !v->click_synth_.idle();
     if (!driven && v->synth_.idle() && !clicking) {
-      v->cur_gain_[0] = v->target_gain_[0], v->cur_gain_[1] = v->target_gain_[1];
+      std::copy(v->target_gain_, v->target_gain_ + channels, v->cur_gain_);
       v->synth_.skip(nullptr, frames);  // keeps its clock: its next pulse lands at the right sample
       v->click_synth_.skip(nullptr, frames);
       continue;
@@ -117,18 +165,7 @@ void SoundEngine::render(float* const* out, size_t frames) {
     } else {
       v->click_synth_.skip(nullptr, frames);
     }
-    const float inv = 1.0f / static_cast<float>(frames);
-    for (uint32_t c = 0; c < channels; ++c) {
-      const float g0 = v->cur_gain_[c], dg = (v->target_gain_[c] - g0) * inv;
-      float* o = out[c];
-      const float* m = v->mono_.data();
-      if (dg == 0.0f) {
-        for (size_t n = 0; n < frames; ++n) o[n] += g0 * m[n];
-      } else {
-        for (size_t n = 0; n < frames; ++n) o[n] += (g0 + dg * static_cast<float>(n + 1)) * m[n];
-      }
-      v->cur_gain_[c] = v->target_gain_[c];
-    }
+    mixPath(v->mono_.data(), v->cur_gain_, v->target_gain_, out, frames);
     active += v->synth_.activeModeCount();
   }
   enforceBudget(active);
@@ -149,6 +186,10 @@ void SoundEngine::enforceBudget(uint64_t& active) {
     if (!v) continue;
     const size_t n = v->synth_.activeModeLevels(v->levels_.data(), v->levels_.size());
     for (size_t k = 0; k < n; ++k) ++histogram_[histogramBin(v->levels_[k] * v->level_gain2_)];
+    if (v->image_) {
+      const size_t m = v->image_->synth.activeModeLevels(v->levels_.data(), v->levels_.size());
+      for (size_t k = 0; k < m; ++k) ++histogram_[histogramBin(v->levels_[k] * v->level_gain2_)];
+    }
   }
   // Keep the loudest bins while they fit; cull the first bin that does not, and all below it.
   uint64_t kept = 0;
@@ -171,6 +212,10 @@ void SoundEngine::enforceBudget(uint64_t& active) {
     if (!v) continue;
     stats_.modes_culled += v->synth_.sleepModesAtOrBelow(threshold, v->level_gain2_);
     active += v->synth_.activeModeCount();
+    if (v->image_) {
+      stats_.modes_culled += v->image_->synth.sleepModesAtOrBelow(threshold, v->level_gain2_);
+      active += v->image_->synth.activeModeCount();
+    }
   }
 }
 
@@ -183,6 +228,7 @@ EngineStats SoundEngine::stats() const {
     s.modes_total += vs.modes_total;
     s.modes_out_of_band += vs.modes_out_of_band;
     s.mode_samples += vs.mode_samples;
+    if (v->image_) s.mode_samples += v->image_->synth.stats().mode_samples;
   }
   return s;
 }

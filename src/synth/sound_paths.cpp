@@ -148,7 +148,8 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
     impact.shape = shape;
     impact.modal_impulse = modal;
     impact.modal_transfer = transfer[k];
-    const ImpactResult r = settings_.realtime ? v.synth_.addImpactNoAlloc(impact) : v.synth_.addImpact(impact);
+    OscillatorBank& synth = pathSynth(v, k);
+    const ImpactResult r = settings_.realtime ? synth.addImpactNoAlloc(impact) : synth.addImpact(impact);
     if (k == 0) {  // one impact, however many paths it takes
       switch (r) {
         case ImpactResult::Scheduled: ++stats_.impacts; break;
@@ -157,7 +158,7 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
         case ImpactResult::BadObject: ++stats_.impacts_dropped; break;
       }
     }
-    if (v.clicks_ && shape == PulseShape::HalfSine) scheduleClick(v, paths[k], time_s, duration_s, impulse_local);
+    if (v.clicks_ && shape == PulseShape::HalfSine) scheduleClick(v, k, paths[k], time_s, duration_s, impulse_local);
   }
 }
 
@@ -174,7 +175,8 @@ void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double
     step.ramp_s = ramp_s;
     step.modal_force_change = modal_change;
     step.modal_transfer = transfer[k];
-    const ImpactResult r = settings_.realtime ? v.synth_.addForceStepNoAlloc(step) : v.synth_.addForceStep(step);
+    OscillatorBank& synth = pathSynth(v, k);
+    const ImpactResult r = settings_.realtime ? synth.addForceStepNoAlloc(step) : synth.addForceStep(step);
     if (k > 0) continue;
     if (r == ImpactResult::NoCapacity)
       ++stats_.impacts_dropped;
@@ -187,7 +189,7 @@ void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double
 // K_j lambda_j q_j' with K_j = rho M_j (d . e_j) / (4 pi c). The oscillators' output is
 // Re(factor b g y) with b = -i p^2 R / omega_d and q' = g Im(p y) / omega_d, so
 // factor = K_j lambda_j / p_j gives it (R = the voice's pressure scale / reference distance).
-void SoundEngine::scheduleClick(Voice& v, const Arrival& a, double time_s, double duration_s,
+void SoundEngine::scheduleClick(Voice& v, int path, const Arrival& a, double time_s, double duration_s,
                                 const std::array<double, 3>& impulse_local) {
   const double inv_mass = 1.0 / v.mass_kg_;
   const double k_air = kAirDensity_kg_m3 / (4.0 * M_PI * kSpeedOfSoundAir_m_s);
@@ -204,10 +206,26 @@ void SoundEngine::scheduleClick(Voice& v, const Arrival& a, double time_s, doubl
   click.shape = PulseShape::HalfSine;
   click.modal_impulse = v.click_force_.data();
   click.modal_transfer = v.click_transfer_.data();
+  OscillatorBank& clicks = pathClicks(v, path);
   if (settings_.realtime)
-    (void)v.click_synth_.addImpactNoAlloc(click);
+    (void)clicks.addImpactNoAlloc(click);
   else
-    (void)v.click_synth_.addImpact(click);
+    (void)clicks.addImpact(click);
+}
+
+void SoundEngine::setExtraDamping(Voice& v, double time_s, const std::array<double, 3>& world_point, double per_s) {
+  const double at_s = time_s + delayTo(world_point);
+  if (settings_.realtime)
+    (void)v.synth_.setExtraDampingNoAlloc(0, at_s, per_s);
+  else
+    v.synth_.setExtraDamping(0, at_s, per_s);
+  if (!v.image_) return;  // the image rings in synth_ too
+  // The image's modes change with the direct sound's, as they do when both ring in synth_: the
+  // omni channel of an output with directions is then the mono render.
+  if (settings_.realtime)
+    (void)v.image_->synth.setExtraDampingNoAlloc(0, at_s, per_s);
+  else
+    v.image_->synth.setExtraDamping(0, at_s, per_s);
 }
 
 }  // namespace strike

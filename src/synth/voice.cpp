@@ -154,6 +154,7 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
     click_gain_[j] = omega0 > 0.0 ? omega0 * omega0 / pole : 0.0;
   }
   click_synth_.addObject(click);
+  if (image_) image_->click_synth.addObject(click);
   click_mono_.assign(std::max<uint32_t>(settings.max_block_frames, 1), 0.0f);
   clicks_ = true;
 }
@@ -169,6 +170,12 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
   modal.rayleigh_mass = bank.material.rayleigh_mass;
   modal.radiation_weight = desc.weights;
   synth_.addObject(modal);
+  // An output with directions hears the ground's image from below: a signal of its own.
+  const bool pressure = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
+  if (outputHasDirections(settings.output) && settings.ground.enabled && pressure) {
+    image_ = std::make_unique<ImagePath>(settings.synth);
+    image_->synth.addObject(modal);
+  }
   const SynthStats bands = synth_.stats();
   rings_ = bands.modes_total > bands.modes_out_of_band;
   const size_t modes = bank.modeCount();
@@ -199,6 +206,11 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
     synth_.reserveImpacts(settings.max_pending_impacts_per_voice * paths, settings.max_contact_duration_s);
     if (clicks_)
       click_synth_.reserveImpacts(settings.max_pending_impacts_per_voice * paths, settings.max_contact_duration_s);
+    if (image_) {
+      image_->synth.reserveImpacts(settings.max_pending_impacts_per_voice, settings.max_contact_duration_s);
+      if (clicks_)
+        image_->click_synth.reserveImpacts(settings.max_pending_impacts_per_voice, settings.max_contact_duration_s);
+    }
   }
 }
 

@@ -57,6 +57,10 @@ CommandSpec renderSpec() {
        "polarity of some modes against a render without it. With the transfer, one transfer per shape,\n"
        "wave speed E/rho and number of modes kept, scaled to every size and density (cached)"},
       {"--max-events", "N", "stop if the simulation records more contact events (memory cap); default 20000000"},
+      {"--output", "mono|stereo|ambix1|ambix2|ambix3",
+       "the channels written (docs/listener.md): mono (default), stereo (a constant-power pan),\n"
+       "or Ambisonics of order 1-3 in AmbiX (ACN order, SN3D; 4, 9 or 16 channels), each path\n"
+       "(direct, ground image) from its own direction in the listener's frame"},
       {"--simd", "KERNEL", kSimdHelp},
       {"--via-library", "",
        "send the simulation through libstrike's C API, step by step, as a game would\n"
@@ -221,6 +225,13 @@ int runRender(const std::vector<std::string>& raw_args) {
   Result<SimdLevel> simd = simdLevelFor(args);
   if (!simd) return reportError("render", simd.error());
   settings.simd = *simd;
+  if (args.has("--output")) {
+    const std::optional<OutputFormat> format = parseOutputFormat(args.text("--output"));
+    if (!format)
+      return reportError("render", badInput("--output = " + args.text("--output") +
+                                            " (must be mono, stereo, ambix1, ambix2 or ambix3)"));
+    settings.output_format = *format;
+  }
   if (args.has("--via-library")) settings.output = libraryOutput(settings.gain);
   settings.similar_reuse = args.has("--similar");
   if (args.has("--transfer") && args.has("--no-transfer"))

@@ -50,7 +50,17 @@ class LibraryOutput final : public SoundOutput {
     c.contact_queue_capacity = 1u << 20;
     c.max_pending_impacts_per_object = 4096;
     c.log = [](void*, int32_t, const char* message) { std::fprintf(stderr, "libstrike: %s\n", message); };
-    if (strike_status s = strike_context_create(&c, &out->ctx_); s != STRIKE_OK)
+    strike_output_desc output = strike_output_desc_default();
+    switch (engine.output) {
+      case OutputFormat::Mono: output.format = STRIKE_OUTPUT_MONO; break;
+      case OutputFormat::Stereo: output.format = STRIKE_OUTPUT_STEREO; break;
+      case OutputFormat::Ambix1: output.format = STRIKE_OUTPUT_AMBIX1; break;
+      case OutputFormat::Ambix2: output.format = STRIKE_OUTPUT_AMBIX2; break;
+      case OutputFormat::Ambix3: output.format = STRIKE_OUTPUT_AMBIX3; break;
+    }
+    out->channels_ = outputChannels(engine.output);
+    out->planar_.assign(static_cast<size_t>(out->channels_) * kRenderBlockFrames, 0.0f);
+    if (strike_status s = strike_context_create_with_output(&c, &output, &out->ctx_); s != STRIKE_OK)
       return badInput(std::string("--via-library: strike_context_create: ") + strike_status_string(s));
     return std::unique_ptr<SoundOutput>(std::move(out));
   }
@@ -82,9 +92,8 @@ class LibraryOutput final : public SoundOutput {
     return {};
   }
 
-  void setListener(const std::array<double, 3>& position_m) override {
-    const double identity[4] = {1, 0, 0, 0};
-    strike_listener_set_pose(ctx_, position_m.data(), identity);
+  void setListener(const std::array<double, 3>& position_m, const std::array<double, 4>& orientation_wxyz) override {
+    strike_listener_set_pose(ctx_, position_m.data(), orientation_wxyz.data());
   }
 
   void beginStep(double step_end_s, double step_s) override {
@@ -139,10 +148,15 @@ class LibraryOutput final : public SoundOutput {
     if (strike_step(ctx_, &step_) != STRIKE_OK) ++failed_steps_;
   }
 
-  Status render(float* mono, size_t frames) override {
-    float* channels[1] = {mono};
-    if (strike_status s = strike_render(ctx_, channels, 1, static_cast<uint32_t>(frames)); s != STRIKE_OK)
+  Status render(float* interleaved, size_t frames) override {
+    float* channels[kMaxOutputChannels] = {};
+    for (uint32_t c = 0; c < channels_; ++c)
+      channels[c] = channels_ == 1 ? interleaved : planar_.data() + c * kRenderBlockFrames;
+    if (strike_status s = strike_render(ctx_, channels, channels_, static_cast<uint32_t>(frames)); s != STRIKE_OK)
       return badInput(std::string("--via-library: strike_render: ") + strike_status_string(s));
+    if (channels_ > 1)
+      for (size_t n = 0; n < frames; ++n)
+        for (uint32_t c = 0; c < channels_; ++c) interleaved[n * channels_ + c] = channels[c][n];
     return {};
   }
 
@@ -181,6 +195,8 @@ class LibraryOutput final : public SoundOutput {
   std::vector<strike_bank> banks_;
   std::vector<strike_object_id> ids_;  ///< by body index; {0, 0}: not an object (not heard)
   float gain_ = 1.0f;
+  uint32_t channels_ = 1;
+  std::vector<float> planar_;  ///< channels_ x kRenderBlockFrames, for more than one channel
   strike_step_desc step_{};
   std::vector<strike_body_state> states_;
   std::vector<strike_contact> contacts_;

@@ -44,6 +44,7 @@
 #include "strike/bank.hpp"
 #include "strike/contact_noise.hpp"
 #include "strike/listener.hpp"
+#include "strike/spatializer.hpp"
 #include "strike/synth.hpp"
 
 namespace strike {
@@ -87,7 +88,10 @@ struct GroundReflection {
 
 struct EngineSettings {
   SynthSettings synth;    ///< sample rate, band, audibility threshold, kernel
-  uint32_t channels = 1;  ///< 1, or 2 (constant-power pan by the listener's x)
+  uint32_t channels = 1;  ///< 1, or 2: stereo (when `output` is Mono; kept for older callers)
+  /// How each path reaches the output's channels (spatializer.hpp); its channel count wins over
+  /// `channels`. With directions and a ground, the ground's image is a signal of its own.
+  OutputFormat output = OutputFormat::Mono;
   uint32_t max_voices = 64;
   uint32_t max_block_frames = 1024;  ///< largest render() call
   /// Ringing modes over all voices; above it at the end of a render call the quietest (at the
@@ -303,7 +307,17 @@ class Voice {
   Pose pose_;
   bool asleep_ = false;
   float gain_ = 1.0f;
-  float cur_gain_[2] = {0, 0}, target_gain_[2] = {0, 0};
+  float cur_gain_[kMaxOutputChannels] = {}, target_gain_[kMaxOutputChannels] = {};
+  /// The ground's image as a signal of its own (an output with directions and a ground: it
+  /// arrives from below), with its own oscillators, clicks and gains; null otherwise, when the
+  /// image is mixed into synth_ with the direct sound.
+  struct ImagePath {
+    explicit ImagePath(const SynthSettings& s) : synth(s), click_synth(s) {}
+    OscillatorBank synth;
+    OscillatorBank click_synth;
+    float cur_gain[kMaxOutputChannels] = {}, target_gain[kMaxOutputChannels] = {};
+  };
+  std::unique_ptr<ImagePath> image_;
   float level_gain2_ = 0.0f;
   bool fresh_ = true;
   // Contact scheduler state (contact_scheduler.cpp).
@@ -412,9 +426,21 @@ class SoundEngine {
   static constexpr double kContinuousTransferTolerance = 1e-3;  ///< of a mode's loudest far field
   void radiationToward(Voice& v, const Arrival paths[], int count, const std::complex<double>* factors[2],
                        Reuse reuse = Reuse::SameDirection, int also_to = 0);
-  void scheduleClick(Voice& v, const Arrival& a, double time_s, double duration_s,
+  void scheduleClick(Voice& v, int path, const Arrival& a, double time_s, double duration_s,
                      const std::array<double, 3>& impulse_local);
   void updateGains(Voice& v);
+  /// Mixes `mono` (the voice's path signal) into out with gains ramped from cur to target.
+  void mixPath(const float* mono, float* cur, const float* target, float* const* out, size_t frames) const;
+  /// Where the ground's mirror image of `point` is, when the image path exists for it.
+  bool imageOf(const std::array<double, 3>& point, std::array<double, 3>& image) const;
+  /// The synth a path's pulses go to: synth_ for the direct sound, and for the image too unless
+  /// it has its own signal.
+  OscillatorBank& pathSynth(Voice& v, int path) const { return path > 0 && v.image_ ? v.image_->synth : v.synth_; }
+  OscillatorBank& pathClicks(Voice& v, int path) const {
+    return path > 0 && v.image_ ? v.image_->click_synth : v.click_synth_;
+  }
+  /// Contact damping on from time_s (event time, before the delay) heard from world_point.
+  void setExtraDamping(Voice& v, double time_s, const std::array<double, 3>& world_point, double per_s);
   void enforceBudget(uint64_t& active);
 
   EngineSettings settings_;

@@ -19,6 +19,7 @@
 #include "strike/progress.hpp"
 #include "strike/scene.hpp"
 #include "strike/sim.hpp"
+#include "strike/spatializer.hpp"
 #include "strike/synth.hpp"
 
 namespace strike {
@@ -40,14 +41,16 @@ class SoundOutput {
   /// and quaternion (w, x, y, z), as a physics engine has it. Errors name the body.
   virtual Status addVoice(uint32_t slot, const VoiceDesc& voice, const std::array<double, 3>& position_m,
                           const std::array<double, 4>& orientation_wxyz, const std::string& name) = 0;
-  virtual void setListener(const std::array<double, 3>& position_m) = 0;
+  /// The listener's pose: its position and orientation (w, x, y, z; world from listener).
+  virtual void setListener(const std::array<double, 3>& position_m, const std::array<double, 4>& orientation_wxyz) = 0;
   virtual void beginStep(double step_end_s, double step_s) = 0;
   virtual void setPose(uint32_t slot, const std::array<double, 3>& position_m,
                        const std::array<double, 4>& orientation_wxyz, bool asleep) = 0;
   virtual void contact(const EngineContact& contact) = 0;
   virtual void endStep() = 0;
-  /// The next `frames` (<= kRenderBlockFrames) mono samples, full scale 1.0.
-  virtual Status render(float* mono, size_t frames) = 0;
+  /// The next `frames` (<= kRenderBlockFrames) frames of the engine settings' channels
+  /// (EngineSettings::output), interleaved, full scale 1.0.
+  virtual Status render(float* interleaved, size_t frames) = 0;
   virtual EngineStats stats() const = 0;
   /// Problems to report after the render (e.g. what a fixed-size queue dropped); empty if none.
   virtual std::vector<std::string> warnings() const { return {}; }
@@ -101,6 +104,8 @@ struct RenderSettings {
   /// impact is placed within one step (48 samples at 48 kHz); 1 ms halves the simulation cost of
   /// the 0.5 ms step used before (`strike bench render` measures both).
   double substep_s = 1e-3;
+  /// The channels written (`strike render --output`; spatializer.hpp): mono by default.
+  OutputFormat output_format = OutputFormat::Mono;
   /// The synthesizer's kernel (SynthSettings::simd): kernels differ only in the last bits.
   SimdLevel simd = SimdLevel::Auto;
   ProgressFn progress;

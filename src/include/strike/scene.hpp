@@ -55,6 +55,9 @@ struct Scene {
   double duration_s = 3.0;
   std::array<double, 3> gravity_m_s2{0, 0, -9.81};
   std::array<double, 3> listener_position_m{0, -1, 0.5};
+  /// World from listener (w, x, y, z): the listener faces its +y with +x to its right and +z up
+  /// (docs/listener.md). Identity: facing +y. From listener.orientation or listener.look_at.
+  std::array<double, 4> listener_orientation_wxyz{1, 0, 0, 0};
   bool has_ground = true;
   Material ground_material;  ///< concrete unless given
   double ground_height_m = 0.0;

@@ -246,6 +246,41 @@ STRIKE_API strike_context_config STRIKE_CALL strike_context_config_default(void)
  */
 STRIKE_API strike_status STRIKE_CALL strike_context_create(const strike_context_config* config, strike_context* out);
 
+/** Output formats (docs/listener.md): how each path (the direct sound, the ground's image)
+ *  reaches the channels of strike_render() from its direction of arrival in the listener's
+ *  frame (+y forward, +x right, +z up; strike_listener_set_pose). */
+enum {
+  STRIKE_OUTPUT_MONO = 0,   /**< 1 channel: the level alone; both paths in one signal */
+  STRIKE_OUTPUT_STEREO = 1, /**< 2 channels (left, right): constant-power pan by the direction's x */
+  /** (N+1)^2 channels of Ambisonics of order N = 1, 2, 3 in the AmbiX convention: ACN channel
+   *  order, SN3D normalisation, x forward, y left, z up. */
+  STRIKE_OUTPUT_AMBIX1 = 2,
+  STRIKE_OUTPUT_AMBIX2 = 3,
+  STRIKE_OUTPUT_AMBIX3 = 4
+};
+
+/** (0.4, added later) The output of a context, for strike_context_create_with_output(). Later versions
+ *  add fields at its end; the library reads only struct_size bytes of it. */
+typedef struct strike_output_desc {
+  uint32_t struct_size; /**< sizeof(strike_output_desc); set by _default() */
+  uint32_t format;      /**< a STRIKE_OUTPUT_* value; default STRIKE_OUTPUT_MONO */
+} strike_output_desc;
+
+/** Defaults (mono). [any-thread] */
+STRIKE_API strike_output_desc STRIKE_CALL strike_output_desc_default(void);
+
+/**
+ * (0.4, added later) strike_context_create() with an output format: config->channels is ignored, and
+ * strike_render() takes the format's channel count (1, 2, 4, 9 or 16). With a format that has
+ * directions and a reflecting ground, the ground's image is rendered as a signal of its own
+ * (twice the oscillators of the objects it reaches) and arrives from below. Refusals as
+ * strike_context_create(), and STRIKE_ERR_INVALID_ARG for a NULL output, a struct_size too small
+ * for `format`, or an unknown format (logged). [main-thread]
+ */
+STRIKE_API strike_status STRIKE_CALL strike_context_create_with_output(const strike_context_config* config,
+                                                                       const strike_output_desc* output,
+                                                                       strike_context* out);
+
 /**
  * Destroys the context, its objects and its queues. Banks loaded in it must be destroyed first
  * or after (a bank keeps its data alive on its own), but the context must outlive no audio

@@ -161,5 +161,33 @@ TEST(SceneFile, ANumberTooLargeForADoubleIsNamedWithItsLineAndColumn) {
       << scene.error().message;
 }
 
+TEST(SceneFile, ListenerOrientationIsAQuaternionOrAPointToLookAt) {
+  const std::string obj = R"([{"mesh": "box:0.1,0.1,0.1", "material": "steel"}])";
+  Result<Scene> plain = parseScene(R"({"objects": )" + obj + "}", "s.json");
+  ASSERT_TRUE(plain) << plain.error().message;
+  EXPECT_EQ(plain->listener_orientation_wxyz, (std::array<double, 4>{1, 0, 0, 0}));
+  // Turned 90 degrees to the left about +z: w = x... = cos 45, z = sin 45.
+  Result<Scene> turned = parseScene(
+      R"({"listener": {"position": [0, 0, 1], "orientation": [0.70710678, 0, 0, 0.70710678]}, "objects": )" + obj + "}",
+      "s.json");
+  ASSERT_TRUE(turned) << turned.error().message;
+  EXPECT_NEAR(turned->listener_orientation_wxyz[3], std::sqrt(0.5), 1e-8);
+  // Looking at a point on its left (-x) is the same turn.
+  Result<Scene> looking =
+      parseScene(R"({"listener": {"position": [0, 0, 1], "look_at": [-3, 0, 1]}, "objects": )" + obj + "}", "s.json");
+  ASSERT_TRUE(looking) << looking.error().message;
+  for (int k = 0; k < 4; ++k)
+    EXPECT_NEAR(looking->listener_orientation_wxyz[k], turned->listener_orientation_wxyz[k], 1e-8) << k;
+  const BadCase cases[] = {
+      {R"({"listener": {"orientation": [1, 1, 0, 0]}, "objects": )" + obj + "}",
+       "listener.orientation: expected a unit quaternion"},
+      {R"({"listener": {"position": [0, 0, 1], "look_at": [0, 0, 5]}, "objects": )" + obj + "}",
+       "listener.look_at: must be a point beside the listener's position"},
+      {R"({"listener": {"orientation": [1, 0, 0, 0], "look_at": [0, 1, 0]}, "objects": )" + obj + "}",
+       "listener.look_at: give either orientation or look_at"},
+  };
+  for (const BadCase& c : cases) expectError(c);
+}
+
 }  // namespace
 }  // namespace strike

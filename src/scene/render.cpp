@@ -593,83 +593,108 @@ std::string defaultCacheDir() {
   return {};
 }
 
-Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& settings) {
-  const auto start = std::chrono::steady_clock::now();
-  const double rate = settings.sample_rate_hz > 0 ? settings.sample_rate_hz : scene.sample_rate_hz;
-  const double duration = settings.duration_s > 0 ? settings.duration_s : scene.duration_s;
-  const double substep = settings.substep_s;  // simulate() refuses steps outside (0, 1 ms]
-  // No mode above the audible band or what the sample rate can carry is ever computed.
-  const double max_freq_hz = synthesizedTopHz(scene.max_freq_hz, rate);
-  // ...and only the modes the engine plays get an acoustic transfer.
-  const EngineSettings engine_settings = renderEngineSettings(scene, settings, rate, max_freq_hz);
-  const double heard_hz = synthesizedTopHz(engine_settings.synth.max_freq_hz, rate);
-  RenderResult result;
-  RenderReport& report = result.report;
-  report.objects = scene.objects.size();
+namespace {
 
-  // ---- Phase 1: bodies and simulation -------------------------------------------------------
-  std::vector<Body> bodies(scene.objects.size());
+/// One render on its way through the pipeline: what each phase reads, and leaves for the next.
+struct RenderRun {
+  RenderRun(const Scene& scene_, const RenderSettings& settings_) : scene(scene_), settings(settings_) {}
+  const Scene& scene;
+  const RenderSettings& settings;
+  double rate = 0.0, duration = 0.0, substep = 0.0;
+  double max_freq_hz = 0.0;  ///< no mode above the audible band or what the rate can carry is computed
+  double heard_hz = 0.0;     ///< ...and only the modes the engine plays get an acoustic transfer
+  EngineSettings engine_settings;
+  RenderResult result;
+  std::vector<Body> bodies;
+  std::vector<SimBodyDesc> sim_bodies;
+  SimResult simulated;  ///< its events moved to result.events
+  SurfaceProperties ground_surface;
+  std::vector<bool> has_voice;
+
+  RenderReport& report() { return result.report; }
+  void warn(std::string text) {
+    if (settings.on_warning) settings.on_warning(text);
+    result.report.warnings.push_back(std::move(text));
+  }
+};
+
+// ---- Phase 1: bodies ------------------------------------------------------------------------
+
+/// Each object's bank (given, cached) or mesh, with mass and surface for the simulation.
+Status prepareBodies(RenderRun& run) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Body>& bodies = run.bodies;
+  bodies.resize(run.scene.objects.size());
   std::map<uint64_t, const Body*> loaded_by_key;  // identical objects are read or meshed once
   for (size_t i = 0; i < bodies.size(); ++i) {
-    bodies[i].object = &scene.objects[i];
-    Status prepared = prepareBody(scene, settings, max_freq_hz, heard_hz, bodies[i], loaded_by_key, report);
-    if (!prepared) return prepared.error();
+    bodies[i].object = &run.scene.objects[i];
+    Status prepared =
+        prepareBody(run.scene, run.settings, run.max_freq_hz, run.heard_hz, bodies[i], loaded_by_key, run.report());
+    if (!prepared) return prepared;
     if (bodies[i].object->bank.empty()) loaded_by_key.emplace(bodies[i].cache_key, &bodies[i]);
     bodies[i].contact_radius_m = std::cbrt(3.0 * bodies[i].bank->volume_m3 / (4.0 * M_PI));
-    result.body_names.push_back(scene.objects[i].name);
+    run.result.body_names.push_back(run.scene.objects[i].name);
   }
-  if (!settings.cache_dir.empty()) {
+  if (!run.settings.cache_dir.empty()) {
     std::error_code ignored;
-    std::filesystem::create_directories(settings.cache_dir, ignored);
+    std::filesystem::create_directories(run.settings.cache_dir, ignored);
   }
-  report.load_seconds = secondsSince(start);
+  run.report().load_seconds = secondsSince(start);
+  return {};
+}
 
-  // Simulate: the Bullet world (hulls, bodies) is built and stepped; both count as simulation.
-  const auto simulate_start = std::chrono::steady_clock::now();
-  std::vector<SimBodyDesc> sim_bodies;
-  for (const Body& body : bodies) sim_bodies.push_back(simBody(body));
-  auto warn = [&](std::string text) {
-    if (settings.on_warning) settings.on_warning(text);
-    report.warnings.push_back(std::move(text));
-  };
-  for (std::string& text : checkStartingPlacement(scene, sim_bodies)) warn(std::move(text));
+// ---- Phase 2: the simulation --------------------------------------------------------------
+
+/// The starting placement's warnings, and one for a given bank without a transfer.
+void warnBeforeSimulating(RenderRun& run) {
+  for (std::string& text : checkStartingPlacement(run.scene, run.sim_bodies)) run.warn(std::move(text));
   // A bank given in the scene is used as it is: one without a transfer (older formats, or solved
   // with --no-transfer) is heard with the direction-averaged model (radiation.cpp). Say so once.
-  if (settings.acoustic_transfer)
-    for (const Body& body : bodies)
+  if (run.settings.acoustic_transfer)
+    for (const Body& body : run.bodies)
       if (!body.object->bank.empty() && body.bank->transfer.empty() && body.bank->modeCount() > 0)
-        warn("objects \"" + body.object->name + "\": bank " + body.object->bank +
-             " has no acoustic transfer: heard at each mode's direction-averaged level, with no direction "
-             "(solve it again with `strike modes` for the transfer; docs/listener.md)");
-  // Convex pieces of concave moving bodies from the cache (computed ones are written after).
-  std::vector<uint64_t> surface_hashes(bodies.size(), 0);
-  for (size_t i = 0; i < bodies.size(); ++i) {
-    if (settings.cache_dir.empty() || bodies[i].object->is_static) continue;
+        run.warn("objects \"" + body.object->name + "\": bank " + body.object->bank +
+                 " has no acoustic transfer: heard at each mode's direction-averaged level, with no direction "
+                 "(solve it again with `strike modes` for the transfer; docs/listener.md)");
+}
+
+/// Convex pieces of concave moving bodies from the cache (computed ones are written after); the
+/// surface hash of each body looked up (0: none).
+std::vector<uint64_t> readCachedPieces(RenderRun& run) {
+  std::vector<uint64_t> surface_hashes(run.bodies.size(), 0);
+  for (size_t i = 0; i < run.bodies.size(); ++i) {
+    const SceneObject& object = *run.bodies[i].object;
+    if (run.settings.cache_dir.empty() || object.is_static) continue;
     // A primitive (box, sphere, cylinder) is convex: its surface fills its hull, so "auto" makes
     // it a hull and it never needs pieces; hashing its surface (~0.2 ms) would buy nothing.
-    const std::string& shape = bodies[i].object->shape;
-    if (bodies[i].object->bank.empty() && isPrimitiveSpec(bodies[i].object->mesh) &&
-        (shape == "auto" || shape == "convex"))
+    if (object.bank.empty() && isPrimitiveSpec(object.mesh) && (object.shape == "auto" || object.shape == "convex"))
       continue;
-    surface_hashes[i] = surfaceHash(sim_bodies[i].surface_positions, sim_bodies[i].surface_triangles);
-    Result<ConvexPiecePoints> cached = readPieces(piecesPath(settings.cache_dir, surface_hashes[i]), surface_hashes[i]);
-    if (cached) sim_bodies[i].convex_pieces_m = std::move(*cached);
+    SimBodyDesc& sim_body = run.sim_bodies[i];
+    surface_hashes[i] = surfaceHash(sim_body.surface_positions, sim_body.surface_triangles);
+    Result<ConvexPiecePoints> cached =
+        readPieces(piecesPath(run.settings.cache_dir, surface_hashes[i]), surface_hashes[i]);
+    if (cached) sim_body.convex_pieces_m = std::move(*cached);
   }
+  return surface_hashes;
+}
+
+/// The simulation's settings: the scene's world, the ground's surface, the engine's impact rule.
+SimSettings simSettings(RenderRun& run) {
+  const Scene& scene = run.scene;
   SimSettings sim;
-  sim.duration_s = duration;
+  sim.duration_s = run.duration;
   sim.gravity_m_s2 = scene.gravity_m_s2;
-  sim.substep_s = substep;
-  sim.max_events = settings.max_events;
-  sim.record_states = true;                 // the sound engine follows each body as it moves
+  sim.substep_s = run.substep;
+  sim.max_events = run.settings.max_events;
+  sim.record_states = true;  // the sound engine follows each body as it moves
   // The engine's impact rule: the simulation times impacts within the step by it (ContactEvent::time_s).
-  sim.impact_speed_m_s = engine_settings.impact_speed_m_s;
+  sim.impact_speed_m_s = run.engine_settings.impact_speed_m_s;
   sim.ground = scene.has_ground;
   sim.ground_height_m = scene.ground_height_m;
-  const SurfaceProperties ground_surface = groundSurface(scene);  // for the simulation and the sound
-  sim.ground_restitution = ground_surface.restitution;
-  sim.ground_friction = ground_surface.friction;
-  sim.ground_rolling_resistance = ground_surface.rolling_resistance;
-  sim.ground_compliance_per_pa = ground_surface.compliance_per_pa;
+  sim.ground_restitution = run.ground_surface.restitution;
+  sim.ground_friction = run.ground_surface.friction;
+  sim.ground_rolling_resistance = run.ground_surface.rolling_resistance;
+  sim.ground_compliance_per_pa = run.ground_surface.compliance_per_pa;
   for (const ContactPairSpec& pair : scene.contact_pairs) {
     // An object's name first; "ground" is the ground unless an object has that name.
     auto indexOf = [&](const std::string& name) {
@@ -680,61 +705,115 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     sim.contact_pairs.push_back(
         {indexOf(pair.object_a), indexOf(pair.object_b), pair.restitution, pair.friction, pair.rolling_resistance});
   }
-  sim.progress = settings.progress;
-  if (settings.session) sim.hull_memo = settings.session->hullMemo();
-  if (!settings.cache_dir.empty()) sim.hull_memo = cachedHullMemo(settings.cache_dir, sim.hull_memo);
-  Result<SimResult> simulated = simulate(sim_bodies, sim);
-  if (!simulated) return simulated.error();
-  report.simulate_seconds = secondsSince(simulate_start);
-  for (size_t i = 0; i < bodies.size(); ++i) {
-    const std::string& name = scene.objects[i].name;
-    const SimBodyDesc::Shape used = simulated->shape_used[i];
+  sim.progress = run.settings.progress;
+  if (run.settings.session) sim.hull_memo = run.settings.session->hullMemo();
+  if (!run.settings.cache_dir.empty()) sim.hull_memo = cachedHullMemo(run.settings.cache_dir, sim.hull_memo);
+  return sim;
+}
+
+/// How each concave moving body collided (pieces computed and cached, or the exact mesh).
+void noteCollisionShapes(RenderRun& run, const std::vector<uint64_t>& surface_hashes) {
+  RenderReport& report = run.report();
+  const SimResult& simulated = run.simulated;
+  for (size_t i = 0; i < run.bodies.size(); ++i) {
+    const std::string& name = run.scene.objects[i].name;
+    const SimBodyDesc::Shape used = simulated.shape_used[i];
     if (used == SimBodyDesc::Shape::ConvexPieces) {
       char note[160];
-      if (simulated->pieces_computed[i]) {
-        report.pieces_seconds += simulated->pieces_seconds[i];
-        const bool cached = surface_hashes[i] != 0 && writePieces(piecesPath(settings.cache_dir, surface_hashes[i]),
-                                                                  surface_hashes[i], simulated->convex_pieces_m[i]);
+      if (simulated.pieces_computed[i]) {
+        report.pieces_seconds += simulated.pieces_seconds[i];
+        const bool cached = surface_hashes[i] != 0 && writePieces(piecesPath(run.settings.cache_dir, surface_hashes[i]),
+                                                                  surface_hashes[i], simulated.convex_pieces_m[i]);
         std::snprintf(note, sizeof note, "%s: %zu convex pieces (computed in %.2f s%s)", name.c_str(),
-                      simulated->collision_pieces[i], simulated->pieces_seconds[i], cached ? ", cached" : "");
+                      simulated.collision_pieces[i], simulated.pieces_seconds[i], cached ? ", cached" : "");
       } else {
         std::snprintf(note, sizeof note, "%s: %zu convex pieces (from the cache)", name.c_str(),
-                      simulated->collision_pieces[i]);
+                      simulated.collision_pieces[i]);
       }
       report.collision_notes.push_back(note);
-    } else if (used == SimBodyDesc::Shape::Concave && !scene.objects[i].is_static) {
+    } else if (used == SimBodyDesc::Shape::Concave && !run.scene.objects[i].is_static) {
       report.collision_notes.push_back(
-          name + ": exact mesh (GImpact, " + std::to_string(sim_bodies[i].surface_triangles.size() / 3) +
+          name + ": exact mesh (GImpact, " + std::to_string(run.sim_bodies[i].surface_triangles.size() / 3) +
           " triangles): slow to simulate; \"shape\": \"pieces\" (the default) is ~5-20x faster");
     }
   }
-  result.events = std::move(simulated->events);
-  report.events = result.events.size();
-  for (const ContactEvent& event : result.events)
-    ++(engine_settings.isImpact(event.normal_speed_m_s) ? report.impact_events : report.sustained_events);
+}
 
-  // ---- Phase 2: banks only for objects struck hard enough to hear ----------------------------
-  for (const ContactEvent& event : result.events) {
+/// The Bullet world (hulls, bodies) built and stepped: both count as simulation.
+Status simulateBodies(RenderRun& run) {
+  const auto start = std::chrono::steady_clock::now();
+  for (const Body& body : run.bodies) run.sim_bodies.push_back(simBody(body));
+  warnBeforeSimulating(run);
+  const std::vector<uint64_t> surface_hashes = readCachedPieces(run);
+  Result<SimResult> simulated = simulate(run.sim_bodies, simSettings(run));
+  if (!simulated) return simulated.error();
+  RenderReport& report = run.report();
+  report.simulate_seconds = secondsSince(start);
+  run.simulated = std::move(*simulated);
+  noteCollisionShapes(run, surface_hashes);
+  run.result.events = std::move(run.simulated.events);
+  report.events = run.result.events.size();
+  for (const ContactEvent& event : run.result.events)
+    ++(run.engine_settings.isImpact(event.normal_speed_m_s) ? report.impact_events : report.sustained_events);
+  return {};
+}
+
+// ---- Phase 3: banks only for objects struck hard enough to hear -----------------------------
+
+/// Each body's largest velocity change from one contact; a moving body never struck is warned.
+void findStruckBodies(RenderRun& run) {
+  for (const ContactEvent& event : run.result.events) {
     const double impulse = norm(event.impulse_on_a_mesh);
     for (uint32_t index : {event.body_a, event.body_b}) {
       if (index == kGroundBody) continue;
-      Body& body = bodies[index];
+      Body& body = run.bodies[index];
       if (body.bank->mass_kg > 0)
         body.max_velocity_change_m_s = std::max(body.max_velocity_change_m_s, impulse / body.bank->mass_kg);
     }
   }
-  for (size_t i = 0; i < bodies.size(); ++i)
-    if (bodies[i].max_velocity_change_m_s == 0.0 && !bodies[i].object->is_static)
-      warn(neverStruckWarning(scene, sim_bodies[i], duration));
-  const auto precompute_start = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < run.bodies.size(); ++i)
+    if (run.bodies[i].max_velocity_change_m_s == 0.0 && !run.bodies[i].object->is_static)
+      run.warn(neverStruckWarning(run.scene, run.sim_bodies[i], run.duration));
+}
+
+/// What phase 3 still has to do after each sounding body's bank was looked for.
+struct BankPlan {
+  std::vector<size_t> to_solve;                   ///< bodies whose bank is solved now
+  std::vector<std::pair<size_t, size_t>> shares;  ///< (body, the identical body whose bank it takes)
+  std::map<uint64_t, std::shared_ptr<const ModeBank>> extended_by_key;  ///< cached banks given more transfer
+};
+
+/// Reads a body's bank file (cached or given) at its struck points, or extends its transfer; false
+/// (the error) when the file is damaged.
+Status readBankFile(RenderRun& run, size_t i, BankPlan& plan) {
+  Body& body = run.bodies[i];
+  return lacksHeardTransfer(body, run.settings)
+             ? extendCachedTransfer(body, run.settings, plan.extended_by_key, run.report())
+             : readStruckShapes(body, static_cast<uint32_t>(i), run.result.events, bool(run.settings.output),
+                                run.settings.session, run.report());
+}
+
+/// Undoes openCached() for an entry found damaged: its bank is solved again.
+void forgetCachedBank(Body& body, RenderReport& report) {
+  body.file.reset();
+  body.rows.reset();
+  body.has_modes = false;
+  if (body.from_cache) {
+    --report.banks_cached;
+    report.precompute_saved_seconds -= solveSeconds(*body.bank);
+  }
+}
+
+/// Which sounding body gets its bank how: scaled (similar_reuse), from its file, shared with an
+/// identical body, or solved (plan.to_solve).
+Status planBanks(RenderRun& run, BankPlan& plan, std::map<uint64_t, size_t>& solved_by_key,
+                 std::map<uint64_t, ModeBank>& unit_by_key) {
+  const RenderSettings& settings = run.settings;
+  RenderReport& report = run.report();
+  auto warn = [&](std::string text) { run.warn(std::move(text)); };
   std::map<uint64_t, size_t> computed_by_key;  // identical objects share one eigen-solve
-  std::map<uint64_t, size_t> solved_by_key;    // similar_reuse: objects of one shape share one solve
-  std::map<uint64_t, ModeBank> unit_by_key;    // ...and one transfer per wave speed and modes kept
-  std::map<uint64_t, std::shared_ptr<const ModeBank>> extended_by_key;  // cached banks given more transfer
-  std::vector<size_t> to_solve;                                         // bodies whose bank is solved now
-  std::vector<std::pair<size_t, size_t>> shares;  // (body, the identical body whose bank it takes)
-  for (size_t i = 0; i < bodies.size(); ++i) {
-    Body& body = bodies[i];
+  for (size_t i = 0; i < run.bodies.size(); ++i) {
+    Body& body = run.bodies[i];
     if (body.max_velocity_change_m_s == 0.0 && !settings.leave_nothing_out) continue;
     if (body.max_velocity_change_m_s > 0.0) ++report.objects_struck;
     if (body.max_velocity_change_m_s < kInaudibleVelocityChange_m_s && !settings.leave_nothing_out) {
@@ -743,78 +822,73 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     }
     body.sounded = true;
     if (settings.similar_reuse && body.object->bank.empty()) {
-      if (Status made = similarPhase2(bodies, i, settings, solved_by_key, unit_by_key, report, warn); !made)
-        return made.error();
+      if (Status made = similarPhase2(run.bodies, i, settings, solved_by_key, unit_by_key, report, warn); !made)
+        return made;
       continue;
     }
     if (body.file) {
-      Status read = lacksHeardTransfer(body, settings)
-                        ? extendCachedTransfer(body, settings, extended_by_key, report)
-                        : readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output),
-                                           settings.session, report);
+      Status read = readBankFile(run, i, plan);
       if (read) continue;
-      if (!body.object->bank.empty()) return read.error();  // the user's bank file is damaged
-      // A cache entry whose shapes are damaged is recomputed, not trusted.
-      body.file.reset();
-      body.rows.reset();
-      body.has_modes = false;
-      if (body.from_cache) {
-        --report.banks_cached;
-        report.precompute_saved_seconds -= solveSeconds(*body.bank);
-      }
+      if (!body.object->bank.empty()) return read;  // the user's bank file is damaged
+      forgetCachedBank(body, report);               // a damaged cache entry is recomputed, not trusted
       Result<LoadedMesh> loaded = loadMeshFor(body.precompute);
       if (!loaded) return badInput("objects \"" + body.object->name + "\": " + loaded.error().message);
       body.mesh = std::move(*loaded);
     }
     if (body.has_modes) continue;
     if (auto shared = computed_by_key.find(body.cache_key); shared != computed_by_key.end()) {
-      shares.emplace_back(i, shared->second);  // its bank once that body has one (below)
+      plan.shares.emplace_back(i, shared->second);  // its bank once that body has one
       continue;
     }
     computed_by_key[body.cache_key] = i;
-    to_solve.push_back(i);
+    plan.to_solve.push_back(i);
   }
-  // Held until the banks are in the cache: a render elsewhere that needs one waits, then reads it.
-  // Taken in the order of the keys, as every render takes them, so two never wait for each other.
+  return {};
+}
+
+/// The cache locks of the banks to solve, held until they are in the cache: a render elsewhere
+/// that needs one waits, then reads it. Taken in the order of the keys, as every render takes
+/// them, so two never wait for each other. A bank solved meanwhile by the holder is read instead.
+std::map<uint64_t, CacheEntryLock> lockBanksToSolve(RenderRun& run, BankPlan& plan) {
   std::map<uint64_t, CacheEntryLock> locks;
-  std::vector<size_t> by_key = to_solve;
+  if (run.settings.cache_dir.empty()) return locks;
+  std::vector<size_t> by_key = plan.to_solve;
   std::sort(by_key.begin(), by_key.end(),
-            [&](size_t a, size_t b) { return bodies[a].cache_key < bodies[b].cache_key; });
-  for (size_t i : settings.cache_dir.empty() ? std::vector<size_t>{} : by_key) {
-    Body& body = bodies[i];
-    CacheEntryLock lock(cachePath(settings.cache_dir, body.cache_key, ".lock"));
-    if (lock.held() && !body.from_cache && openCached(settings.cache_dir, body, report)) {
-      // Solved by whoever held the lock while this render simulated or waited.
-      if (lacksHeardTransfer(body, settings) ? extendCachedTransfer(body, settings, extended_by_key, report)
-                                             : readStruckShapes(body, static_cast<uint32_t>(i), result.events,
-                                                                bool(settings.output), settings.session, report)) {
+            [&](size_t a, size_t b) { return run.bodies[a].cache_key < run.bodies[b].cache_key; });
+  for (size_t i : by_key) {
+    Body& body = run.bodies[i];
+    CacheEntryLock lock(cachePath(run.settings.cache_dir, body.cache_key, ".lock"));
+    if (lock.held() && !body.from_cache && openCached(run.settings.cache_dir, body, run.report())) {
+      if (readBankFile(run, i, plan)) {  // solved by whoever held the lock while this render waited
         body.mesh.reset();
-        to_solve.erase(std::find(to_solve.begin(), to_solve.end(), i));
+        plan.to_solve.erase(std::find(plan.to_solve.begin(), plan.to_solve.end(), i));
         continue;
       }
-      --report.banks_cached;
-      report.precompute_saved_seconds -= solveSeconds(*body.bank);
-      body.file.reset();
-      body.rows.reset();
-      body.has_modes = false;
+      forgetCachedBank(body, run.report());
       body.from_cache = false;
     }
     locks.emplace(body.cache_key, std::move(lock));
   }
-  // The new banks, side by side (side_by_side.hpp): each solve's bits are a serial solve's.
-  std::vector<std::optional<Result<PrecomputeResult>>> computed(to_solve.size());
+  return locks;
+}
+
+/// The new banks, side by side (side_by_side.hpp): each solve's bits are a serial solve's. Each
+/// is cached (and its lock released) as it is taken, in the bodies' order.
+Status solveBanks(RenderRun& run, const BankPlan& plan, std::map<uint64_t, CacheEntryLock>& locks) {
+  const RenderSettings& settings = run.settings;
+  std::vector<std::optional<Result<PrecomputeResult>>> computed(plan.to_solve.size());
   std::mutex progress_lock;  // the caller's progress callback is called from one thread at a time
   auto progress = [&](std::string_view phase, double fraction) {
     std::lock_guard<std::mutex> hold(progress_lock);
     settings.progress(phase, fraction);
   };
   runSideBySide(
-      to_solve.size(),
+      plan.to_solve.size(),
       settings.solve_threads > 0 ? settings.solve_threads : std::max(1u, std::thread::hardware_concurrency()),
       settings.max_memory_bytes > 0 ? settings.max_memory_bytes : availableMemoryBytes(),
-      [&](size_t j) { return solveForecastBytes(bodies[to_solve[j]]); },
+      [&](size_t j) { return solveForecastBytes(run.bodies[plan.to_solve[j]]); },
       [&](size_t j) {
-        Body& body = bodies[to_solve[j]];
+        Body& body = run.bodies[plan.to_solve[j]];
         PrecomputeSettings precompute = body.precompute;
         if (settings.progress) {
           precompute.progress = progress;
@@ -822,59 +896,78 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
         }
         computed[j] = computeModeBankForMesh(*body.mesh, precompute);
       });
-  for (size_t j = 0; j < to_solve.size(); ++j) {  // in the bodies' order, as a serial solve
-    Body& body = bodies[to_solve[j]];
+  for (size_t j = 0; j < plan.to_solve.size(); ++j) {  // in the bodies' order, as a serial solve
+    Body& body = run.bodies[plan.to_solve[j]];
     Result<PrecomputeResult>& bank = *computed[j];
     if (!bank) return badInput("objects \"" + body.object->name + "\": " + bank.error().message);
-    for (const MeshWarning& w : bank->report.warnings) warn("objects \"" + body.object->name + "\": " + w.message);
+    for (const MeshWarning& w : bank->report.warnings) run.warn("objects \"" + body.object->name + "\": " + w.message);
     body.bank = std::make_shared<const ModeBank>(std::move(bank->bank));
     body.has_modes = true;
     body.mesh.reset();
-    ++report.banks_computed;
+    ++run.report().banks_computed;
     if (!settings.cache_dir.empty()) {
       // A failed cache write costs the next render time, never this one its result.
       (void)writeBank(cachePath(settings.cache_dir, body.cache_key, ".modes"), *body.bank);
       locks.erase(body.cache_key);
     }
   }
-  for (const auto& [i, holder] : shares) {  // identical objects: the bank of the first
-    Body& body = bodies[i];
-    body.bank = bodies[holder].bank;
-    body.file = bodies[holder].file;  // read from the cache meanwhile: its shapes where this one is struck
+  return {};
+}
+
+/// Identical objects take the bank of the first (read from the cache meanwhile: its shapes where
+/// this one is struck).
+Status shareBanks(RenderRun& run, const BankPlan& plan) {
+  for (const auto& [i, holder] : plan.shares) {
+    Body& body = run.bodies[i];
+    body.bank = run.bodies[holder].bank;
+    body.file = run.bodies[holder].file;
     body.has_modes = true;
-    ++report.banks_shared;
+    ++run.report().banks_shared;
     if (body.file)
-      if (Status read = readStruckShapes(body, static_cast<uint32_t>(i), result.events, bool(settings.output),
-                                         settings.session, report);
+      if (Status read = readStruckShapes(body, static_cast<uint32_t>(i), run.result.events, bool(run.settings.output),
+                                         run.settings.session, run.report());
           !read)
-        return read.error();
+        return read;
   }
-  report.precompute_seconds = secondsSince(precompute_start);
-  if (!settings.cache_dir.empty() && settings.cache_max_bytes > 0) {
+  return {};
+}
+
+/// Every sounding body's bank: planned, locked, solved, shared; then the cache kept to its size.
+Status provideBanks(RenderRun& run) {
+  const auto start = std::chrono::steady_clock::now();
+  findStruckBodies(run);
+  BankPlan plan;
+  std::map<uint64_t, size_t> solved_by_key;  // similar_reuse: objects of one shape share one solve
+  std::map<uint64_t, ModeBank> unit_by_key;  // ...and one transfer per wave speed and modes kept
+  if (Status planned = planBanks(run, plan, solved_by_key, unit_by_key); !planned) return planned;
+  std::map<uint64_t, CacheEntryLock> locks = lockBanksToSolve(run, plan);
+  if (Status solved = solveBanks(run, plan, locks); !solved) return solved;
+  if (Status shared = shareBanks(run, plan); !shared) return shared;
+  RenderReport& report = run.report();
+  report.precompute_seconds = secondsSince(start);
+  if (!run.settings.cache_dir.empty() && run.settings.cache_max_bytes > 0) {
     // This render's banks were just written or touched, so they are the last to go.
-    Result<PruneReport> pruned = pruneCache(settings.cache_dir, settings.cache_max_bytes, -1.0, std::time(nullptr));
+    Result<PruneReport> pruned =
+        pruneCache(run.settings.cache_dir, run.settings.cache_max_bytes, -1.0, std::time(nullptr));
     if (pruned) report.cache_pruned = pruned->removed, report.cache_pruned_bytes = pruned->bytes_removed;
   }
+  return {};
+}
 
-  // ---- Phase 3: the simulation, step by step, into the sound engine -------------------------
-  const auto synth_start = std::chrono::steady_clock::now();
-  std::unique_ptr<SoundOutput> output;
-  if (settings.output) {
-    Result<std::unique_ptr<SoundOutput>> made = settings.output(engine_settings);
-    if (!made) return made.error();
-    output = std::move(*made);
-  } else {
-    output = makeEngineOutput(engine_settings);
-  }
-  std::vector<bool> has_voice(bodies.size(), false);
-  for (size_t index = 0; index < bodies.size(); ++index) {
-    Body& body = bodies[index];
+// ---- Phase 4: the simulation, step by step, into the sound engine ---------------------------
+
+/// A voice for each sounding body with a mode to play (or a free body's clicks).
+Status addVoices(RenderRun& run, SoundOutput& output) {
+  RenderReport& report = run.report();
+  run.has_voice.assign(run.bodies.size(), false);
+  for (size_t index = 0; index < run.bodies.size(); ++index) {
+    Body& body = run.bodies[index];
     if (!body.sounded) continue;
-    if (Status audible = hasAudibleMode(*body.bank, engine_settings.synth, rate); !audible) {
+    if (Status audible = hasAudibleMode(*body.bank, run.engine_settings.synth, run.rate); !audible) {
       if (body.object->is_static || !(body.bank->mass_kg > 0.0)) {
         ++report.objects_silent;
         body.silent = true;
-        warn("objects \"" + body.object->name + "\": " + audible.error().message);
+        run.warn("objects \"" + body.object->name + "\": " + audible.error().message);
         continue;
       }
       // A free body still clicks when struck: its acceleration noise (sound_paths.cpp).
@@ -886,50 +979,60 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
     if (body.rows) voice.rows = std::move(*body.rows), voice.use_rows = true;
     voice.locator = body.locator;
     voice.located = std::move(body.located);
-    voice.pressure_scale = outputPerPascal(settings.gain);
-    voice.weights = pressureWeights(*body.bank, engine_settings.reference_distance_m, voice.pressure_scale);
+    voice.pressure_scale = outputPerPascal(run.settings.gain);
+    voice.weights = pressureWeights(*body.bank, run.engine_settings.reference_distance_m, voice.pressure_scale);
     voice.is_static = body.object->is_static;
     voice.contact_radius_m = body.contact_radius_m;
     const SurfaceProperties surface = objectSurface(*body.object, body.bank->material);
     voice.roughness = surface.roughness;
     voice.restitution = surface.restitution;
-    if (Status added = output->addVoice(static_cast<uint32_t>(index), voice, sim_bodies[index].position_m,
-                                        sim_bodies[index].orientation_wxyz, body.object->name);
+    const SimBodyDesc& placed = run.sim_bodies[index];
+    if (Status added = output.addVoice(static_cast<uint32_t>(index), voice, placed.position_m, placed.orientation_wxyz,
+                                       body.object->name);
         !added)
-      return added.error();
-    has_voice[index] = true;
+      return added;
+    run.has_voice[index] = true;
   }
-  output->setListener(scene.listener_position_m, scene.listener_orientation_wxyz);
+  output.setListener(run.scene.listener_position_m, run.scene.listener_orientation_wxyz);
+  return {};
+}
 
-  // The other bodies as the Hertz contact time needs them: a sounding body by its voice, the
-  // ground and anything else by its material, size and mass.
-  std::vector<ContactPartner> partners(bodies.size());
-  for (size_t i = 0; i < bodies.size(); ++i) {
+/// The other bodies as the Hertz contact time needs them: a sounding body by its voice, anything
+/// else by its material, size and mass.
+std::vector<ContactPartner> contactPartners(const RenderRun& run) {
+  std::vector<ContactPartner> partners(run.bodies.size());
+  for (size_t i = 0; i < run.bodies.size(); ++i) {
     ContactPartner& partner = partners[i];
-    if (has_voice[i]) {
+    if (run.has_voice[i]) {
       partner.voice = static_cast<uint32_t>(i);  // its material from its bank; its sleep keeps a static body's load
       continue;
     }
-    partner.youngs_pa = bodies[i].bank->material.youngs_pa;
-    partner.poisson = bodies[i].bank->material.poisson;
-    partner.radius_m = bodies[i].contact_radius_m;
-    partner.mass_kg = bodies[i].object->is_static ? 0.0 : bodies[i].bank->mass_kg;
-    const SurfaceProperties surface = objectSurface(*bodies[i].object, bodies[i].bank->material);
+    const Body& body = run.bodies[i];
+    partner.youngs_pa = body.bank->material.youngs_pa;
+    partner.poisson = body.bank->material.poisson;
+    partner.radius_m = body.contact_radius_m;
+    partner.mass_kg = body.object->is_static ? 0.0 : body.bank->mass_kg;
+    const SurfaceProperties surface = objectSurface(*body.object, body.bank->material);
     partner.roughness = surface.roughness;
     partner.restitution = surface.restitution;
   }
+  return partners;
+}
+
+/// ...and the ground by its material and surface.
+ContactPartner groundPartner(const RenderRun& run) {
   ContactPartner ground;
-  ground.youngs_pa = scene.ground_material.youngs_pa;
-  ground.poisson = scene.ground_material.poisson;
-  ground.roughness = ground_surface.roughness;
-  ground.restitution = ground_surface.restitution;
-  result.audio.sample_rate_hz = rate;
-  result.audio.channels = static_cast<int>(outputChannels(settings.output_format));
-  result.audio.samples.assign(
-      static_cast<size_t>(std::llround(duration * rate)) * outputChannels(settings.output_format), 0.0f);
-  const Playback playback{result.events, simulated->states, simulated->substeps, substep, has_voice, partners, ground};
-  if (Status played = play(playback, *output, result.audio, settings.progress); !played) return played.error();
-  const EngineStats engine_stats = output->stats();
+  ground.youngs_pa = run.scene.ground_material.youngs_pa;
+  ground.poisson = run.scene.ground_material.poisson;
+  ground.roughness = run.ground_surface.roughness;
+  ground.restitution = run.ground_surface.restitution;
+  return ground;
+}
+
+/// The engine's counts, the output's warnings, the peak and clipping, into the report.
+void reportPlayback(RenderRun& run, const SoundOutput& output) {
+  RenderReport& report = run.report();
+  const EngineStats engine_stats = output.stats();
   report.impacts = engine_stats.impacts + engine_stats.impacts_inaudible;
   report.sustained_contacts = engine_stats.sustained_contacts;
   report.load_changes = engine_stats.load_changes;
@@ -938,9 +1041,8 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   report.continuous_dropped = engine_stats.continuous_dropped;
   report.continuous_lost_samples = engine_stats.continuous_lost_samples;
   report.continuous_last_force_s = engine_stats.continuous_last_force_s;
-  for (std::string& text : output->warnings()) warn(std::move(text));
-  const AudioBuffer& audio = result.audio;
-  for (float s : audio.samples) {
+  for (std::string& text : output.warnings()) run.warn(std::move(text));
+  for (float s : run.result.audio.samples) {
     report.peak = std::max(report.peak, static_cast<double>(std::fabs(s)));
     if (std::fabs(s) >= 1.0f) ++report.clipped_samples;
   }
@@ -948,12 +1050,57 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   report.modes_out_of_band = engine_stats.modes_out_of_band;
   report.mode_samples = engine_stats.mode_samples;
   report.max_active_modes = engine_stats.max_active_modes;
-  report.synthesize_seconds = secondsSince(synth_start);
-  for (const Body& body : bodies)
-    result.banks.push_back(
+}
+
+/// The sound engine (or the caller's output) plays the simulation into the audio.
+Status playScene(RenderRun& run) {
+  const auto start = std::chrono::steady_clock::now();
+  std::unique_ptr<SoundOutput> output;
+  if (run.settings.output) {
+    Result<std::unique_ptr<SoundOutput>> made = run.settings.output(run.engine_settings);
+    if (!made) return made.error();
+    output = std::move(*made);
+  } else {
+    output = makeEngineOutput(run.engine_settings);
+  }
+  if (Status added = addVoices(run, *output); !added) return added;
+  const std::vector<ContactPartner> partners = contactPartners(run);
+  AudioBuffer& audio = run.result.audio;
+  audio.sample_rate_hz = run.rate;
+  audio.channels = static_cast<int>(outputChannels(run.settings.output_format));
+  audio.samples.assign(
+      static_cast<size_t>(std::llround(run.duration * run.rate)) * outputChannels(run.settings.output_format), 0.0f);
+  const Playback playback{run.result.events, run.simulated.states, run.simulated.substeps, run.substep, run.has_voice,
+                          partners,          groundPartner(run)};
+  if (Status played = play(playback, *output, audio, run.settings.progress); !played) return played;
+  reportPlayback(run, *output);
+  run.report().synthesize_seconds = secondsSince(start);
+  for (const Body& body : run.bodies)
+    run.result.banks.push_back(
         {body.object->bank.empty() ? body.cache_key : 0, body.object->bank, body.sounded, body.transfer_key});
-  report.total_seconds = secondsSince(start);
-  return result;
+  return {};
+}
+
+}  // namespace
+
+// The render as a pipeline: prepare bodies -> simulate -> provide banks -> play.
+Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& settings) {
+  const auto start = std::chrono::steady_clock::now();
+  RenderRun run(scene, settings);
+  run.rate = settings.sample_rate_hz > 0 ? settings.sample_rate_hz : scene.sample_rate_hz;
+  run.duration = settings.duration_s > 0 ? settings.duration_s : scene.duration_s;
+  run.substep = settings.substep_s;  // simulate() refuses steps outside (0, 1 ms]
+  run.max_freq_hz = synthesizedTopHz(scene.max_freq_hz, run.rate);
+  run.engine_settings = renderEngineSettings(scene, settings, run.rate, run.max_freq_hz);
+  run.heard_hz = synthesizedTopHz(run.engine_settings.synth.max_freq_hz, run.rate);
+  run.ground_surface = groundSurface(scene);  // for the simulation and the sound
+  run.report().objects = scene.objects.size();
+  if (Status prepared = prepareBodies(run); !prepared) return prepared.error();
+  if (Status simulated = simulateBodies(run); !simulated) return simulated.error();
+  if (Status provided = provideBanks(run); !provided) return provided.error();
+  if (Status played = playScene(run); !played) return played.error();
+  run.report().total_seconds = secondsSince(start);
+  return std::move(run.result);
 }
 
 // The events CSV's marker of continuous contact (docs/cli.md): whether the surfaces roll and/or

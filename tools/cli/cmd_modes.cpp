@@ -259,7 +259,7 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
 }
 
 /// --tolerance: "0.5%" or "0.005". A bare number >= 0.1 is refused: "0.5" is 50% to the
-/// parser and half a percent to whoever typed it (issue 15).
+/// parser and half a percent to whoever typed it.
 Result<double> parseTolerance(const std::string& raw, const std::string& option = "--tolerance") {
   std::string text = raw;
   const bool percent = !text.empty() && text.back() == '%';

@@ -33,7 +33,7 @@ struct PrecomputeSettings {
   /// Estimate each mode's frequency error (src/precompute/error_estimate.cpp) at extra cost;
   /// does not change the modes, so it is not part of the cache key.
   bool error_estimate = false;
-  /// Solve each mode's acoustic transfer (bank.transfer, its own phase "transfer"; issue 17).
+  /// Solve each mode's acoustic transfer (bank.transfer, its own phase "transfer").
   /// The tools turn it on (`strike modes`, `strike render` and the Python package solve it unless
   /// told `--no-transfer` / transfer=False); here, as error_estimate, it is asked for. Without it
   /// the sound depends on the eigen-solver's signs and degenerate bases and has no direction. It costs 0.8x to 1.8x the eigen-solve on the order-2 examples, more on coarse

@@ -17,20 +17,23 @@ using cd = std::complex<double>;
 
 constexpr size_t kRestart = 60;
 
-/// y = A x, rows in two fixed halves, each row's sum in column order.
+/// y = A x, rows in two fixed halves; each row's sum in column order, walked column by column
+/// (A is column-major: contiguous reads).
 void multiply(const Eigen::MatrixXcd& A, const std::vector<cd>& x, std::vector<cd>& y, TwoParts& parts) {
   const size_t n = static_cast<size_t>(A.rows());
   y.assign(n, cd(0.0));
   parts.run(n, n / 2, [&](size_t begin, size_t end, int) {
-    for (size_t i = begin; i < end; ++i) {
-      double re = 0.0, im = 0.0;
-      for (size_t j = 0; j < n; ++j) {
-        const cd a = A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
-        re += a.real() * x[j].real() - a.imag() * x[j].imag();
-        im += a.real() * x[j].imag() + a.imag() * x[j].real();
+    std::vector<double> re(end - begin, 0.0), im(end - begin, 0.0);
+    for (size_t j = 0; j < n; ++j) {
+      const cd* column = A.data() + j * n;
+      const double x_re = x[j].real(), x_im = x[j].imag();
+      for (size_t i = begin; i < end; ++i) {
+        const double a_re = column[i].real(), a_im = column[i].imag();
+        re[i - begin] += a_re * x_re - a_im * x_im;
+        im[i - begin] += a_re * x_im + a_im * x_re;
       }
-      y[i] = cd(re, im);
     }
+    for (size_t i = begin; i < end; ++i) y[i] = cd(re[i - begin], im[i - begin]);
   });
 }
 

@@ -1049,6 +1049,8 @@ void reportPlayback(RenderRun& run, const SoundOutput& output) {
   report.modes_total = engine_stats.modes_total;
   report.modes_out_of_band = engine_stats.modes_out_of_band;
   report.mode_samples = engine_stats.mode_samples;
+  report.forced_mode_samples = engine_stats.forced_mode_samples;
+  report.image_mode_samples = engine_stats.image_mode_samples;
   report.max_active_modes = engine_stats.max_active_modes;
 }
 

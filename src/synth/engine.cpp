@@ -221,14 +221,20 @@ void SoundEngine::enforceBudget(uint64_t& active) {
 
 EngineStats SoundEngine::stats() const {
   EngineStats s = stats_;
-  s.modes_total = s.modes_out_of_band = s.mode_samples = 0;
+  s.modes_total = s.modes_out_of_band = s.mode_samples = s.forced_mode_samples = s.image_mode_samples = 0;
   for (const Voice* v : slots_) {
     if (!v) continue;
     const SynthStats vs = v->synth_.stats();
     s.modes_total += vs.modes_total;
     s.modes_out_of_band += vs.modes_out_of_band;
     s.mode_samples += vs.mode_samples;
-    if (v->image_) s.mode_samples += v->image_->synth.stats().mode_samples;
+    s.forced_mode_samples += vs.forced_mode_samples;
+    if (v->image_) {
+      const SynthStats is = v->image_->synth.stats();
+      s.mode_samples += is.mode_samples;
+      s.image_mode_samples += is.mode_samples - is.forced_mode_samples;
+      s.forced_mode_samples += is.forced_mode_samples;
+    }
   }
   return s;
 }

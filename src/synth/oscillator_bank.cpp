@@ -234,7 +234,7 @@ struct OscillatorBank::Impl {
   // that impacts, sleeping and the float anchors of the free modes are untouched.
   static constexpr size_t kForcedLanes = 8;
   static constexpr size_t kForcedGroups = kForcedLanes / 4;  // Float4s per group of modes
-  static constexpr size_t kForcedPending = 8;  // weight changes pending per object
+  static constexpr size_t kForcedPending = 8;                // weight changes pending per object
   struct ForcedObject {
     size_t count = 0, padded = 0;  // ringing modes, and rounded up to kForcedLanes
     std::vector<uint32_t> mode;    // global mode index per entry
@@ -1183,6 +1183,7 @@ struct OscillatorBank::Impl {
         mix[n] += sum;
       }
       stats.mode_samples += static_cast<uint64_t>(f.count) * (s1 - s0);
+      stats.forced_mode_samples += static_cast<uint64_t>(f.count) * (s1 - s0);
     }
   }
 

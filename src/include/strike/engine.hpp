@@ -191,7 +191,7 @@ struct EngineContact {
   double time_s = -1.0;
   ContactPartner partner;
   // Continuous contact (rolling, sliding, scraping; contact_sources.cpp). normal_force_n 0: none.
-  double normal_force_n = 0.0;           ///< this point's normal load over the step, N
+  double normal_force_n = 0.0;  ///< this point's normal load over the step, N
   /// Velocity of this body's surface relative to the partner's at the point, in the tangent
   /// plane, m/s: 0 while they stick (strike_contact::slip_velocity_m_s).
   std::array<double, 3> slip_velocity_m_s{};
@@ -229,13 +229,15 @@ struct EngineImpact {
 struct EngineStats {
   uint64_t impacts = 0;  ///< contacts that struck (Hertz pulses scheduled)
   uint64_t impacts_inaudible = 0;
-  uint64_t impacts_dropped = 0;     ///< realtime reserve full
-  uint64_t sustained_contacts = 0;  ///< contact points of sustained contact
-  uint64_t load_changes = 0;        ///< force steps scheduled (a load starting, changing, ending)
-  uint64_t load_holds = 0;          ///< steps a sleeping body's load was kept
-  uint64_t modes_culled = 0;        ///< by the budget
-  uint64_t stale = 0;               ///< contacts or impacts on an empty slot
-  uint64_t mode_samples = 0;        ///< active modes x samples, voices installed now
+  uint64_t impacts_dropped = 0;      ///< realtime reserve full
+  uint64_t sustained_contacts = 0;   ///< contact points of sustained contact
+  uint64_t load_changes = 0;         ///< force steps scheduled (a load starting, changing, ending)
+  uint64_t load_holds = 0;           ///< steps a sleeping body's load was kept
+  uint64_t modes_culled = 0;         ///< by the budget
+  uint64_t stale = 0;                ///< contacts or impacts on an empty slot
+  uint64_t mode_samples = 0;         ///< active modes x samples, voices installed now
+  uint64_t forced_mode_samples = 0;  ///< of mode_samples, driven by rolling and sliding (SynthStats)
+  uint64_t image_mode_samples = 0;   ///< of mode_samples, the ground image's own free oscillators
   uint64_t modes_total = 0, modes_out_of_band = 0;
   uint64_t max_active_modes = 0;         ///< of any render call's end, all voices
   uint64_t active_modes = 0;             ///< after the last render call
@@ -273,10 +275,10 @@ class Voice {
   std::vector<float> mono_;         ///< max_block_frames
   std::vector<float> levels_;       ///< #modes: budget scratch
   // Radiation toward the listener (radiation.cpp).
-  bool pressure_ = false;                                 ///< output is pressure (VoiceDesc::pressure_scale > 0)
-  std::vector<double> sh_;                                ///< spherical harmonics scratch, (max order + 1)^2
-  SphericalHarmonicsTable sh_table_;                      ///< their recurrence's constants to the max order
-  CompactTransfer transfer_;                              ///< the bank's transfer as evaluations read it
+  bool pressure_ = false;             ///< output is pressure (VoiceDesc::pressure_scale > 0)
+  std::vector<double> sh_;            ///< spherical harmonics scratch, (max order + 1)^2
+  SphericalHarmonicsTable sh_table_;  ///< their recurrence's constants to the max order
+  CompactTransfer transfer_;          ///< the bank's transfer as evaluations read it
   /// Scratch for one pass over the transfer's coefficients, which evaluates up to two directions
   /// (the paths that need it): each one's farFieldWeights of sh_, and its F_i for the #modes.
   std::array<std::vector<float>, 2> weights_;

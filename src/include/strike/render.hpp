@@ -160,12 +160,15 @@ struct RenderReport {
   /// Scenes that cannot be right, and silent results, in words with numbers (scene_checks.hpp).
   std::vector<std::string> warnings;
   uint64_t modes_total = 0, modes_out_of_band = 0, mode_samples = 0, max_active_modes = 0;
+  uint64_t forced_mode_samples = 0;  ///< of mode_samples, driven by rolling and sliding contacts
+  uint64_t image_mode_samples = 0;   ///< of mode_samples, the ground image's oscillators (free ones)
   double peak = 0.0;
   size_t clipped_samples = 0;
   double load_seconds = 0, simulate_seconds = 0, precompute_seconds = 0, synthesize_seconds = 0, total_seconds = 0;
-  double precompute_saved_seconds = 0;  ///< solve time (meshing, eigen-solve, transfer) the cache answered, as the banks record it
-  double transfer_saved_seconds = 0;    ///< unit transfer solves the cache answered (as recorded in them)
-  size_t cache_pruned = 0;              ///< banks removed from the cache by its size cap after this render
+  double precompute_saved_seconds =
+      0;  ///< solve time (meshing, eigen-solve, transfer) the cache answered, as the banks record it
+  double transfer_saved_seconds = 0;  ///< unit transfer solves the cache answered (as recorded in them)
+  size_t cache_pruned = 0;            ///< banks removed from the cache by its size cap after this render
   uint64_t cache_pruned_bytes = 0;
   double pieces_seconds = 0;  ///< of simulate_seconds: computing convex pieces (cached for the next render)
   /// One line per concave moving body: its collision shape and what it cost (the summary's

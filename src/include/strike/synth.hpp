@@ -145,6 +145,9 @@ struct SynthStats {
   uint64_t impacts_inaudible = 0;  ///< changed no mode above the threshold
   uint64_t mode_starts = 0;        ///< a sleeping mode woken by an impact
   uint64_t mode_samples = 0;       ///< work done: active modes x samples rendered
+  /// Of mode_samples, those of the copies a rolling or sliding contact drives (a mode may ring
+  /// free and be driven by several contacts at once, so mode_samples may exceed modes x samples).
+  uint64_t forced_mode_samples = 0;
   uint64_t max_active_modes = 0;
   uint64_t active_modes = 0;  ///< ringing now (after the last completed render call)
 };

@@ -243,5 +243,15 @@ TEST(FirstHourInfo, VerticesListsEverySurfaceVertexWithItsOutwardNormal) {
             std::string::npos);
 }
 
+TEST(FirstHourMessages, ATet10FileWithNoOrderGivenKeepsItsOrderWithoutAWarning) {
+  const std::string dir = folder("tet10");
+  const CliResult r =
+      runCli("modes " + std::string(STRIKE_SOURCE_DIR) +
+             "/tests/data/mesh/cube_tet10_v22.msh --material steel --no-transfer -o " + dir + "/c.modes");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(Tet10)"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace strike

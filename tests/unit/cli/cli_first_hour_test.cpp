@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -251,6 +252,57 @@ TEST(FirstHourMessages, ATet10FileWithNoOrderGivenKeepsItsOrderWithoutAWarning) 
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("(Tet10)"), std::string::npos) << r.err;
+}
+
+// Every `strike ...` command line in README.md's and docs/'s shell blocks names a command that
+// exists and only options its --help lists (a renamed or removed option fails here). Running
+// them all is left to the examples' and golden tests (the eigen-solves take minutes); the whole
+// scenes of the docs are run by Docs.EveryWholeSceneInTheDocsRunsAsWrittenWithoutWarnings.
+TEST(FirstHourDocs, EveryCommandLineInTheDocsUsesOptionsTheCommandHas) {
+  const fs::path root = STRIKE_SOURCE_DIR;
+  std::vector<fs::path> files = {root / "README.md"};
+  for (const auto& e : fs::directory_iterator(root / "docs"))
+    if (e.path().extension() == ".md") files.push_back(e.path());
+  size_t lines_checked = 0;
+  for (const fs::path& file : files) {
+    std::ifstream in(file);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    bool in_shell = false;
+    std::istringstream lines(text);
+    std::string line;
+    while (std::getline(lines, line)) {
+      if (line.rfind("```", 0) == 0) {
+        in_shell = !in_shell && (line == "```sh" || line == "```bash" || line == "```");
+        continue;
+      }
+      const size_t start = line.find_first_not_of(' ');
+      if (!in_shell || start == std::string::npos || line.compare(start, 7, "strike ") != 0) continue;
+      std::string command_line =
+          line.substr(start, line.find('#') == std::string::npos ? std::string::npos : line.find('#') - start);
+      command_line = command_line.substr(0, command_line.find('|'));
+      std::istringstream words(command_line);
+      std::string word, command;
+      std::vector<std::string> options;
+      words >> word >> command;
+      // A synopsis (`strike COMMAND [ARGS]`, `strike --version`) or a printed message
+      // (`strike render: wrote ...`) is not a command line.
+      const std::vector<std::string> known = {"render", "modes", "info", "hit", "analyze", "cache", "batch", "bench"};
+      if (std::find(known.begin(), known.end(), command) == known.end()) continue;
+      if (command == "bench" || command == "cache") {
+        std::string sub;
+        words >> sub;
+        if (command == "bench") command += " " + sub;
+      }
+      while (words >> word)
+        if (word.rfind("--", 0) == 0) options.push_back(word.substr(0, word.find('=')));
+      const CliResult help = runCli(command + " --help");
+      ASSERT_EQ(help.exit_code, 0) << file << ": `" << command_line << "`: no command " << command;
+      for (const std::string& option : options)
+        EXPECT_NE(help.out.find("  " + option + " "), std::string::npos) << file << ": `" << command_line << "`";
+      ++lines_checked;
+    }
+  }
+  EXPECT_GE(lines_checked, 15u);
 }
 
 }  // namespace

@@ -299,6 +299,29 @@ strike_status createContext(const strike_context_config* config, const strike_ou
         return STRIKE_ERR_INVALID_ARG;
     }
   }
+  bool air_absorption = false;
+  AirConditions air;
+  if (output && output->struct_size >= offsetof(strike_output_desc, air_pressure_kpa) + sizeof(double) &&
+      output->air_absorption != 0) {
+    air_absorption = true;
+    air.temperature_c = output->air_temperature_c;
+    air.relative_humidity_percent = output->air_relative_humidity_percent;
+    air.pressure_kpa = output->air_pressure_kpa;
+    char why[160] = "";
+    if (output->air_absorption != 1)
+      std::snprintf(why, sizeof why, "output: air_absorption = %d (must be 0 or 1)", output->air_absorption);
+    else if (!(air.temperature_c >= -50.0 && air.temperature_c <= 60.0))
+      std::snprintf(why, sizeof why, "output: air_temperature_c = %g (must be -50 .. 60)", air.temperature_c);
+    else if (!(air.relative_humidity_percent >= 0.0 && air.relative_humidity_percent <= 100.0))
+      std::snprintf(why, sizeof why, "output: air_relative_humidity_percent = %g (must be 0 .. 100)",
+                    air.relative_humidity_percent);
+    else if (!(air.pressure_kpa >= 50.0 && air.pressure_kpa <= 200.0))
+      std::snprintf(why, sizeof why, "output: air_pressure_kpa = %g (must be 50 .. 200)", air.pressure_kpa);
+    if (why[0]) {
+      logRejected(c, why);
+      return STRIKE_ERR_INVALID_ARG;
+    }
+  }
   cfg.channels = outputChannels(format);  // what strike_render() checks
 
   void* mem = cfg.alloc(cfg.user, sizeof(strike_context_s), alignof(strike_context_s));
@@ -332,6 +355,8 @@ strike_status createContext(const strike_context_config* config, const strike_ou
     e.synth.max_freq_hz = cfg.max_freq_hz;
     e.synth.audibility_threshold = cfg.audibility_threshold;
     e.output = format;
+    e.air_absorption = air_absorption;
+    e.air = air;
     e.channels = cfg.channels;
     e.max_voices = cfg.max_objects;
     e.max_block_frames = cfg.max_block_frames;
@@ -375,6 +400,10 @@ STRIKE_API strike_output_desc STRIKE_CALL strike_output_desc_default(void) {
   std::memset(&d, 0, sizeof d);
   d.struct_size = sizeof d;
   d.format = STRIKE_OUTPUT_MONO;
+  d.air_absorption = 0;
+  d.air_temperature_c = 20.0;
+  d.air_relative_humidity_percent = 50.0;
+  d.air_pressure_kpa = 101.325;
   return d;
 }
 

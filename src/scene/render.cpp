@@ -571,6 +571,8 @@ EngineSettings renderEngineSettings(const Scene& scene, const RenderSettings& se
     engine.synth.audibility_threshold = 0.0;
   }
   engine.output = settings.output_format;
+  engine.air_absorption = scene.air_absorption;
+  engine.air = scene.air;
   engine.channels = outputChannels(settings.output_format);
   engine.max_voices = static_cast<uint32_t>(scene.objects.size());
   engine.max_block_frames = kRenderBlockFrames;

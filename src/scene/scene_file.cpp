@@ -386,7 +386,8 @@ const std::vector<SceneKeyTable>& sceneKeyTables() {
   static const std::vector<SceneKeyTable> tables = {
       {"top level",
        {"sample_rate", "duration", "gravity", "listener", "ground", "objects", "max_freq", "max_modes",
-        "contact_damping", "contacts"}},
+        "contact_damping", "contacts", "air"}},
+      {"air", {"temperature", "humidity", "pressure"}},
       {"listener", {"position", "orientation", "look_at"}},
       {"contacts[]", {"objects", "restitution", "friction", "rolling_resistance"}},
       {"ground", {"material", "height", "restitution", "friction", "rolling_resistance", "reflection"}},
@@ -474,6 +475,36 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& path) 
     if (!c) return c.error();
     if (*c < 0) return root.at("contact_damping").error("must be >= 0 (1/s), got " + show(doc["contact_damping"]));
     scene.contact_damping_per_s = *c;
+  }
+  if (doc.contains("air")) {
+    const json& air = doc["air"];
+    const Where where = root.at("air");
+    if (air.is_boolean()) {
+      scene.air_absorption = air.get<bool>();
+    } else {
+      Status air_keys = checkKeys(air, where, keysOf("air"));
+      if (!air_keys) return air_keys.error();
+      scene.air_absorption = true;
+      struct Field {
+        const char* key;
+        double* value;
+        double low, high;
+        const char* rule;
+      };
+      const Field fields[] = {
+          {"temperature", &scene.air.temperature_c, -50.0, 60.0, "must be -50 to 60 (degrees C)"},
+          {"humidity", &scene.air.relative_humidity_percent, 0.0, 100.0, "must be 0 to 100 (% relative humidity)"},
+          {"pressure", &scene.air.pressure_kpa, 50.0, 200.0, "must be 50 to 200 (kPa)"},
+      };
+      for (const Field& f : fields) {
+        if (!air.contains(f.key)) continue;
+        Result<double> x = number(air[f.key], where.at(f.key));
+        if (!x) return x.error();
+        if (!(*x >= f.low && *x <= f.high))
+          return where.at(f.key).error(std::string(f.rule) + ", got " + show(air[f.key]));
+        *f.value = *x;
+      }
+    }
   }
   if (doc.contains("max_modes")) {
     if (!doc["max_modes"].is_number_integer() || doc["max_modes"].get<long long>() < 1 ||

@@ -147,7 +147,7 @@ void SoundEngine::continuousEndStep(Voice& v, bool load_change_follows) {
       // the direct path is evaluated here, the ground's image rides along in the same pass.
       const int count = arrivals(v, world, paths);
       radiationToward(v, paths, 1, transfer, Reuse::WithinTolerance, load_change_follows ? count : 0);
-      w.modal_transfer = transfer[0];
+      w.modal_transfer = throughAir(v, 0, transfer[0], paths[0].distance_m);
     }
     (void)v.synth_.setForceWeights(w);  // a full queue keeps the weights in force
   }

@@ -47,7 +47,8 @@ int SoundEngine::arrivals(const Voice& v, const std::array<double, 3>& world_poi
     return v.pose_.toLocalDirection({to[0] - origin[0], to[1] - origin[1], to[2] - origin[2]});
   };
   const std::array<double, 3>& listener = listener_.position_m;
-  out[0].delay_s = propagationDelay_s(distance(from, listener));
+  out[0].distance_m = distance(from, listener);
+  out[0].delay_s = propagationDelay_s(out[0].distance_m);
   out[0].gain = 1.0;
   out[0].direction = direction(listener);
   const GroundReflection& g = settings_.ground;
@@ -61,7 +62,8 @@ int SoundEngine::arrivals(const Voice& v, const std::array<double, 3>& world_poi
                                        listener[1] - 2.0 * listener_height * n[1],
                                        listener[2] - 2.0 * listener_height * n[2]};
   const double min_d = settings_.min_distance_m;
-  out[1].delay_s = propagationDelay_s(distance(from, image));
+  out[1].distance_m = distance(from, image);
+  out[1].delay_s = propagationDelay_s(out[1].distance_m);
   out[1].gain = g.reflection * std::max(distance(centre_of_mass, listener), min_d) /
                 std::max(distance(centre_of_mass, image), min_d);
   out[1].direction = direction(image);
@@ -140,6 +142,7 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
   const int count = arrivals(v, world_point, paths);
   const std::complex<double>* transfer[2];
   radiationToward(v, paths, count, transfer);
+  for (int k = 0; k < count; ++k) transfer[k] = throughAir(v, k, transfer[k], paths[k].distance_m);
   for (int k = 0; k < count; ++k) {
     ImpactDesc impact;
     impact.object = 0;
@@ -168,6 +171,7 @@ void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double
   const int count = arrivals(v, world_point, paths);
   const std::complex<double>* transfer[2];
   radiationToward(v, paths, count, transfer);
+  for (int k = 0; k < count; ++k) transfer[k] = throughAir(v, k, transfer[k], paths[k].distance_m);
   for (int k = 0; k < count; ++k) {
     ForceStepDesc step;
     step.object = 0;
@@ -211,6 +215,17 @@ void SoundEngine::scheduleClick(Voice& v, int path, const Arrival& a, double tim
     (void)clicks.addImpactNoAlloc(click);
   else
     (void)clicks.addImpact(click);
+}
+
+const std::complex<double>* SoundEngine::throughAir(Voice& v, int path, const std::complex<double>* factors,
+                                                    double distance_m) {
+  if (v.air_np_per_m_.empty()) return factors;
+  std::vector<std::complex<double>>& out = v.air_factor_[static_cast<size_t>(path)];
+  for (size_t i = 0; i < out.size(); ++i) {
+    const double gain = std::exp(-v.air_np_per_m_[i] * distance_m);
+    out[i] = factors ? factors[i] * gain : std::complex<double>(gain, 0.0);
+  }
+  return out.data();
 }
 
 void SoundEngine::setExtraDamping(Voice& v, double time_s, const std::array<double, 3>& world_point, double per_s) {

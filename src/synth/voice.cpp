@@ -100,6 +100,13 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
   pressure_ = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
   if (!pressure_) return;
   for (PathTransfer& p : path_transfer_) p.factor.assign(modes, std::complex<double>(1.0, 0.0));
+  if (settings.air_absorption) {
+    // Each mode a sinusoid at its undamped frequency; dB to nepers of amplitude: ln 10 / 20.
+    air_np_per_m_.assign(modes, 0.0);
+    for (size_t i = 0; i < modes; ++i)
+      air_np_per_m_[i] = airAttenuationDbPerM(bank.frequencyHz(i), settings.air) * (std::log(10.0) / 20.0);
+    for (std::vector<std::complex<double>>& f : air_factor_) f.assign(modes, 1.0);
+  }
   // The transfer of the modes this engine plays: a prefix, as the modes are ascending and the
   // band ends at synthesizedTopHz. A mode without one (above what its bank was solved for) is
   // heard at its direction-averaged level (radiationWeights), as every mode of a bank without a

@@ -58,6 +58,10 @@ class LibraryOutput final : public SoundOutput {
       case OutputFormat::Ambix2: output.format = STRIKE_OUTPUT_AMBIX2; break;
       case OutputFormat::Ambix3: output.format = STRIKE_OUTPUT_AMBIX3; break;
     }
+    output.air_absorption = engine.air_absorption ? 1 : 0;
+    output.air_temperature_c = engine.air.temperature_c;
+    output.air_relative_humidity_percent = engine.air.relative_humidity_percent;
+    output.air_pressure_kpa = engine.air.pressure_kpa;
     out->channels_ = outputChannels(engine.output);
     out->planar_.assign(static_cast<size_t>(out->channels_) * kRenderBlockFrames, 0.0f);
     if (strike_status s = strike_context_create_with_output(&c, &output, &out->ctx_); s != STRIKE_OK)

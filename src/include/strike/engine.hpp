@@ -41,6 +41,7 @@
 #include <memory>
 #include <vector>
 
+#include "strike/air_absorption.hpp"
 #include "strike/bank.hpp"
 #include "strike/contact_noise.hpp"
 #include "strike/listener.hpp"
@@ -113,6 +114,9 @@ struct EngineSettings {
   bool realtime = true;
   uint32_t max_pending_impacts_per_voice = 32;  ///< realtime reserve of pulses in flight per voice
   GroundReflection ground;                      ///< off unless enabled
+  /// Air absorption on every path of every mode (ISO 9613-1, air_absorption.hpp); off: none.
+  bool air_absorption = false;
+  AirConditions air;
 };
 
 /// What a voice is made of. The bank must outlive the voice (libstrike keeps it in a shared
@@ -294,6 +298,10 @@ class Voice {
     bool valid = false;
   };
   std::array<PathTransfer, 2> path_transfer_;
+  /// Air absorption (EngineSettings::air_absorption): per mode, nepers of amplitude per metre;
+  /// and per path, the factors with the air's gain in them (scratch).
+  std::vector<double> air_np_per_m_;
+  std::array<std::vector<std::complex<double>>, 2> air_factor_;
   std::vector<double> inv_rms_;                           ///< #modes: 1 / rms_d |F_i| (0 for a silent mode)
   bool clicks_ = false;                                   ///< acceleration noise (a free body with mass)
   std::array<std::array<double, 3>, 3> click_axis_{};     ///< principal axes of the dipole tensor, mesh frame
@@ -414,6 +422,7 @@ class SoundEngine {
   struct Arrival {
     double delay_s = 0.0;               ///< propagation delay
     double gain = 1.0;                  ///< relative to the voice's distance gain
+    double distance_m = 0.0;            ///< the path's length
     std::array<double, 3> direction{};  ///< toward the (image) listener, mesh frame, unit
   };
   int arrivals(const Voice& v, const std::array<double, 3>& world_point, Arrival out[2]) const;
@@ -431,6 +440,9 @@ class SoundEngine {
   void scheduleClick(Voice& v, int path, const Arrival& a, double time_s, double duration_s,
                      const std::array<double, 3>& impulse_local);
   void updateGains(Voice& v);
+  /// The path's factors times each mode's air absorption over distance_m (the voice's scratch),
+  /// or `factors` itself when the air absorbs nothing.
+  const std::complex<double>* throughAir(Voice& v, int path, const std::complex<double>* factors, double distance_m);
   /// Mixes `mono` (the voice's path signal) into out with gains ramped from cur to target.
   void mixPath(const float* mono, float* cur, const float* target, float* const* out, size_t frames) const;
   /// Where the ground's mirror image of `point` is, when the image path exists for it.

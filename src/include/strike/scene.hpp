@@ -4,6 +4,8 @@
 // the key path and the value.
 #pragma once
 
+#include "strike/air_absorption.hpp"
+
 #include <array>
 #include <cmath>
 #include <optional>
@@ -58,6 +60,9 @@ struct Scene {
   /// World from listener (w, x, y, z): the listener faces its +y with +x to its right and +z up
   /// (docs/listener.md). Identity: facing +y. From listener.orientation or listener.look_at.
   std::array<double, 4> listener_orientation_wxyz{1, 0, 0, 0};
+  /// Air absorption (ISO 9613-1) on every path, from "air": off unless the scene has it.
+  bool air_absorption = false;
+  AirConditions air;
   bool has_ground = true;
   Material ground_material;  ///< concrete unless given
   double ground_height_m = 0.0;

@@ -264,6 +264,12 @@ enum {
 typedef struct strike_output_desc {
   uint32_t struct_size; /**< sizeof(strike_output_desc); set by _default() */
   uint32_t format;      /**< a STRIKE_OUTPUT_* value; default STRIKE_OUTPUT_MONO */
+  /** Air absorption on every path of every mode, per ISO 9613-1 (docs/listener.md): 1 on, 0 off
+   *  (default). Read only when struct_size covers air_pressure_kpa. */
+  int32_t air_absorption;
+  double air_temperature_c;             /**< -50 .. 60; default 20 */
+  double air_relative_humidity_percent; /**< 0 .. 100; default 50 */
+  double air_pressure_kpa;              /**< 50 .. 200; default 101.325 */
 } strike_output_desc;
 
 /** Defaults (mono). [any-thread] */
@@ -275,7 +281,7 @@ STRIKE_API strike_output_desc STRIKE_CALL strike_output_desc_default(void);
  * directions and a reflecting ground, the ground's image is rendered as a signal of its own
  * (twice the oscillators of the objects it reaches) and arrives from below. Refusals as
  * strike_context_create(), and STRIKE_ERR_INVALID_ARG for a NULL output, a struct_size too small
- * for `format`, or an unknown format (logged). [main-thread]
+ * for `format`, an unknown format or air values out of range (logged). [main-thread]
  */
 STRIKE_API strike_status STRIKE_CALL strike_context_create_with_output(const strike_context_config* config,
                                                                        const strike_output_desc* output,

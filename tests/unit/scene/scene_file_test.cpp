@@ -189,5 +189,23 @@ TEST(SceneFile, ListenerOrientationIsAQuaternionOrAPointToLookAt) {
   for (const BadCase& c : cases) expectError(c);
 }
 
+TEST(SceneFile, AirIsOffUnlessAskedForAndChecked) {
+  const std::string obj = R"([{"mesh": "box:0.1,0.1,0.1", "material": "steel"}])";
+  Result<Scene> none = parseScene(R"({"objects": )" + obj + "}", "s.json");
+  ASSERT_TRUE(none) << none.error().message;
+  EXPECT_FALSE(none->air_absorption);
+  Result<Scene> standard = parseScene(R"({"air": true, "objects": )" + obj + "}", "s.json");
+  ASSERT_TRUE(standard) << standard.error().message;
+  EXPECT_TRUE(standard->air_absorption);
+  EXPECT_EQ(standard->air.relative_humidity_percent, 50.0);
+  Result<Scene> humid = parseScene(R"({"air": {"humidity": 80, "temperature": 5}, "objects": )" + obj + "}", "s.json");
+  ASSERT_TRUE(humid) << humid.error().message;
+  EXPECT_EQ(humid->air.relative_humidity_percent, 80.0);
+  EXPECT_EQ(humid->air.temperature_c, 5.0);
+  EXPECT_EQ(humid->air.pressure_kpa, 101.325);
+  expectError({R"({"air": {"humidity": 120}, "objects": )" + obj + "}", "air.humidity: must be 0 to 100"});
+  expectError({R"({"air": {"wind": 3}, "objects": )" + obj + "}", "air.wind: unknown key"});
+}
+
 }  // namespace
 }  // namespace strike

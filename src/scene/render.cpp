@@ -893,8 +893,12 @@ Status solveBanks(RenderRun& run, const BankPlan& plan, std::map<uint64_t, Cache
         Body& body = run.bodies[plan.to_solve[j]];
         PrecomputeSettings precompute = body.precompute;
         if (settings.progress) {
-          precompute.progress = progress;
-          progress("modes " + body.object->name, -1.0);
+          // Solves side by side interleave their phases: each names its object.
+          const std::string object = "modes " + body.object->name;
+          precompute.progress = [&progress, object](std::string_view phase, double fraction) {
+            progress(object + ": " + std::string(phase), fraction);
+          };
+          progress(object, -1.0);
         }
         computed[j] = computeModeBankForMesh(*body.mesh, precompute);
       });

@@ -9,17 +9,6 @@
 
 namespace strike::cli {
 
-namespace {
-
-// The steps of one object's solve (meshing, FEM, eigen-solve, transfer): a render names the
-// object first ("modes NAME"), and they are shown as its parts.
-bool isSolveStep(std::string_view phase) {
-  return phase == "tetrahedralize" || phase == "assemble" || phase == "factorize" || phase == "lanczos" ||
-         phase == "transfer";
-}
-
-}  // namespace
-
 ProgressReporter::ProgressReporter(std::string command, bool quiet, bool forced)
     : command_(std::move(command)),
       enabled_(!quiet && (forced || isatty(STDERR_FILENO) != 0)),
@@ -38,11 +27,7 @@ void ProgressReporter::update(std::string_view phase, double fraction) {
   if (phase != phase_) {
     phase_ = std::string(phase);
     phase_start_ = now;
-    if (phase_.rfind("modes ", 0) == 0)
-      object_ = phase_.substr(6);
-    else if (!isSolveStep(phase_))
-      object_.clear();
-    shown_ = !object_.empty() && isSolveStep(phase_) ? "modes " + object_ + ": " + phase_ : phase_;
+    shown_ = phase_;  // a render names each object's solve steps itself: "modes bowl: lanczos"
     say("interrupted during " + shown_ + "; nothing was written");
   }
   if (!enabled_) return;

@@ -32,9 +32,8 @@ class ProgressReporter {
   bool enabled_;
   bool terminal_;
   bool line_open_ = false;
-  std::string phase_;   ///< as the library named it
-  std::string object_;  ///< the render's object whose modes are being computed, if any
-  std::string shown_;   ///< the phase as shown: "modes bowl: lanczos"
+  std::string phase_;  ///< as the library named it ("modes bowl: lanczos" in a render)
+  std::string shown_;  ///< the phase as shown
   std::chrono::steady_clock::time_point phase_start_, last_print_;
 };
 

@@ -30,7 +30,6 @@
 #include "strike/element_order.hpp"
 #include "strike/materials.hpp"
 #include "strike/normalized_problem.hpp"
-#include "strike/modal.hpp"
 #include "strike/precompute.hpp"
 #include "strike/render_session.hpp"
 #include "strike/scene_checks.hpp"
@@ -880,19 +879,6 @@ std::map<uint64_t, CacheEntryLock> lockBanksToSolve(RenderRun& run, BankPlan& pl
 Status solveBanks(RenderRun& run, const BankPlan& plan, std::map<uint64_t, CacheEntryLock>& locks) {
   const RenderSettings& settings = run.settings;
   std::vector<std::optional<Result<PrecomputeResult>>> computed(plan.to_solve.size());
-  // A solve forecast to need more than half an 8 GB laptop is said before it starts: a table or
-  // plate at its automatic mesh size can need more than a small machine has (--max-memory refuses
-  // what does not fit at all; this says what would be slow to swap in).
-  constexpr double kLargeSolveBytes = 4e9;
-  for (size_t i : plan.to_solve) {
-    const Body& body = run.bodies[i];
-    const double bytes = solveForecastBytes(body);
-    if (bytes > kLargeSolveBytes)
-      run.warn("objects \"" + body.object->name + "\": its solve is forecast to need about " + memoryText(bytes) +
-               " (" + std::to_string(body.mesh ? 3 * body.mesh->mesh.nodes.rows() : 0) +
-               " degrees of freedom): a larger \"size\" (coarser mesh), fewer \"max_modes\" or a lower \"max_freq\" "
-               "need less; --max-memory refuses a solve that does not fit");
-  }
   std::mutex progress_lock;  // the caller's progress callback is called from one thread at a time
   auto progress = [&](std::string_view phase, double fraction) {
     std::lock_guard<std::mutex> hold(progress_lock);

@@ -14,7 +14,7 @@ parameter, the scene as rendered, the bank cache keys, the Strike version, the s
 - Re-runs skip every render whose ID.json is there with the same inputs (job_key); an edited
   line is rendered again.
 - One bank cache (--cache, default $STRIKE_CACHE_DIR or ~/.cache/strike), shared by every worker:
-  content-addressed, and a bank is solved once (a file lock per entry, src/scene/cache_lock.hpp).
+  content-addressed, and a bank is solved once (a file lock per entry, src/cache/cache_lock.hpp).
   On a cluster give a folder every worker sees.
 - Each worker process keeps one strike.Session for its life: the hulls and bank surfaces of the
   dataset's shapes are built once per worker, not once per render (the same bytes).

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 # The shared bank cache: renders that need the same missing bank at the same time solve it once
-# (src/scene/cache_lock.hpp), and the cache holds whole files only afterwards: one bank, and its body's hull.
+# (src/cache/cache_lock.hpp), and the cache holds whole files only afterwards: one bank, and its body's hull.
 import subprocess
 
 from conftest import run

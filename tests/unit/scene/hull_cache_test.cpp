@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The hull cache (src/scene/hull_cache.hpp): a hull file reads back to the bit, a damaged or
+// The hull cache (src/cache/hull_cache.hpp): a hull file reads back to the bit, a damaged or
 // foreign one is refused, and a render reads the hulls an earlier render cached (it does not
 // write them again) and gives the same samples with the cache cold, warm or damaged.
 #include "hull_cache.hpp"

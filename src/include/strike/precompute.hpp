@@ -18,9 +18,10 @@ namespace strike {
 struct PrecomputeSettings {
   std::string mesh_spec;  ///< file path or primitive ("box:0.3,0.02,0.02")
   Material material;
-  /// 1 Tet4, 2 Tet10, kAutoOrder (0, the default of every front-end): chosen from the shape by
-  /// chooseElementOrder (src/precompute/element_order.cpp).
-  int order = 0;
+  /// 1 Tet4, 2 Tet10, or kAutoOrder (0): chosen from the shape by chooseElementOrder
+  /// (src/precompute/element_order.cpp). Every front-end asks for kAutoOrder unless told an
+  /// order: `strike modes` without --order, a scene object without "order", Python's order=None.
+  int order = 1;
   double target_edge_m = 0;  ///< 0: automatic
   double mesh_scale = 1.0;   ///< metres per unit of a mesh file (MeshOptions::scale); primitives ignore it
   double max_freq_hz = 20000.0;

@@ -67,7 +67,7 @@ double numberAfter(const std::string& text, const std::string& prefix) {
 // by the transfer, golden and render tests. (NewcomerCompactBank keeps it: the one int16 bank
 // written with a transfer.)
 const char kDrop[] = R"({"duration": 0.3, "max_modes": 8,
-  "objects": [{"name": "bar", "mesh": "box:0.2,0.03,0.02", "material": "steel", "position": [0, 0, 0.05]}]})";
+  "objects": [{"name": "bar", "mesh": "box:0.2,0.03,0.02", "material": "steel", "order": 1, "position": [0, 0, 0.05]}]})";
 
 // ---- Item 9: outputs are checked before any work ----------------------------------------------
 

@@ -499,8 +499,9 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     next_mesh = std::move(finer->loaded);
   }
   if (settings.acoustic_transfer && !out.trials.empty()) {
-    if (Status solved =
-            solveTransferInto(out.chosen.bank, settings.transfer, settings.transfer_max_freq_hz, settings.progress);
+    TransferSettings transfer = settings.transfer;
+    if (options.max_seconds > 0) transfer.max_seconds = std::max(1e-3, options.max_seconds - secondsSince(start));
+    if (Status solved = solveTransferInto(out.chosen.bank, transfer, settings.transfer_max_freq_hz, settings.progress);
         !solved)
       return solved.error();
     out.chosen.bank.total_seconds += out.chosen.bank.transfer_seconds;

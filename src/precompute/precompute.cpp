@@ -269,8 +269,10 @@ Result<PrecomputeResult> computeModeBankForMesh(const LoadedMesh& loaded, const 
     // The acoustic transfer: a phase of its own, part of the bank's cost (total_seconds).
     if (Status fits = checkTransferMemory(bank, settings.transfer, settings.max_memory_bytes); !fits)
       return fits.error();
-    if (Status solved = solveTransferInto(bank, settings.transfer, settings.transfer_max_freq_hz, settings.progress);
-        !solved)
+    TransferSettings transfer = settings.transfer;
+    if (settings.max_seconds > 0)  // what is left of the budget (at least a token: still a budget)
+      transfer.max_seconds = std::max(1e-3, settings.max_seconds - loaded.meshing_seconds - secondsSince(start));
+    if (Status solved = solveTransferInto(bank, transfer, settings.transfer_max_freq_hz, settings.progress); !solved)
       return solved.error();
   }
   bank.total_seconds = loaded.meshing_seconds + secondsSince(start);

@@ -66,6 +66,22 @@ size_t chiefPointsFor(const Surface& s, const TransferSettings& settings, double
   return std::min(s.chief_candidates.size(), std::max<size_t>(8, elements / 10));
 }
 
+/// A solve measured, the basis of the time budget's forecasts.
+struct MeasuredSolve {
+  size_t elements = 0;  // 0: none yet
+  double k = 0.0, assembly_s = 0.0, factor_s = 0.0, far_field_s = 0.0;
+};
+
+/// The seconds of a solve of `elements` unknowns at wavenumber k, forecast from a measured one:
+/// the assembly grows as the unknowns (rows x pieces), the factorization as their cube (dense LU
+/// or QR) or square (GMRES's products), the far field as k^2 (its directions ~ order^2) and not
+/// with the unknowns.
+double forecastSolveSeconds(const MeasuredSolve& m, size_t elements, double k, size_t direct_max) {
+  const double n = static_cast<double>(elements) / static_cast<double>(std::max<size_t>(m.elements, 1));
+  const double kk = m.k > 0 ? std::max(1.0, (k / m.k) * (k / m.k)) : 1.0;
+  return m.assembly_s * n + m.factor_s * std::pow(n, elements > direct_max ? 2.0 : 3.0) + m.far_field_s * kk;
+}
+
 }  // namespace
 
 std::vector<size_t> transferGroups(const ModeBank& bank, const TransferSettings& settings) {
@@ -134,6 +150,25 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
   std::map<size_t, NearCache> near_caches;
   double near_caches_k = -1.0;
 
+  // The time budget (settings.max_seconds): the last solve measured, and the modes it left
+  // coarser than the target asked.
+  MeasuredSolve measured;
+  size_t modes_cut = 0;
+  auto budgetAllows = [&](size_t first_mode, size_t group_modes, size_t elements, double k, size_t instead) {
+    if (!(settings.max_seconds > 0) || measured.elements == 0) return true;
+    TransferBudgetStep step;
+    step.first_mode = first_mode;
+    step.modes = group_modes;
+    step.elements = elements;
+    step.instead_elements = instead;
+    step.elapsed_s = secondsSince(start);
+    step.forecast_s = forecastSolveSeconds(measured, elements, k, settings.direct_max_elements);
+    step.budget_s = settings.max_seconds;
+    step.made = step.elapsed_s + step.forecast_s <= settings.max_seconds;
+    if (settings.on_budget_step) settings.on_budget_step(step);
+    return step.made;
+  };
+
   std::vector<NodeData> data;
   std::vector<std::vector<cd>> coef;
   std::vector<double> energy, diff;
@@ -166,6 +201,13 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     // (not only the wavelength) sets the resolution, and the estimate sees it.
     size_t elements = elementsFor(s, settings, k);
     const size_t cap = settings.fixed_elements > 0 ? elements : std::min<size_t>(settings.max_elements, s.tris.size());
+    // A first solve forecast past the time budget is made with the fewest unknowns instead.
+    bool group_cut = false;
+    if (const size_t fewest = std::min<size_t>(settings.min_elements, s.tris.size());
+        elements > fewest && !budgetAllows(first, rhs, elements, k, fewest)) {
+      elements = fewest;
+      group_cut = true;
+    }
     const double k_rule = ruleWavenumber(k);
     if (k_rule != near_caches_k) {
       near_caches.clear();
@@ -198,6 +240,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
                         step_dcoef, parts);
       }
       far_field_seconds += secondsSince(far_start);
+      measured = {solved.elements, k, solved.assembly_seconds, solved.factor_seconds, secondsSince(far_start)};
       const bool last_step = elements >= cap;
       for (size_t r = 0; r < rhs; ++r) {
         if (done[r]) continue;
@@ -228,6 +271,10 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
         if (!done[r]) best = std::min(best, total[r] > 0 ? std::sqrt(diff[r] / total[r]) : 0.0);
       const double asked = static_cast<double>(elements) * best / settings.target_relative_error;
       elements = asked >= static_cast<double>(cap) ? cap : std::min(cap, elements * 5 / 2);
+      if (!budgetAllows(first, rhs, elements, k, 0)) {  // the modes not done keep this solve
+        group_cut = true;
+        break;
+      }
     }
     const double group_seconds = secondsSince(group_begin);
 
@@ -254,6 +301,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
             std::complex<float>(static_cast<float>(coef[r][i].real()), static_cast<float>(coef[r][i].imag())));
       out.offset.push_back(out.coefficients.size());
       out.relative_error.push_back(static_cast<float>(relative));
+      if (group_cut && relative > settings.target_relative_error) ++modes_cut;
       if (stats) {
         TransferModeStats& st = (*stats)[mode];
         st.ka = omega_mode / c_air * s.radius;
@@ -304,6 +352,11 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
                 "bem collocation, clustered constant elements (%u-%u), chief, target %.3g, %zu triangles",
                 settings.min_elements, settings.max_elements, settings.target_relative_error, s.tris.size());
   out.method = method;
+  if (modes_cut > 0) {  // said in the bank: its estimates are a time budget's, not the element budget's
+    std::snprintf(method, sizeof method, "; time budget %.3g s: %zu modes cut short of the target",
+                  settings.max_seconds, modes_cut);
+    out.method += method;
+  }
   return out;
 }
 

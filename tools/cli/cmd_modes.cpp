@@ -64,8 +64,10 @@ CommandSpec modesSpec() {
        "more; default: the memory available now (MemAvailable). With --transfer-max-elements\n"
        "the transfer's budget is lowered until its largest system fits in half of it"},
       {"--max-seconds", "S",
-       "with --tolerance: do not start a step forecast to end later than S seconds\n"
-       "after the start; default: no limit. A budget stop keeps the finest result and says so"},
+       "time budget: do not start a step (each --tolerance step, each refinement step of the\n"
+       "transfer) forecast to end later than S seconds after the start; default: no limit. A\n"
+       "budget stop keeps the finest result and says so (NOT met). The forecasts come from the\n"
+       "rates measured on this machine, so with a budget the bank depends on its speed"},
       {"--compact", "",
        "store the mode shapes as 16-bit integers with a scale per mode (bank format 4):\n"
        "half the shape bytes, each value within 1.54e-5 of its mode's largest amplitude"},
@@ -187,7 +189,9 @@ Result<Material> materialFromArgs(const ParsedArgs& args) {
   return material;
 }
 
-void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& result, const std::string& output) {
+/// `time_cuts`: the transfer's steps that the time budget (--max-seconds) did not make.
+void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& result, const std::string& output,
+                  size_t time_cuts) {
   const ModeBank& bank = result.bank;
   std::fprintf(stderr, "strike modes: %s, %s (E %.3g Pa, nu %.3g, rho %.4g kg/m^3)\n", settings.mesh_spec.c_str(),
                bank.material.name.c_str(), bank.material.youngs_pa, bank.material.poisson, bank.material.density_kg_m3);
@@ -225,12 +229,24 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
     std::fprintf(stderr, "  transfer    tolerance %.3g%% (%.0f dB: a mode's level within %+.2f/%+.2f dB) %s",
                  100.0 * target, 20.0 * std::log10(target), 20.0 * std::log10(std::max(1e-6, 1.0 - target)),
                  20.0 * std::log10(1.0 + target), over == 0 ? "met on every mode\n" : "NOT met: ");
-    if (over > 0)
+    if (over > 0 && time_cuts == 0)
       std::fprintf(stderr,
                    "%zu of %zu modes estimated worse (max %.0f dB, %+.1f dB); the element budget (%u unknowns) stops "
                    "them short (--transfer-max-elements; docs/acoustic-transfer.md)\n",
                    over, bank.transfer.modeCount(), 20.0 * std::log10(worst), 20.0 * std::log10(1.0 + worst),
                    settings.transfer.max_elements);
+    else if (over > 0)
+      std::fprintf(stderr,
+                   "%zu of %zu modes estimated worse (max %.0f dB, %+.1f dB); the time budget (--max-seconds) cut %zu "
+                   "of the transfer's steps (within the element budget, %u unknowns); this bank depends on the "
+                   "machine's speed\n",
+                   over, bank.transfer.modeCount(), 20.0 * std::log10(worst), 20.0 * std::log10(1.0 + worst), time_cuts,
+                   settings.transfer.max_elements);
+    if (over == 0 && time_cuts > 0)
+      std::fprintf(stderr,
+                   "              the time budget (--max-seconds) cut %zu of the transfer's steps, none past the "
+                   "tolerance\n",
+                   time_cuts);
     if (bank.transfer.modeCount() < bank.modeCount())
       std::fprintf(stderr,
                    "  heard       the transfer of the %zu modes up to %.0f Hz, what a render plays; the %zu above "
@@ -416,8 +432,14 @@ int runModes(const std::vector<std::string>& raw_args) {
     return reportError("modes", badInput("--max-tets = " + args.text("--max-tets") + " (must be >= 1)"));
   settings.max_tets = *max_tets;
 
-  if (args.has("--max-seconds") && !args.has("--tolerance"))
-    return reportError("modes", badInput("--max-seconds is a budget for --tolerance; give --tolerance too"));
+  Result<double> max_seconds = args.number("--max-seconds", 0.0);
+  if (!max_seconds) return reportError("modes", max_seconds.error());
+  if (args.has("--max-seconds") && !(*max_seconds > 0))
+    return reportError("modes", badInput("--max-seconds = " + args.text("--max-seconds") + " (must be > 0)"));
+  if (args.has("--max-seconds") && args.has("--similar"))
+    return reportError("modes", badInput("--max-seconds bounds a direct solve; --similar's transfer is the cached "
+                                         "unit transfer's, solved whole (give one or the other)"));
+  if (!args.has("--tolerance")) settings.max_seconds = *max_seconds;  // (--tolerance applies it itself)
   Result<double> max_memory = memoryBudgetFromArgs(args);
   if (!max_memory) return reportError("modes", max_memory.error());
   settings.max_memory_bytes = *max_memory;
@@ -432,6 +454,23 @@ int runModes(const std::vector<std::string>& raw_args) {
   const bool quiet = args.has("--quiet");
   ProgressReporter progress("modes", quiet, args.has("--progress"));
   settings.progress = progress.callback();
+  // Each decision of the transfer's time budget, with its forecast (the bank depends on them).
+  size_t time_cuts = 0;
+  settings.transfer.on_budget_step = [&time_cuts, quiet](const TransferBudgetStep& step) {
+    time_cuts += step.made ? 0 : 1;
+    if (quiet) return;
+    char instead[96] = "";
+    if (!step.made)
+      std::snprintf(instead, sizeof instead, ": not made, %s",
+                    step.instead_elements > 0
+                        ? ("solved with " + std::to_string(step.instead_elements) + " unknowns instead").c_str()
+                        : "the modes keep their last solve");
+    std::fprintf(stderr,
+                 "strike modes: transfer time budget: modes %zu-%zu, %zu unknowns, %.1f s spent + %.1f s "
+                 "forecast %s %g s%s\n",
+                 step.first_mode, step.first_mode + step.modes - 1, step.elements, step.elapsed_s, step.forecast_s,
+                 step.made ? "<=" : ">", step.budget_s, instead);
+  };
   if (!args.has("--similar") && (args.has("--cache") || args.has("--no-cache")))
     return reportError("modes", badInput("--cache and --no-cache go with --similar (a direct solve is not cached)"));
   const std::string cache_dir = args.has("--no-cache") ? "" : args.text("--cache", defaultCacheDir());
@@ -453,7 +492,7 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (!written) return reportError("modes", written.error());
   progress.written(output);
   if (!quiet) {
-    printSummary(settings, *result, output);
+    printSummary(settings, *result, output, time_cuts);
     if (!result->report.order_reason.empty())
       std::fprintf(stderr, "  order       %s (--order to override)\n", result->report.order_reason.c_str());
     if (args.has("--similar")) {

@@ -55,6 +55,10 @@ struct PrecomputeSettings {
   /// whose forecast is over the budget is refused with the forecast (bad input). Not part of the
   /// cache key: it changes whether a bank is computed, never its numbers.
   double max_memory_bytes = 0.0;
+  /// Time budget, seconds from the start of the precompute (`--max-seconds`); 0: none. The
+  /// acoustic transfer keeps within what is left of it (TransferSettings::max_seconds), so the
+  /// bank then depends on the machine's speed. Not part of the cache key.
+  double max_seconds = 0.0;
 };
 
 struct PrecomputeReport {

@@ -28,7 +28,9 @@
 // bits on one thread), as are the fine solve and the error estimate's coarse one.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "strike/acoustic_transfer.hpp"
@@ -38,6 +40,20 @@
 #include "strike/result.hpp"
 
 namespace strike {
+
+/// One decision of a time budget (TransferSettings::max_seconds): whether to make a solve of
+/// `elements` unknowns for the group of modes [first_mode, first_mode + modes), from its
+/// forecast (the rates measured on the solve before it, scaled to its unknowns).
+struct TransferBudgetStep {
+  size_t first_mode = 0, modes = 0;
+  size_t elements = 0;          ///< the unknowns of the solve forecast
+  size_t instead_elements = 0;  ///< when not made: the group's first solve is made with these; 0: a
+                                ///< refinement step, the group keeps the solve it has
+  double elapsed_s = 0.0;       ///< since the solve started
+  double forecast_s = 0.0;
+  double budget_s = 0.0;
+  bool made = false;
+};
 
 struct TransferSettings {
   double air_density_kg_m3 = kAirDensity_kg_m3;
@@ -63,6 +79,16 @@ struct TransferSettings {
   /// fixed halves, the second on a helper thread when the machine has two cores (as the
   /// eigen-solve's block stage). The bits do not depend on it.
   int threads = 2;
+  /// Time budget of the solve, seconds from its start (0: none; not part of a bank cache key).
+  /// Before each refinement step (and each group's first solve) the step's time is forecast from
+  /// the rates measured on the solve before it; a step forecast to end past the budget is not
+  /// made: the group keeps its coarser solve (a first solve drops to min_elements), with the
+  /// estimate of that solve. Each group gets at least one solve, and the rigid translation's
+  /// dipole is always solved. What is decided depends on the machine's speed: the bank does
+  /// too (docs/cli.md).
+  double max_seconds = 0.0;
+  /// Told each decision of the time budget (optional).
+  std::function<void(const TransferBudgetStep&)> on_budget_step;
 };
 
 /// The solver's revision, in the bank cache's key of banks with a transfer: raised whenever the

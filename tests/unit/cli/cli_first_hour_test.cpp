@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "run_cli.hpp"
+#include "strike/bank.hpp"
 
 namespace strike {
 namespace {
@@ -60,6 +61,48 @@ TEST(FirstHourMemory, ASolveForecastOverMaxMemoryIsRefusedWithItsForecastAndWrit
   const CliResult zero = runCli("modes box:0.05,0.03,0.02 --material steel --max-memory 0 -o " + dir + "/d.modes");
   EXPECT_EQ(zero.exit_code, 1);
   EXPECT_NE(zero.err.find("--max-memory = 0"), std::string::npos) << zero.err;
+}
+
+// --max-seconds bounds the transfer too: a budget the eigen-solve alone overruns leaves the
+// transfer its first solve of each group and no refinement, and the summary says NOT met and
+// why; the bank is whole and exits 0. A budget that never binds changes nothing in the transfer.
+TEST(FirstHourTime, ATransferOverMaxSecondsKeepsItsCoarserSolvesAndSaysSo) {
+  const std::string dir = folder("time");
+  // A steel block: three modes, each refined from its first solve when no budget stops it.
+  const std::string block = "modes box:0.12,0.04,0.03 --material steel --max-modes 12 --no-error-estimate ";
+  const CliResult cut = runCli(block + "--max-seconds 0.001 -o " + dir + "/cut.modes");
+  ASSERT_EQ(cut.exit_code, 0) << cut.err;
+  EXPECT_NE(cut.err.find("transfer time budget"), std::string::npos) << cut.err;
+  EXPECT_NE(cut.err.find("forecast >"), std::string::npos) << cut.err;
+  EXPECT_NE(cut.err.find("NOT met"), std::string::npos) << cut.err;
+  EXPECT_NE(cut.err.find("the time budget (--max-seconds) cut"), std::string::npos) << cut.err;
+  const CliResult unbounded = runCli(block + "-o " + dir + "/free.modes");
+  ASSERT_EQ(unbounded.exit_code, 0) << unbounded.err;
+  EXPECT_EQ(unbounded.err.find("time budget"), std::string::npos) << unbounded.err;
+  const CliResult loose = runCli(block + "--max-seconds 1e6 -o " + dir + "/loose.modes");
+  ASSERT_EQ(loose.exit_code, 0) << loose.err;
+  Result<ModeBank> a = readBank(dir + "/cut.modes"), b = readBank(dir + "/free.modes"),
+                   c = readBank(dir + "/loose.modes");
+  ASSERT_TRUE(a && b && c);
+  EXPECT_EQ(a->checkConsistency(), "");
+  ASSERT_EQ(a->transfer.modeCount(), b->transfer.modeCount());
+  ASSERT_GT(b->transfer.modeCount(), 0u);
+  EXPECT_NE(a->transfer.method.find("time budget"), std::string::npos) << a->transfer.method;
+  // Cut short: no estimate better than the unbounded solve's, at least one worse.
+  bool worse = false;
+  for (size_t i = 0; i < b->transfer.modeCount(); ++i) {
+    EXPECT_GE(a->transfer.relative_error[i], 0.999f * b->transfer.relative_error[i]) << i;
+    worse = worse || a->transfer.relative_error[i] > 1.001f * b->transfer.relative_error[i];
+  }
+  EXPECT_TRUE(worse);
+  // A budget that never binds: the same transfer, to the bit.
+  EXPECT_EQ(c->transfer.method, b->transfer.method);
+  EXPECT_EQ(c->transfer.order, b->transfer.order);
+  EXPECT_EQ(c->transfer.relative_error, b->transfer.relative_error);
+  EXPECT_TRUE(c->transfer.coefficients == b->transfer.coefficients);
+  const CliResult zero = runCli(block + "--max-seconds 0 -o " + dir + "/zero.modes");
+  EXPECT_EQ(zero.exit_code, 1);
+  EXPECT_NE(zero.err.find("--max-seconds = 0"), std::string::npos) << zero.err;
 }
 
 struct Interrupted {

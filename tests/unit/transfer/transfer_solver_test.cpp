@@ -14,6 +14,7 @@
 #include <ctime>
 #include <vector>
 
+#include "references/axisymmetric_dipole.hpp"
 #include "strike/mesh.hpp"
 #include "strike/similar_bank.hpp"
 #include "strike/transfer_solver.hpp"
@@ -371,44 +372,71 @@ TEST(TransferSolver, IsLinearInTheShapeSoSignsAndDegenerateBasesCancel) {
 }
 
 // A thin body: a disc 4 mm thick and 200 mm across, its two faces 4 mm apart (near-singular
-// integrals between them). Its broadside translation's added mass is the infinitely thin
-// disc's, 8/3 rho R^3 (Lamb, Hydrodynamics, sec. 108), plus a little for the thickness; at low
-// ka the mode path's far field must be the same dipole, and at ka ~ 3 it must stay finite with a
-// sane estimate.
-TEST(TransferSolver, ThinDiscHasTheDiscsAddedMassAndAFiniteFarField) {
+// integrals between them). Its broadside translation's dipole M_zz = V + (added mass) / rho is
+// 8/3 R^3 for the infinitely thin disc (Lamb, Hydrodynamics, sec. 108); at H/R = 0.04 the rim adds
+// 5.4% of that beyond the volume's 4.7%: 1.1005 x 8/3 R^3 (the disc's value is not the thin
+// disc's plus its volume, 1.047 x, which read as +3.6% here before). The reference is an
+// axisymmetric solve on the generating curve, graded to the rim (references/axisymmetric_dipole.hpp),
+// checked here against Lamb's closed forms: the sphere, 2 pi a^3, and an oblate spheroid as thin
+// as the disc (c/a = 0.02: 1.0255 x 8/3 R^3). The transfer must give that dipole both from its
+// rigid translation and from a mode's far field at low ka, on the disc's mesh at two sizes; at
+// ka ~ 3 it must stay finite with a sane estimate.
+TEST(TransferSolver, ThinDiscRadiatesTheDipoleOfItsAddedMass) {
   const double R = 0.1, H = 0.004, c_air = 343.0, rho = 1.2;
-  Result<SurfaceMesh> disc = makeCylinderSurface(R, H, 0.008);
-  ASSERT_TRUE(disc) << disc.error().message;
-  ModeBank bank = surfaceBank(*disc);
-  const double ks[] = {0.05 / R, 3.0 / R};
-  for (double k : ks) {
-    bank.eigenvalues.push_back(k * k * c_air * c_air);
-    for (size_t v = 0; v < bank.surfaceVertexCount(); ++v)
-      for (int c = 0; c < 3; ++c) bank.shapes.push_back(c == 2 ? 1.0f : 0.0f);  // rigid, along z
-  }
-  TransferSettings settings;
-  settings.air_density_kg_m3 = rho;
-  settings.speed_of_sound_m_s = c_air;
-  std::vector<TransferModeStats> stats;
-  Result<AcousticTransfer> t = solveAcousticTransfer(bank, settings, {}, &stats);
-  ASSERT_TRUE(t) << t.error().message;
-  const double thin = 8.0 / 3.0 * R * R * R + M_PI * R * R * H;
-  const double Mzz = t->translation_dipole_m3[8];
-  std::printf("disc of %zu triangles: M_zz %.6g m^3, thin-disc closed form %.6g (%+.2f%%); M_xx %.4g\n",
-              bank.surface_triangles.size() / 3, Mzz, thin, 100 * (Mzz / thin - 1), t->translation_dipole_m3[0]);
-  EXPECT_GT(Mzz, 0.99 * thin);
-  EXPECT_LT(Mzz, 1.08 * thin);                        // thickness adds a few percent
-  EXPECT_LT(t->translation_dipole_m3[0], 0.2 * Mzz);  // edgewise: little more than the volume
-  // Low ka: c_10 = -(i k rho / 4 pi) M_zz sqrt(4 pi / 3) (d_z = sqrt(4 pi / 3) Y_10).
-  const cd expected = cd(0, -ks[0] * rho / (4 * M_PI)) * Mzz * std::sqrt(4 * M_PI / 3);
-  ASSERT_GE(t->order[0], 1u);
-  const cd c10(t->coefficients[t->offset[0] + 2].real(), t->coefficients[t->offset[0] + 2].imag());
-  EXPECT_LT(std::abs(c10 - expected), 0.02 * std::abs(expected)) << c10 << " vs " << expected;
-  for (size_t i = 0; i < 2; ++i) {
-    std::printf("  ka %.2f: %u elements, order %u, rms %.4g Pa m, estimate %.4f, %.3f s\n", stats[i].ka,
-                stats[i].elements, stats[i].order, t->rmsFarField(i), stats[i].relative_error, stats[i].seconds);
-    EXPECT_TRUE(std::isfinite(t->rmsFarField(i)));
-    EXPECT_LT(stats[i].relative_error, 0.1);
+  const double thin = 8.0 / 3.0 * R * R * R;
+  // The reference against the closed forms (converging as h^2: errors 4x smaller at twice the segments).
+  const double sphere = test::axialDipole(test::spheroidCurve(R, R, 40)) / (2 * M_PI * R * R * R) - 1;
+  const double flat =
+      test::axialDipole(test::spheroidCurve(R, 0.02 * R, 80)) / test::oblateSpheroidAxialDipole(R, 0.02 * R) - 1;
+  EXPECT_LT(std::abs(sphere), 2e-3);
+  EXPECT_LT(std::abs(flat), 1e-2);
+  EXPECT_NEAR(test::oblateSpheroidAxialDipole(R, 0.02 * R) / thin, 1.0255, 1e-4);  // Lamb's limit, 8/3 R^3
+  // The disc: two gradings, extrapolated (h^2).
+  const double coarse = test::axialDipole(test::cylinderCurve(R, H, 30, 4));
+  const double fine = test::axialDipole(test::cylinderCurve(R, H, 60, 8));
+  const double reference = fine + (fine - coarse) / 3.0;
+  std::printf("reference: sphere %+.3f%%, oblate c/a 0.02 %+.3f%%; disc M_zz %.5f x 8/3 R^3 (%.5f, %.5f)\n",
+              100 * sphere, 100 * flat, reference / thin, coarse / thin, fine / thin);
+  EXPECT_LT(std::abs(fine / reference - 1), 3e-3);
+  for (double edge : {0.016, 0.008}) {
+    Result<SurfaceMesh> disc = makeCylinderSurface(R, H, edge);
+    ASSERT_TRUE(disc) << disc.error().message;
+    ModeBank bank = surfaceBank(*disc);
+    const double ks[] = {0.05 / R, 3.0 / R};
+    for (double k : ks) {
+      bank.eigenvalues.push_back(k * k * c_air * c_air);
+      for (size_t v = 0; v < bank.surfaceVertexCount(); ++v)
+        for (int c = 0; c < 3; ++c) bank.shapes.push_back(c == 2 ? 1.0f : 0.0f);  // rigid, along z
+    }
+    TransferSettings settings;
+    settings.air_density_kg_m3 = rho;
+    settings.speed_of_sound_m_s = c_air;
+    std::vector<TransferModeStats> stats;
+    Result<AcousticTransfer> t = solveAcousticTransfer(bank, settings, {}, &stats);
+    ASSERT_TRUE(t) << t.error().message;
+    const double Mzz = t->translation_dipole_m3[8];
+    // Low ka: c_10 = -(i k rho / 4 pi) M_zz sqrt(4 pi / 3) (d_z = sqrt(4 pi / 3) Y_10).
+    ASSERT_GE(t->order[0], 1u);
+    const cd c10(t->coefficients[t->offset[0] + 2].real(), t->coefficients[t->offset[0] + 2].imag());
+    const cd per_m3 = cd(0, -ks[0] * rho / (4 * M_PI)) * std::sqrt(4 * M_PI / 3);
+    const double far_field_dipole = std::abs(c10 / per_m3);
+    std::printf(
+        "disc of %zu triangles (edge %g m): M_zz %+.2f%%, from the far field %+.2f%% (phase %.2f deg); M_xx %.3g\n",
+        bank.surface_triangles.size() / 3, edge, 100 * (Mzz / reference - 1), 100 * (far_field_dipole / reference - 1),
+        std::arg(c10 / per_m3) * 180 / M_PI, t->translation_dipole_m3[0] / Mzz);
+    EXPECT_LT(std::abs(Mzz / reference - 1), 0.02) << edge;
+    EXPECT_LT(std::abs(far_field_dipole / reference - 1), 0.02) << edge;
+    EXPECT_LT(std::abs(std::arg(c10 / per_m3)), 0.01) << edge;
+    EXPECT_LT(t->translation_dipole_m3[0], 0.2 * Mzz);  // edgewise: little more than the volume
+    for (size_t i = 0; i < 2; ++i) {
+      std::printf("  ka %.2f: %u elements, order %u, rms %.4g Pa m, estimate %.4f, %.3f s\n", stats[i].ka,
+                  stats[i].elements, stats[i].order, t->rmsFarField(i), stats[i].relative_error, stats[i].seconds);
+      EXPECT_TRUE(std::isfinite(t->rmsFarField(i)));
+      // (On the coarse mesh every triangle is an unknown at ka 3 and the estimate reads 13%.)
+      if (edge < 0.01) {
+        EXPECT_LT(stats[i].relative_error, 0.1);
+      }
+    }
   }
 }
 

@@ -371,6 +371,86 @@ TEST(TransferSolver, IsLinearInTheShapeSoSignsAndDegenerateBasesCancel) {
   EXPECT_LT(worst, 3e-4 * scale);  // -70 dB: float storage and the order's -80 dB tail
 }
 
+// The tolerance converges: at --transfer-tolerance 10%, 5% and 2% the solve takes more unknowns,
+// and both its estimate and its true error fall at the order the method promises. Constant
+// elements on clusters of size h: far-field error ~ h^2 ~ 1 / unknowns, and the unknowns chosen
+// ~ 1 / target (elements per wavelength ~ 1 / sqrt(target)), so error ~ target. The true error
+// is taken against a solve of the same surface with every triangle an unknown (the surface's own
+// faceting is common to both; against the exact sphere it is a floor of ~1-1.5% that flattens
+// the order), and the order in unknowns is held within 0.6-1.6 per step. The solver's floor of
+// unknowns is lowered to 16 so that the tolerance alone chooses them (at 160, 10% and 5% would
+// both be met by the first solve).
+TEST(TransferSolver, TheToleranceConvergesAtTheOrderOfConstantElements) {
+  const double a = 0.1, c_air = 343.0, rho = 1.2;
+  ModeBank bank = sphereBank(a, 0.014);
+  struct Case {
+    int n, m;
+    double ka;
+  };
+  const Case cases[] = {{2, 1, 1.5}, {2, -2, 2.5}};
+  for (const Case& c : cases) addYnmMode(bank, c.n, c.m, c.ka / a, c_air);
+  const uint32_t triangles = static_cast<uint32_t>(bank.surface_triangles.size() / 3);
+  TransferSettings settings;
+  settings.air_density_kg_m3 = rho;
+  settings.speed_of_sound_m_s = c_air;
+  settings.min_elements = 16;
+  settings.max_elements = triangles;
+  settings.direct_max_elements = triangles;
+  TransferSettings every = settings;
+  every.fixed_elements = triangles;
+  Result<AcousticTransfer> reference = solveAcousticTransfer(bank, every);
+  ASSERT_TRUE(reference) << reference.error().message;
+  auto distance = [&](const AcousticTransfer& t, size_t mode) {
+    const AcousticTransfer& r = *reference;
+    double wrong = 0.0, total = 0.0;
+    const uint64_t na = t.offset[mode + 1] - t.offset[mode], nb = r.offset[mode + 1] - r.offset[mode];
+    for (uint64_t j = 0; j < std::max(na, nb); ++j) {
+      const cd x = j < na ? cd(t.coefficients[t.offset[mode] + j]) : cd(0.0);
+      const cd y = j < nb ? cd(r.coefficients[r.offset[mode] + j]) : cd(0.0);
+      wrong += std::norm(x - y);
+      total += std::norm(y);
+    }
+    return std::sqrt(wrong / total);
+  };
+  std::vector<std::vector<double>> estimate(2), truth(2), unknowns(2);
+  for (double target : {0.10, 0.05, 0.02}) {
+    settings.target_relative_error = target;
+    std::vector<TransferModeStats> stats;
+    Result<AcousticTransfer> t = solveAcousticTransfer(bank, settings, {}, &stats);
+    ASSERT_TRUE(t) << t.error().message;
+    for (size_t i = 0; i < 2; ++i) {
+      const SphereError exact = compare(*t, i, cases[i].n, cases[i].m, cases[i].ka / a, a, rho);
+      std::printf("target %4.0f%%: n %d ka %.1f: %4u unknowns, estimate %6.2f%%, error %6.2f%% (exact %.2f%%)\n",
+                  100 * target, cases[i].n, cases[i].ka, stats[i].elements, 100 * stats[i].relative_error,
+                  100 * distance(*t, i), 100 * exact.relative);
+      EXPECT_LE(stats[i].relative_error, target) << "met at every tolerance";
+      estimate[i].push_back(stats[i].relative_error);
+      truth[i].push_back(distance(*t, i));
+      unknowns[i].push_back(stats[i].elements);
+    }
+  }
+  for (size_t i = 0; i < 2; ++i)
+    for (size_t step = 1; step < 3; ++step) {
+      EXPECT_GT(unknowns[i][step], unknowns[i][step - 1]) << i << " " << step;
+      EXPECT_LT(estimate[i][step], estimate[i][step - 1]) << i << " " << step;
+      EXPECT_LT(truth[i][step], truth[i][step - 1]) << i << " " << step;
+      const double more = std::log(unknowns[i][step] / unknowns[i][step - 1]);
+      const double order_estimate = -std::log(estimate[i][step] / estimate[i][step - 1]) / more;
+      const double order_truth = -std::log(truth[i][step] / truth[i][step - 1]) / more;
+      std::printf("mode %zu, step %zu: order in unknowns %.2f (estimate), %.2f (error)\n", i, step, order_estimate,
+                  order_truth);
+      EXPECT_GT(order_truth, 0.6) << i << " " << step;
+      EXPECT_LT(order_truth, 1.6) << i << " " << step;
+      // The estimate (a difference with the solve of half the unknowns) follows the same order
+      // from the solver's floor of 160 unknowns on; below it, on a pattern resolved by a few
+      // dozen clusters, it under-reads (40 unknowns: 4.3% against a true 6.8%).
+      if (unknowns[i][step - 1] >= TransferSettings{}.min_elements) {
+        EXPECT_GT(order_estimate, 0.6) << i << " " << step;
+        EXPECT_LT(order_estimate, 1.6) << i << " " << step;
+      }
+    }
+}
+
 // A thin body: a disc 4 mm thick and 200 mm across, its two faces 4 mm apart (near-singular
 // integrals between them). Its broadside translation's dipole M_zz = V + (added mass) / rho is
 // 8/3 R^3 for the infinitely thin disc (Lamb, Hydrodynamics, sec. 108); at H/R = 0.04 the rim adds

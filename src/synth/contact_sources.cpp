@@ -126,7 +126,6 @@ void SoundEngine::continuousEndStep(Voice& v, bool load_change_follows) {
     const double per_n = 1.0 / (n * dt);
     for (double& g : s.modal) g *= per_n;
     ForceWeightsDesc w;
-    w.object = 0;
     w.channel = ch;
     w.time_s = t;  // with the generator's state: both carry the source's delay
     w.modal_weight = s.modal.data();

@@ -77,7 +77,8 @@ namespace {
 double sinAngleBetween(const std::array<double, 3>& a, const std::array<double, 3>& b) {
   const double cross[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
   const double dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-  const double lengths = std::sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) * (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
+  const double lengths =
+      std::sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) * (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
   if (!(dot > 0.0) || !(lengths > 0.0)) return 1.0;
   return std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]) / lengths;
 }
@@ -145,7 +146,6 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
   for (int k = 0; k < count; ++k) transfer[k] = throughAir(v, k, transfer[k], paths[k].distance_m);
   for (int k = 0; k < count; ++k) {
     ImpactDesc impact;
-    impact.object = 0;
     impact.time_s = time_s + paths[k].delay_s;
     impact.duration_s = duration_s;
     impact.shape = shape;
@@ -157,8 +157,7 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
       switch (r) {
         case ImpactResult::Scheduled: ++stats_.impacts; break;
         case ImpactResult::Inaudible: ++stats_.impacts_inaudible; break;
-        case ImpactResult::NoCapacity:
-        case ImpactResult::BadObject: ++stats_.impacts_dropped; break;
+        case ImpactResult::NoCapacity: ++stats_.impacts_dropped; break;
       }
     }
     if (v.clicks_ && shape == PulseShape::HalfSine) scheduleClick(v, k, paths[k], time_s, duration_s, impulse_local);
@@ -174,7 +173,6 @@ void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double
   for (int k = 0; k < count; ++k) transfer[k] = throughAir(v, k, transfer[k], paths[k].distance_m);
   for (int k = 0; k < count; ++k) {
     ForceStepDesc step;
-    step.object = 0;
     step.time_s = time_s + paths[k].delay_s;
     step.ramp_s = ramp_s;
     step.modal_force_change = modal_change;
@@ -204,7 +202,6 @@ void SoundEngine::scheduleClick(Voice& v, int path, const Arrival& a, double tim
     v.click_transfer_[j] = v.click_gain_[j] * (k_air * v.click_moment_m3_[j] * toward * a.gain);
   }
   ImpactDesc click;
-  click.object = 0;
   click.time_s = time_s + a.delay_s;
   click.duration_s = duration_s;
   click.shape = PulseShape::HalfSine;
@@ -231,16 +228,16 @@ const std::complex<double>* SoundEngine::throughAir(Voice& v, int path, const st
 void SoundEngine::setExtraDamping(Voice& v, double time_s, const std::array<double, 3>& world_point, double per_s) {
   const double at_s = time_s + delayTo(world_point);
   if (settings_.realtime)
-    (void)v.synth_.setExtraDampingNoAlloc(0, at_s, per_s);
+    (void)v.synth_.setExtraDampingNoAlloc(at_s, per_s);
   else
-    v.synth_.setExtraDamping(0, at_s, per_s);
+    v.synth_.setExtraDamping(at_s, per_s);
   if (!v.image_) return;  // the image rings in synth_ too
   // The image's modes change with the direct sound's, as they do when both ring in synth_: the
   // omni channel of an output with directions is then the mono render.
   if (settings_.realtime)
-    (void)v.image_->synth.setExtraDampingNoAlloc(0, at_s, per_s);
+    (void)v.image_->synth.setExtraDampingNoAlloc(at_s, per_s);
   else
-    v.image_->synth.setExtraDamping(0, at_s, per_s);
+    v.image_->synth.setExtraDamping(at_s, per_s);
 }
 
 }  // namespace strike

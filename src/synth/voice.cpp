@@ -92,6 +92,16 @@ void symmetricEigen3(std::array<double, 9> a, std::array<double, 3>& values,
   }
 }
 
+// The bank's modes as the oscillators play them, with the voice's output weights.
+ModalObjectDesc modalObject(const ModeBank& bank, const std::vector<double>& weights) {
+  ModalObjectDesc modal;
+  modal.eigenvalues = bank.eigenvalues;
+  modal.rayleigh_stiffness = bank.material.rayleigh_stiffness;
+  modal.rayleigh_mass = bank.material.rayleigh_mass;
+  modal.radiation_weight = weights;
+  return modal;
+}
+
 }  // namespace
 
 void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings) {
@@ -160,29 +170,24 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
     const std::complex<double> pole(-omega0 / M_SQRT2, omega0 / M_SQRT2);
     click_gain_[j] = omega0 > 0.0 ? omega0 * omega0 / pole : 0.0;
   }
-  click_synth_.addObject(click);
-  if (image_) image_->click_synth.addObject(click);
+  click_synth_ = OscillatorBank(settings.synth, click);
+  if (image_) image_->click_synth = OscillatorBank(settings.synth, click);
   click_mono_.assign(std::max<uint32_t>(settings.max_block_frames, 1), 0.0f);
   clicks_ = true;
 }
 
 Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
-    : bank_(desc.bank), synth_(settings.synth), click_synth_(settings.synth), projector_(*desc.bank, desc.locator) {
+    : bank_(desc.bank),
+      synth_(settings.synth, modalObject(*desc.bank, desc.weights)),
+      click_synth_(settings.synth, ModalObjectDesc{}),
+      projector_(*desc.bank, desc.locator) {
   const ModeBank& bank = *bank_;
   if (desc.use_rows) projector_.useRows(desc.rows);
   if (desc.locator.get() == &projector_.locator()) projector_.useLocated(desc.located);  // found by it
-  ModalObjectDesc modal;
-  modal.eigenvalues = bank.eigenvalues;
-  modal.rayleigh_stiffness = bank.material.rayleigh_stiffness;
-  modal.rayleigh_mass = bank.material.rayleigh_mass;
-  modal.radiation_weight = desc.weights;
-  synth_.addObject(modal);
   // An output with directions hears the ground's image from below: a signal of its own.
   const bool pressure = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
-  if (outputHasDirections(settings.output) && settings.ground.enabled && pressure) {
-    image_ = std::make_unique<ImagePath>(settings.synth);
-    image_->synth.addObject(modal);
-  }
+  if (outputHasDirections(settings.output) && settings.ground.enabled && pressure)
+    image_ = std::make_unique<ImagePath>(settings.synth, modalObject(bank, desc.weights));
   const SynthStats bands = synth_.stats();
   rings_ = bands.modes_total > bands.modes_out_of_band;
   const size_t modes = bank.modeCount();
@@ -203,7 +208,7 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
   // Continuous contacts (contact_sources.cpp): a force channel per possible partner.
   roughness_ = desc.roughness;
   restitution_ = desc.restitution;
-  synth_.reserveForceInput(0);
+  synth_.reserveForceInput();
   for (Source& s : sources_) s.modal.assign(modes, 0.0);
   force_.assign(static_cast<size_t>(kForceChannels) * std::max<uint32_t>(settings.max_block_frames, 1), 0.0f);
   setUpRadiation(desc, settings);

@@ -480,8 +480,7 @@ TEST(OscillatorBankRealtime, NoAllocImpactsMatchAddImpact) {
   desc.eigenvalues = bank.eigenvalues;
   desc.rayleigh_stiffness = bank.material.rayleigh_stiffness;
   desc.rayleigh_mass = bank.material.rayleigh_mass;
-  strike::OscillatorBank b{strike::SynthSettings{}};
-  b.addObject(desc);
+  strike::OscillatorBank b{strike::SynthSettings{}, desc};
   b.reserveImpacts(4, 0.001);
   const double impulse[3] = {0, 0, 1e-2};
   std::vector<double> g(bank.modeCount());
@@ -490,18 +489,16 @@ TEST(OscillatorBankRealtime, NoAllocImpactsMatchAddImpact) {
   std::vector<float> oa(4096), ob(4096);
   // Four reserved records: the fifth pending impact is refused instead of growing the pool.
   for (int k = 0; k < 5; ++k) {
-    const strike::ImpactDesc d{0, 0.002 * k + 1e-5, 2e-4, g.data(), strike::PulseShape::HalfSine};
+    const strike::ImpactDesc d{0.002 * k + 1e-5, 2e-4, g.data(), strike::PulseShape::HalfSine};
     EXPECT_EQ(b.addImpactNoAlloc(d), k < 4 ? strike::ImpactResult::Scheduled : strike::ImpactResult::NoCapacity) << k;
   }
   // Too long a pulse for the reserve is refused, not grown.
-  const strike::ImpactDesc long_pulse{0, 0.0, 0.01, g.data(), strike::PulseShape::HalfSine};
+  const strike::ImpactDesc long_pulse{0.0, 0.01, g.data(), strike::PulseShape::HalfSine};
   EXPECT_EQ(b.addImpactNoAlloc(long_pulse), strike::ImpactResult::NoCapacity);
-  strike::OscillatorBank c{strike::SynthSettings{}}, d2{strike::SynthSettings{}};
-  c.addObject(desc);
-  d2.addObject(desc);
+  strike::OscillatorBank c{strike::SynthSettings{}, desc}, d2{strike::SynthSettings{}, desc};
   d2.reserveImpacts(8, 0.001);
   for (int k = 0; k < 6; ++k) {
-    const strike::ImpactDesc d{0, 0.002 * k + 1e-5, 2e-4, g.data(), strike::PulseShape::HalfSine};
+    const strike::ImpactDesc d{0.002 * k + 1e-5, 2e-4, g.data(), strike::PulseShape::HalfSine};
     c.addImpact(d);
     ASSERT_EQ(d2.addImpactNoAlloc(d), strike::ImpactResult::Scheduled);
   }

@@ -322,7 +322,7 @@ class Voice {
   /// arrives from below), with its own oscillators, clicks and gains; null otherwise, when the
   /// image is mixed into synth_ with the direct sound.
   struct ImagePath {
-    explicit ImagePath(const SynthSettings& s) : synth(s), click_synth(s) {}
+    ImagePath(const SynthSettings& s, const ModalObjectDesc& modes) : synth(s, modes), click_synth(s, {}) {}
     OscillatorBank synth;
     OscillatorBank click_synth;
     float cur_gain[kMaxOutputChannels] = {}, target_gain[kMaxOutputChannels] = {};

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
-// The oscillator bank: modes of struck objects advanced exactly, sample by sample, and summed.
-// Target strike_synth: C++ standard library only (SIMD intrinsics allowed); no allocation in
-// render() once objects and capacity are set up.
+// The oscillator bank: the modes of one struck object advanced exactly, sample by sample, and
+// summed. Target strike_synth: C++ standard library only (SIMD intrinsics allowed); no allocation
+// in render() once its capacity is set up.
 //
 // Each mode i of an object obeys  q'' + c q' + lambda q = g_i f(t)  (mass-normalized modal
 // coordinate q, c = a1 lambda + a2, f a unit-area force pulse, g_i = phi_i(p) . J the modal
@@ -80,7 +80,6 @@ enum class PulseShape {
 /// One contact: a force pulse of `duration_s` (0 = ideal impulse) starting at `time_s`, of total
 /// impulse 1 N s, scaled per mode by modal_impulse[i] = phi_i(p) . J.
 struct ImpactDesc {
-  uint32_t object = 0;
   double time_s = 0.0;
   double duration_s = 0.0;
   const double* modal_impulse = nullptr;  ///< one per mode of the object (N s / sqrt(kg))
@@ -103,7 +102,6 @@ struct ImpactDesc {
 /// A constant force makes no sound once its onset has rung out, so a body resting for seconds
 /// costs its one or two changes, not a pulse per physics step.
 struct ForceStepDesc {
-  uint32_t object = 0;
   double time_s = 0.0;
   double ramp_s = 0.0;  ///< 0: a sharp step
   /// One per mode of the object: phi_i(p) . dF summed over the contact points, N / sqrt(kg).
@@ -118,7 +116,6 @@ constexpr uint32_t kForceChannels = 4;
 
 /// A channel's modal weights from a time on (OscillatorBank::setForceWeights).
 struct ForceWeightsDesc {
-  uint32_t object = 0;
   uint32_t channel = 0;  ///< < kForceChannels
   double time_s = 0.0;   ///< from the first 128-sample block boundary at or after it (plus the delay)
   /// One per mode of the object: g_i = phi_i(p) . d, the modal force per newton of the channel's
@@ -135,7 +132,6 @@ enum class ImpactResult {
   Scheduled,   ///< will sound
   Inaudible,   ///< changed no mode above the audibility threshold; nothing scheduled
   NoCapacity,  ///< dropped: no free reserved record, or the pulse is longer than reserved
-  BadObject,   ///< no such object
 };
 
 struct SynthStats {
@@ -154,22 +150,20 @@ struct SynthStats {
 
 class OscillatorBank {
  public:
-  explicit OscillatorBank(const SynthSettings& settings);
+  /// The object's modes (a ModalObjectDesc with none: a bank that stays silent). Not real-time
+  /// safe: allocates capacity for all of its modes being active at once, so render() never has to.
+  OscillatorBank(const SynthSettings& settings, const ModalObjectDesc& object);
   ~OscillatorBank();
   OscillatorBank(OscillatorBank&&) noexcept;
   OscillatorBank& operator=(OscillatorBank&&) noexcept;
 
-  /// Adds an object's modes; returns its id (0, 1, ...). Not real-time safe (allocates capacity
-  /// for all of its modes being active at once, so render() never has to).
-  uint32_t addObject(const ModalObjectDesc& object);
   /// Schedules an impact. Impacts may be added in any order, but not before the current render
   /// time (late ones start at the current sample). Copies modal_impulse. Not real-time safe: it
-  /// integrates the pulse for every mode of the object (O(modes x pulse samples)) and allocates.
+  /// integrates the pulse for every mode (O(modes x pulse samples)) and allocates.
   /// Contributions below audibility_threshold are dropped (the mode is not woken).
   ImpactResult addImpact(const ImpactDesc& impact);
   /// Preallocates records for max_pending impacts that are scheduled but not yet fully injected,
-  /// each able to hold an impact on the largest object (also for objects added later) with a
-  /// pulse of up to max_pulse_s. Not real-time safe.
+  /// each able to hold an impact on every mode with a pulse of up to max_pulse_s. Not real-time safe.
   void reserveImpacts(size_t max_pending, double max_pulse_s);
   /// addImpact() without allocation, locks or exceptions: real-time safe [audio-thread], on the
   /// thread that calls render(). Returns NoCapacity instead of growing the reserve.
@@ -183,7 +177,7 @@ class OscillatorBank {
   /// at no cost. [audio-thread]
   void skip(float* out, size_t frames);
   /// Silences every mode, drops pending impacts and contact damping, and restarts the clock at
-  /// 0 (objects and reserves stay). Real-time safe.
+  /// 0 (the modes and reserves stay). Real-time safe.
   void reset();
   /// True when no mode is ringing and no impact is pending: render() would output zeros.
   bool idle() const;
@@ -200,10 +194,10 @@ class OscillatorBank {
   /// 0 restores the material's damping). Applied exactly at the first 128-sample block boundary
   /// at or after time_s (plus the object's delay): the pole moves left, the state carries on.
   /// Models energy an object loses into what it rests on (contact damping). Not real-time safe.
-  void setExtraDamping(uint32_t object, double time_s, double extra_decay_per_s);
+  void setExtraDamping(double time_s, double extra_decay_per_s);
   /// setExtraDamping() without allocation [audio-thread]: false (nothing scheduled) when the
   /// object already has 64 changes pending.
-  bool setExtraDampingNoAlloc(uint32_t object, double time_s, double extra_decay_per_s);
+  bool setExtraDampingNoAlloc(double time_s, double extra_decay_per_s);
   /// Schedules a change of sustained force (ForceStepDesc). Not real-time safe (may grow the
   /// impact records); Inaudible when no mode's ringing from it reaches the audibility threshold.
   ImpactResult addForceStep(const ForceStepDesc& step);
@@ -212,11 +206,11 @@ class OscillatorBank {
   ImpactResult addForceStepNoAlloc(const ForceStepDesc& step);
   /// Prepares the object for continuous force input (setForceWeights, render with force). Not
   /// real-time safe (allocates a state per ringing mode and channel weights).
-  void reserveForceInput(uint32_t object);
+  void reserveForceInput();
   /// Schedules a channel's weights (ForceWeightsDesc) without allocation [audio-thread]. False
   /// when the object was not reserved, the channel is out of range, or 4 changes are pending.
   bool setForceWeights(const ForceWeightsDesc& weights);
-  /// render() with force signals: force[object * kForceChannels + c] (or force itself, or any
+  /// render() with force signals: force[c] (or force itself, or any
   /// entry, null: zeros) holds `frames` samples of channel c, in newtons, each held over its
   /// sample. A driven mode advances exactly for the sample-held force, y <- e^{ph} y + F (e^{ph} -
   /// 1) / p, from a state of its own while any channel is on, summed with the mode's free state by
@@ -224,7 +218,7 @@ class OscillatorBank {
   /// output includes the force's feedthrough sum_i R_i g_i F (a slow force then gives the
   /// acceleration it should: almost none). Same guarantees as render(). [audio-thread]
   void render(float* out, size_t frames, const float* const* force);
-  /// True while some object has a force channel on or a driven state not yet merged.
+  /// True while a force channel is on or a driven state is not yet merged.
   bool forceDriven() const;
   /// Time of the next sample to be rendered, s.
   double time() const;

@@ -24,11 +24,10 @@ TEST(ExtremeSynth, LinearFrom1eMinus9To1e4NewtonSeconds) {
   auto render = [&](double scale, double threshold, uint64_t* inaudible) {
     SynthSettings s;
     s.audibility_threshold = threshold;
-    OscillatorBank bank(s);
-    bank.addObject(test::makeObject(f, 1e-7, 3.0));
+    OscillatorBank bank(s, test::makeObject(f, 1e-7, 3.0));
     std::vector<double> g(f.size());
     for (size_t i = 0; i < g.size(); ++i) g[i] = scale * (0.3 + 0.1 * double(i)) * (i % 2 ? -1 : 1);
-    bank.addImpact(ImpactDesc{0, 0.001, 5e-5, g.data()});
+    bank.addImpact(ImpactDesc{0.001, 5e-5, g.data()});
     std::vector<float> out = test::renderAll(bank, 24000);
     if (inaudible) *inaudible = bank.stats().impacts_inaudible;
     return out;
@@ -64,15 +63,13 @@ TEST(ExtremeSynth, SampleRates8To192kHz) {
     s.sample_rate_hz = rate;
     s.max_freq_hz = 1e9;
     s.audibility_threshold = 0.0;
-    OscillatorBank bank(s);
-    bank.addObject(test::makeObject({1000.0}, 0.0, 0.0));
-    OscillatorBank many(s);
-    many.addObject(test::makeObject(f, 0.0, 0.0));
+    OscillatorBank bank(s, test::makeObject({1000.0}, 0.0, 0.0));
+    OscillatorBank many(s, test::makeObject(f, 0.0, 0.0));
     size_t expected_out = 0;
     for (double x : f) expected_out += x >= 0.45 * rate;
     EXPECT_EQ(many.stats().modes_out_of_band, expected_out) << rate;
     const double g = 1e-3;
-    bank.addImpact(ImpactDesc{0, 0.0, 0.0, &g});
+    bank.addImpact(ImpactDesc{0.0, 0.0, &g});
     const size_t frames = static_cast<size_t>(rate);  // 1 s
     const std::vector<float> out = test::renderAll(bank, frames);
     // Upward zero crossings, linearly interpolated; the period is their mean spacing.
@@ -95,13 +92,12 @@ TEST(ExtremeSynth, ModesAboveNyquistAddNothing) {
   SynthSettings s;
   s.max_freq_hz = 1e9;
   s.audibility_threshold = 0.0;
-  OscillatorBank alone(s), with_stiff(s);
-  alone.addObject(test::makeObject({1000.0}, 1e-8, 1.0));
-  with_stiff.addObject(test::makeObject({1000.0, 0.45 * 48000.0, 24000.0, 297000.0, 3.1e5, 6.4e5}, 1e-8, 1.0));
+  OscillatorBank alone(s, test::makeObject({1000.0}, 1e-8, 1.0));
+  OscillatorBank with_stiff(s, test::makeObject({1000.0, 0.45 * 48000.0, 24000.0, 297000.0, 3.1e5, 6.4e5}, 1e-8, 1.0));
   const double g1 = 1e-3;
   const double g[6] = {1e-3, 1.0, 1.0, 1.0, 1.0, 1.0};
-  alone.addImpact(ImpactDesc{0, 0.0, 1e-5, &g1});
-  with_stiff.addImpact(ImpactDesc{0, 0.0, 1e-5, g});
+  alone.addImpact(ImpactDesc{0.0, 1e-5, &g1});
+  with_stiff.addImpact(ImpactDesc{0.0, 1e-5, g});
   EXPECT_EQ(with_stiff.stats().modes_out_of_band, 5u);
   const std::vector<float> a = test::renderAll(alone, 48000), b = test::renderAll(with_stiff, 48000);
   for (size_t n = 0; n < a.size(); ++n) ASSERT_EQ(a[n], b[n]) << n;
@@ -122,15 +118,14 @@ size_t residentKiB() {
 TEST(ExtremeSynth, TenMinuteRenderMemoryIsFlat) {
   SynthSettings s;
   s.sample_rate_hz = 8000.0;
-  OscillatorBank bank(s);
   std::vector<double> f(200), g(200);
   for (size_t i = 0; i < f.size(); ++i) f[i] = 40.0 + 17.0 * double(i), g[i] = 1e-3 * ((i % 5) - 2.0);
-  bank.addObject(test::makeObject(f, 1e-7, 2.0));
+  OscillatorBank bank(s, test::makeObject(f, 1e-7, 2.0));
   std::vector<float> block(512);
   size_t frame = 0, rss_after_minute_1 = 0;
   double peak = 0;
   for (int second = 0; second < 600; ++second) {
-    bank.addImpact(ImpactDesc{0, double(second) + 0.25, 1e-4, g.data()});
+    bank.addImpact(ImpactDesc{double(second) + 0.25, 1e-4, g.data()});
     const size_t end = static_cast<size_t>(second + 1) * 8000;
     while (frame < end) {
       const size_t n = std::min(block.size(), end - frame);

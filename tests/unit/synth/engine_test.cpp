@@ -30,11 +30,10 @@ TEST(ForceStep, SharpStepMatchesTheClosedForm) {
   s.sample_rate_hz = kRate;
   s.double_precision = true;
   s.audibility_threshold = 0.0;
-  OscillatorBank bank(s);
   const ModalObjectDesc object = test::makeObject({700.0}, 1e-7, 2.0);
-  bank.addObject(object);
+  OscillatorBank bank(s, object);
   const double g = 0.3, t0 = 10.3 / kRate;
-  bank.addForceStep(ForceStepDesc{0, t0, 0.0, &g});
+  bank.addForceStep(ForceStepDesc{t0, 0.0, &g});
   const std::vector<float> out = test::renderAll(bank, 4800);
   const double lambda = object.eigenvalues[0], c = 1e-7 * lambda + 2.0;
   double worst = 0.0;
@@ -50,19 +49,18 @@ TEST(ForceStep, RampUpAndDownEqualsTheRampedBox) {
   for (double r : {0.0, 1e-3, 2.5e-4}) {
     SynthSettings s;
     s.sample_rate_hz = kRate;
-    OscillatorBank steps(s), box(s);
     const ModalObjectDesc object = test::makeObject({300.0, 1234.5, 5000.0}, 1e-8, 3.0);
-    steps.addObject(object);
-    box.addObject(object);
+    OscillatorBank steps(s, object);
+    OscillatorBank box(s, object);
     const double t0 = 0.0123, tau = 0.0371;
     const std::vector<double> force = {2.0, -0.5, 0.25};  // N / sqrt(kg), per mode
     std::vector<double> down(force.size());
     for (size_t i = 0; i < force.size(); ++i) down[i] = -force[i];
-    steps.addForceStep(ForceStepDesc{0, t0, r, force.data()});
-    steps.addForceStep(ForceStepDesc{0, t0 + tau, r, down.data()});
+    steps.addForceStep(ForceStepDesc{t0, r, force.data()});
+    steps.addForceStep(ForceStepDesc{t0 + tau, r, down.data()});
     std::vector<double> impulse(force.size());
     for (size_t i = 0; i < force.size(); ++i) impulse[i] = force[i] * tau;
-    ImpactDesc pulse{0, t0, tau, impulse.data(), PulseShape::Box};
+    ImpactDesc pulse{t0, tau, impulse.data(), PulseShape::Box};
     pulse.ramp_s = r;
     box.addImpact(pulse);
     const std::vector<float> a = test::renderAll(steps, 9600), b = test::renderAll(box, 9600);

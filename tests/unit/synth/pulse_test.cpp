@@ -63,11 +63,10 @@ std::vector<float> renderPulse(double f0, double c, double t0, double tau, bool 
   s.sample_rate_hz = rate;
   s.double_precision = dp;
   s.audibility_threshold = 0.0;
-  OscillatorBank bank(s);
   ModalObjectDesc obj = test::makeObject({f0}, 0.0, c);
-  bank.addObject(obj);
+  OscillatorBank bank(s, obj);
   const double g = 1.0;
-  bank.addImpact(ImpactDesc{0, t0, tau, &g, shape});
+  bank.addImpact(ImpactDesc{t0, tau, &g, shape});
   return test::renderAll(bank, frames);
 }
 
@@ -132,10 +131,9 @@ TEST(ContactPulse, SteadyForceAsContiguousBoxesIsSilentAfterItsOnset) {
     SynthSettings s;
     s.sample_rate_hz = rate;
     s.audibility_threshold = 0.0;
-    OscillatorBank bank(s);
-    bank.addObject(test::makeObject({1000.0, 4000.0, 6000.0}, 0.0, 20.0));  // decay 10/s
+    OscillatorBank bank(s, test::makeObject({1000.0, 4000.0, 6000.0}, 0.0, 20.0));  // decay 10/s
     const double g[] = {force * step, force * step, force * step};
-    for (int k = 0; k < 4000; ++k) bank.addImpact(ImpactDesc{0, 0.01 + k * step, step, g, shape});
+    for (int k = 0; k < 4000; ++k) bank.addImpact(ImpactDesc{0.01 + k * step, step, g, shape});
     const std::vector<float> out = test::renderAll(bank, static_cast<size_t>(2.0 * rate));
     const double onset = test::peakAbs(std::vector<float>(out.begin(), out.begin() + static_cast<size_t>(0.1 * rate)));
     const double tail = test::peakAbs(std::vector<float>(out.end() - static_cast<size_t>(0.2 * rate), out.end()));
@@ -154,11 +152,10 @@ TEST(ContactPulse, ContiguousBoxesAddUpToOneLongBox) {
     s.sample_rate_hz = rate;
     s.double_precision = true;
     s.audibility_threshold = 0.0;
-    OscillatorBank bank(s);
-    bank.addObject(test::makeObject({700.0, 2500.0}, 1e-7, 5.0));
+    OscillatorBank bank(s, test::makeObject({700.0, 2500.0}, 1e-7, 5.0));
     const double tau = 37.3 * h / pieces;
     const double g[] = {1.0 / pieces, 1.0 / pieces};
-    for (int k = 0; k < pieces; ++k) bank.addImpact(ImpactDesc{0, 5.2 * h + k * tau, tau, g, PulseShape::Box});
+    for (int k = 0; k < pieces; ++k) bank.addImpact(ImpactDesc{5.2 * h + k * tau, tau, g, PulseShape::Box});
     return test::renderAll(bank, 2000);
   };
   const std::vector<float> one = render(1), many = render(10);
@@ -183,10 +180,9 @@ TEST(ContactPulse, RampedBoxMatchesQuadratureOfTheTrapezoid) {
       s.sample_rate_hz = rate;
       s.double_precision = true;
       s.audibility_threshold = 0.0;
-      OscillatorBank bank(s);
-      bank.addObject(test::makeObject({f0}, 0.0, c));
+      OscillatorBank bank(s, test::makeObject({f0}, 0.0, c));
       const double g = 1.0;
-      ImpactDesc impact{0, t0, tau, &g, PulseShape::Box};
+      ImpactDesc impact{t0, tau, &g, PulseShape::Box};
       impact.ramp_s = r;
       bank.addImpact(impact);
       const std::vector<float> out = test::renderAll(bank, 800);

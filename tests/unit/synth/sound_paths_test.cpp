@@ -29,10 +29,9 @@ TEST(ImpactFactor, TurnsEachModesPhaseAsTheClosedFormSays) {
   const double lambda = object.eigenvalues[0], c = 1e-8 * lambda + 4.0;
   const std::complex<double> p(-0.5 * c, std::sqrt(lambda - 0.25 * c * c));
   for (std::complex<double> factor : {std::complex<double>(0, 1), std::complex<double>(2, -1)}) {
-    OscillatorBank bank(s);
-    bank.addObject(object);
+    OscillatorBank bank(s, object);
     const double g = 1.0;
-    ImpactDesc impact{0, 0.0, 0.0, &g};
+    ImpactDesc impact{0.0, 0.0, &g};
     impact.modal_transfer = &factor;
     ASSERT_EQ(bank.addImpact(impact), ImpactResult::Scheduled);
     const std::vector<float> out = test::renderAll(bank, 2400);

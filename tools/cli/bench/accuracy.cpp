@@ -267,9 +267,8 @@ SynthRun synthRender(double rate, bool double_precision, double threshold) {
   s.sample_rate_hz = rate;
   s.double_precision = double_precision;
   s.audibility_threshold = threshold;
-  OscillatorBank bank(s);
-  bank.addObject(object);
-  bank.addImpact(ImpactDesc{0, 0.01, 5e-5, g.data()});
+  OscillatorBank bank(s, object);
+  bank.addImpact(ImpactDesc{0.01, 5e-5, g.data()});
   SynthRun run{AudioBuffer{rate, 1, std::vector<float>(static_cast<size_t>(rate * 5))}, 0};
   const auto start = std::chrono::steady_clock::now();
   bank.render(run.audio.samples.data(), run.audio.samples.size());

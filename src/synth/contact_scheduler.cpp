@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
-// The contact scheduler: what a physics engine's contacts sound like. Per body and step:
-//  - an impact (approach faster than kImpactSpeed_m_s) is a Hertz half-sine pulse of the
+// The contact scheduler: what a physics engine's contacts sound like. Each contact is resolved
+// once and played by the first contact model that takes it (contact_model.hpp; the built-in
+// ones in contact_models.cpp). Per body and step:
+//  - an impact (approach faster than the impact rule) is a Hertz half-sine pulse of the
 //    contact time of the two bodies [Johnson 1985, Contact Mechanics, eq. 11.24];
 //  - sustained contact is a force: the step's impulses over the step. Its modal force is held
 //    until the body's load changes (its net force and moment, by kSteadyLoadTolerance), and
@@ -17,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "strike/contact_model.hpp"
 #include "strike/engine.hpp"
 
 namespace strike {
@@ -100,55 +103,56 @@ void SoundEngine::contact(const EngineContact& c) {
     if (own_step) endStep();
     return;
   }
-  const std::array<double, 3> point = c.world_frame ? v->pose_.toLocalPoint(c.point) : c.point;
-  const std::array<double, 3> impulse = c.world_frame ? v->pose_.toLocalDirection(c.impulse) : c.impulse;
-  const std::array<double, 3> world = c.world_frame ? c.point : v->pose_.toWorld(c.point);
-  const double now = time();
-  const bool impact = settings_.isImpact(c.normal_speed_m_s);
-  // A resting body's contacts come back to the same points step after step: remember them.
-  if (impact)
-    v->projector_.projectOnce(point.data(), impulse.data(), v->modal_.data());
-  else
-    v->projector_.projectImpulseInto(point.data(), impulse.data(), v->modal_.data());
-  if (impact) {
-    const double t = c.time_s >= 0.0 ? c.time_s : now;
-    scheduleImpact(*v, v->modal_.data(), t, hertzDuration(*v, c.partner, c.normal_speed_m_s), PulseShape::HalfSine,
-                   world, impulse);
-  } else {
-    // Sustained: a force over the step (its impulse / step length), summed over the step's points.
-    ++stats_.sustained_contacts;
-    const double per_s = step_.length_s > 0.0 ? 1.0 / step_.length_s : 1.0;
-    for (size_t i = 0; i < v->modal_.size(); ++i) v->step_force_[i] += v->modal_[i] * per_s;
-    const std::array<double, 3> arm = {point[0] - v->centre_m_[0], point[1] - v->centre_m_[1],
-                                       point[2] - v->centre_m_[2]};
-    const std::array<double, 3> moment = {arm[1] * impulse[2] - arm[2] * impulse[1],
-                                          arm[2] * impulse[0] - arm[0] * impulse[2],
-                                          arm[0] * impulse[1] - arm[1] * impulse[0]};
-    for (int k = 0; k < 3; ++k) {
-      v->step_load_[k] += impulse[k] * per_s;
-      v->step_load_[3 + k] += moment[k] * per_s / v->size_m_;
-    }
-    if (!v->in_step_) v->partner_count_ = 0, v->partners_overflow_ = false;  // this step's partners from here
-    v->in_step_ = true;
-    if (c.partner.voice != kNoVoice) {
-      bool known = false;
-      for (uint32_t k = 0; k < v->partner_count_; ++k) known = known || v->partners_[k] == c.partner.voice;
-      if (!known && v->partner_count_ < v->partners_.size())
-        v->partners_[v->partner_count_++] = c.partner.voice;
-      else if (!known)
-        v->partners_overflow_ = true;
-    } else {
-      v->partners_overflow_ = true;  // the ground or an unnamed body: it never sleeps
-    }
-    const double t = c.time_s >= 0.0 ? c.time_s : now;
-    if (settings_.contact_damping_per_s > 0.0 && !v->span_open_) {
-      setExtraDamping(*v, t, world, settings_.contact_damping_per_s);
-      v->span_open_ = true;
-    }
-    v->last_sustained_s_ = t;
-    continuousContact(*v, c, world);  // issue 18: rolling, sliding, scraping (contact_sources.cpp)
+  ResolvedContact rc;
+  rc.reported = &c;
+  rc.point = c.world_frame ? v->pose_.toLocalPoint(c.point) : c.point;
+  rc.impulse = c.world_frame ? v->pose_.toLocalDirection(c.impulse) : c.impulse;
+  rc.world_point = c.world_frame ? c.point : v->pose_.toWorld(c.point);
+  rc.time_s = c.time_s >= 0.0 ? c.time_s : time();
+  rc.impact = settings_.isImpact(c.normal_speed_m_s);
+  VoiceInput input(*this, *v);
+  for (const std::unique_ptr<ContactModel>& model : models_) {
+    if (!model->takes(rc)) continue;
+    model->play(rc, input);
+    break;
   }
   if (own_step) endStep();
+}
+
+void SoundEngine::sustainedContact(Voice& v, const ResolvedContact& rc, const double* modal) {
+  const EngineContact& c = *rc.reported;
+  const std::array<double, 3>& point = rc.point;
+  const std::array<double, 3>& impulse = rc.impulse;
+  // A force over the step (its impulse / step length), summed over the step's points.
+  ++stats_.sustained_contacts;
+  const double per_s = step_.length_s > 0.0 ? 1.0 / step_.length_s : 1.0;
+  for (size_t i = 0; i < v.step_force_.size(); ++i) v.step_force_[i] += modal[i] * per_s;
+  const std::array<double, 3> arm = {point[0] - v.centre_m_[0], point[1] - v.centre_m_[1], point[2] - v.centre_m_[2]};
+  const std::array<double, 3> moment = {arm[1] * impulse[2] - arm[2] * impulse[1],
+                                        arm[2] * impulse[0] - arm[0] * impulse[2],
+                                        arm[0] * impulse[1] - arm[1] * impulse[0]};
+  for (int k = 0; k < 3; ++k) {
+    v.step_load_[k] += impulse[k] * per_s;
+    v.step_load_[3 + k] += moment[k] * per_s / v.size_m_;
+  }
+  if (!v.in_step_) v.partner_count_ = 0, v.partners_overflow_ = false;  // this step's partners from here
+  v.in_step_ = true;
+  if (c.partner.voice != kNoVoice) {
+    bool known = false;
+    for (uint32_t k = 0; k < v.partner_count_; ++k) known = known || v.partners_[k] == c.partner.voice;
+    if (!known && v.partner_count_ < v.partners_.size())
+      v.partners_[v.partner_count_++] = c.partner.voice;
+    else if (!known)
+      v.partners_overflow_ = true;
+  } else {
+    v.partners_overflow_ = true;  // the ground or an unnamed body: it never sleeps
+  }
+  if (settings_.contact_damping_per_s > 0.0 && !v.span_open_) {
+    setExtraDamping(v, rc.time_s, rc.world_point, settings_.contact_damping_per_s);
+    v.span_open_ = true;
+  }
+  v.last_sustained_s_ = rc.time_s;
+  continuousContact(v, c, rc.world_point);  // rolling, sliding, scraping (contact_sources.cpp)
 }
 
 void SoundEngine::endStep() {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "strike/contact_model.hpp"
 #include "strike/engine.hpp"
 
 namespace strike {
@@ -22,7 +23,7 @@ uint32_t histogramBin(float level2) {
 
 }  // namespace
 
-SoundEngine::SoundEngine(const EngineSettings& settings) : settings_(settings) {
+SoundEngine::SoundEngine(const EngineSettings& settings) : settings_(settings), models_(builtInContactModels()) {
   if (settings_.output == OutputFormat::Mono && settings_.channels == 2) settings_.output = OutputFormat::Stereo;
   settings_.channels = outputChannels(settings_.output);
   settings_.max_block_frames = std::max<uint32_t>(settings_.max_block_frames, 1);
@@ -31,6 +32,10 @@ SoundEngine::SoundEngine(const EngineSettings& settings) : settings_(settings) {
 }
 
 SoundEngine::~SoundEngine() = default;
+
+void SoundEngine::addContactModel(std::unique_ptr<ContactModel> model) {
+  if (model) models_.insert(models_.begin(), std::move(model));
+}
 
 bool SoundEngine::install(uint32_t slot, Voice* voice) {
   if (slot >= slots_.size() || slots_[slot] || !voice) return false;

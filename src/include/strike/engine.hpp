@@ -3,8 +3,8 @@
 // strike_synth (C++ standard library only).
 //
 // A physics engine reports, every step, where its bodies are (setPose) and the contacts it
-// solved (beginStep, contact, endStep). The engine decides what each contact is (the contact
-// scheduler, contact_scheduler.cpp):
+// solved (beginStep, contact, endStep). The engine resolves each contact once and its contact
+// models (contact_model.hpp) decide what it is; the built-in ones make it
 //  - an impact, when the surfaces approach faster than kImpactSpeed_m_s: a Hertz pulse whose
 //    length follows from the two materials, radii, masses and the speed [Johnson 1985];
 //  - sustained contact otherwise: the step's impulses are a force over the step. A force that
@@ -64,6 +64,10 @@ constexpr double kContactGap_s = 0.02;
 constexpr double kSteadyLoadTolerance = 0.02;
 
 constexpr uint32_t kNoVoice = 0xffffffffu;
+
+class ContactModel;  // contact_model.hpp
+class VoiceInput;
+struct ResolvedContact;
 
 /// World from object (the bank's mesh frame).
 struct Pose {
@@ -266,6 +270,7 @@ class Voice {
 
  private:
   friend class SoundEngine;
+  friend class VoiceInput;
   void setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings);  // sound_paths.cpp's data
   std::shared_ptr<const ModeBank> bank_;
   OscillatorBank synth_;
@@ -383,8 +388,13 @@ class SoundEngine {
   /// A step of step_s seconds ending at step_end_s (engine clock). Contacts outside
   /// beginStep/endStep open a step of their own at their time.
   void beginStep(double step_end_s, double step_s);
+  /// Resolves the contact once and hands it to the first contact model that takes it
+  /// (contact_model.hpp).
   void contact(const EngineContact& contact);
   void endStep();
+  /// Asks `model` before the models added earlier and the built-in ones (contact_model.hpp).
+  /// Not real-time safe: call before the first contact.
+  void addContactModel(std::unique_ptr<ContactModel> model);
   void impact(const EngineImpact& impact);
   /// The Hertz contact time of the voice in `slot` struck by `partner` at normal_speed_m_s
   /// (capped at max_contact_duration_s), s; what contact() and impact() use. 0 for an empty slot.
@@ -404,6 +414,9 @@ class SoundEngine {
     bool open = false;
     double end_s = 0.0, length_s = 0.0;
   };
+  friend class VoiceInput;
+  /// A sustained contact's share of its body's load over the open step (VoiceInput::sustain).
+  void sustainedContact(Voice& v, const ResolvedContact& c, const double* modal);
   void endStepFor(Voice& v);
   void scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
                       const std::array<double, 3>& world_point, const std::array<double, 3>& impulse_local);
@@ -458,6 +471,7 @@ class SoundEngine {
   void enforceBudget(uint64_t& active);
 
   EngineSettings settings_;
+  std::vector<std::unique_ptr<ContactModel>> models_;  ///< asked in order
   std::vector<Voice*> slots_;
   Pose listener_;
   Step step_;

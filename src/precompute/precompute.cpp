@@ -182,7 +182,10 @@ uint64_t bankCacheKey(uint64_t mesh_hash, const PrecomputeSettings& settings) {
   uint64_t key = fnv1a64(numbers, sizeof numbers);
   key = fnv1a64(integers, sizeof integers, key);
   // The automatic order is the rule's answer: another rule, another bank.
-  if (settings.order == kAutoOrder) key = fnv1a64(&kThinWallFraction, sizeof kThinWallFraction, key);
+  if (settings.order == kAutoOrder) {
+    key = fnv1a64(&kThinWallFraction, sizeof kThinWallFraction, key);
+    key = fnv1a64(&kTet10EdgeFactor, sizeof kTet10EdgeFactor, key);
+  }
   // Only a scaled mesh hashes its scale, so banks cached before "units" existed keep their keys.
   if (settings.mesh_scale != 1.0) key = fnv1a64(&settings.mesh_scale, sizeof settings.mesh_scale, key);
   // A bank with an acoustic transfer is another bank than one without, and so is one solved to

@@ -60,14 +60,15 @@ double numberAfter(const std::string& text, const std::string& prefix) {
   return std::strtod(text.c_str() + at + prefix.size(), nullptr);
 }
 
-// A steel bar dropped 4 cm: a short, cheap render (coarse Tet4, a few audible bending modes).
+// A steel bar dropped 4 cm: a short, cheap render (the automatic order: a coarse Tet10 bar, a few
+// audible bending modes).
 // Tests here that check messages, warnings, counts and the cache's files, none of which depends on
 // the acoustic transfer, render and solve with --no-transfer: the transfer (BEM solves) is nearly
 // all of such a render's time (this bar under ASan: 14.6 s with it, 0.3 s without) and is checked
 // by the transfer, golden and render tests. (NewcomerCompactBank keeps it: the one int16 bank
 // written with a transfer.)
 const char kDrop[] = R"({"duration": 0.3, "max_modes": 8,
-  "objects": [{"name": "bar", "mesh": "box:0.2,0.03,0.02", "material": "steel", "order": 1, "position": [0, 0, 0.05]}]})";
+  "objects": [{"name": "bar", "mesh": "box:0.2,0.03,0.02", "material": "steel", "position": [0, 0, 0.05]}]})";
 
 // ---- Item 9: outputs are checked before any work ----------------------------------------------
 

@@ -100,7 +100,7 @@ TEST(CliContact, GlassRestingOnATableFallsAsleepAndGoesSilent) {
     std::ofstream(scene) << R"({"sample_rate": 48000, "duration": 2.5, "max_modes": 10,
       "listener": {"position": [0, -0.7, 1.0]},
       "objects": [
-        {"name": "table", "mesh": "box:1.0,0.6,0.03", "material": "wood", "order": 1, "static": true, "position": [0, 0, 0.735]},
+        {"name": "table", "mesh": "box:1.0,0.6,0.03", "material": "wood", "static": true, "position": [0, 0, 0.735]},
         {"name": "glass", "mesh": ")"
                          << kGlass << R"(", "material": "glass", "size": 0.02, "shape": ")" << shape
                          << R"(", "position": [0, 0, 0.78], "orientation": [0.9962, 0.0872, 0.0, 0.0]}]})";

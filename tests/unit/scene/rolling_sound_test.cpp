@@ -28,7 +28,7 @@ std::string ballOnPlate(bool rough) {
   return R"({"sample_rate": 48000, "duration": 1.2, "listener": {"position": [0, -0.5, 0.3]},
     "ground": {"material": "wood"}, "max_modes": 30,
     "objects": [
-      {"name": "plate", "mesh": "box:0.24,0.16,0.004", "material": "steel", "order": 1, "static": true,
+      {"name": "plate", "mesh": "box:0.24,0.16,0.004", "material": "steel", "static": true,
        "position": [0, 0, 0.002])" +
          plate_r + R"(},
       {"name": "ball", "mesh": "sphere:0.0125", "material": "steel", "rolling_resistance": 0.1,
@@ -101,7 +101,7 @@ std::string blockOnIncline(double degrees) {
   std::snprintf(text, sizeof text, R"({"sample_rate": 48000, "duration": 0.8, "listener": {"position": [0, -0.6, 0.4]},
     "max_modes": 30,
     "objects": [
-      {"name": "plank", "mesh": "box:0.6,0.12,0.02", "material": "wood", "order": 1, "static": true,
+      {"name": "plank", "mesh": "box:0.6,0.12,0.02", "material": "wood", "static": true,
        "position": [0, 0, 0.3], "orientation": [%.9f, 0, %.9f, 0]},
       {"name": "block", "mesh": "box:0.06,0.05,0.03", "material": "wood",
        "position": [%.9f, 0, %.9f], "orientation": [%.9f, 0, %.9f, 0]}]})",

@@ -75,6 +75,7 @@ OscillatorBank::Impl::Impl(const SynthSettings& s, const ModalObjectDesc& object
   threshold = std::isfinite(s.audibility_threshold) ? std::max(s.audibility_threshold, detail::kThresholdFloor)
                                                     : detail::kThresholdFloor;
   use_double = s.double_precision;
+  reserved = s.allocation == Allocation::Reserved;
   kernels = chooseKernels(s.simd);
   acc.grow(kBlock * detail::kKernelMaxLanes);
   mix.assign(kBlock, 0.0);
@@ -200,8 +201,7 @@ OscillatorBank::~OscillatorBank() = default;
 OscillatorBank::OscillatorBank(OscillatorBank&&) noexcept = default;
 OscillatorBank& OscillatorBank::operator=(OscillatorBank&&) noexcept = default;
 
-ImpactResult OscillatorBank::addImpact(const ImpactDesc& impact) { return impl_->addImpact(impact, false); }
-ImpactResult OscillatorBank::addImpactNoAlloc(const ImpactDesc& impact) { return impl_->addImpact(impact, true); }
+ImpactResult OscillatorBank::addImpact(const ImpactDesc& impact) { return impl_->addImpact(impact, impl_->reserved); }
 void OscillatorBank::reserveImpacts(size_t max_pending, double max_pulse_s) {
   const double samples = max_pulse_s * impl_->fs;
   const size_t transient = (samples > 0.0 && std::isfinite(samples)) ? static_cast<size_t>(std::ceil(samples)) + 2 : 2;
@@ -225,14 +225,12 @@ size_t OscillatorBank::activeModeLevels(float* level2, size_t capacity) const {
 size_t OscillatorBank::sleepModesAtOrBelow(float level2, float scale2) {
   return impl_->sleepModesAtOrBelow(level2, scale2);
 }
-void OscillatorBank::setExtraDamping(double time_s, double extra_decay_per_s) {
-  (void)impl_->scheduleExtraDamping(time_s, extra_decay_per_s, false);
+bool OscillatorBank::setExtraDamping(double time_s, double extra_decay_per_s) {
+  return impl_->scheduleExtraDamping(time_s, extra_decay_per_s, impl_->reserved);
 }
-bool OscillatorBank::setExtraDampingNoAlloc(double time_s, double extra_decay_per_s) {
-  return impl_->scheduleExtraDamping(time_s, extra_decay_per_s, true);
+ImpactResult OscillatorBank::addForceStep(const ForceStepDesc& step) {
+  return impl_->addForceStep(step, impl_->reserved);
 }
-ImpactResult OscillatorBank::addForceStep(const ForceStepDesc& step) { return impl_->addForceStep(step, false); }
-ImpactResult OscillatorBank::addForceStepNoAlloc(const ForceStepDesc& step) { return impl_->addForceStep(step, true); }
 void OscillatorBank::render(float* out, size_t frames) {
   if (out && frames > 0) impl_->render(out, frames);
 }

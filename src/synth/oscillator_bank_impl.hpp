@@ -153,6 +153,7 @@ struct OscillatorBank::Impl {
   double fs = 48000.0, h = 1.0 / 48000.0;
   double threshold = detail::kThresholdFloor;
   bool use_double = false;
+  bool reserved = false;  // Allocation::Reserved: scheduling never grows the pool
   detail::KernelTable kernels{};
 
   // The object: its modes, its delay to the listener, its scheduled contact damping ((sample,
@@ -207,7 +208,8 @@ struct OscillatorBank::Impl {
     return std::fabs(m.radiation) * (m.omega0 * std::fabs(x1) + m.damping_c * std::fabs(v));
   }
 
-  // oscillator_pulses.cpp: scheduling (no_alloc: NoCapacity rather than growing the pool).
+  // oscillator_pulses.cpp: scheduling (no_alloc, from `reserved`: NoCapacity rather than growing
+  // the pool).
   void reserveImpacts(size_t records, size_t max_transient);
   double extraDampingAt(uint64_t sample) const;
   ImpactResult addImpact(const ImpactDesc& desc, bool no_alloc);

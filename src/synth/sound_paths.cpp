@@ -152,7 +152,7 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
     impact.modal_impulse = modal;
     impact.modal_transfer = transfer[k];
     OscillatorBank& synth = pathSynth(v, k);
-    const ImpactResult r = settings_.realtime ? synth.addImpactNoAlloc(impact) : synth.addImpact(impact);
+    const ImpactResult r = synth.addImpact(impact);
     if (k == 0) {  // one impact, however many paths it takes
       switch (r) {
         case ImpactResult::Scheduled: ++stats_.impacts; break;
@@ -178,7 +178,7 @@ void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double
     step.modal_force_change = modal_change;
     step.modal_transfer = transfer[k];
     OscillatorBank& synth = pathSynth(v, k);
-    const ImpactResult r = settings_.realtime ? synth.addForceStepNoAlloc(step) : synth.addForceStep(step);
+    const ImpactResult r = synth.addForceStep(step);
     if (k > 0) continue;
     if (r == ImpactResult::NoCapacity)
       ++stats_.impacts_dropped;
@@ -208,10 +208,7 @@ void SoundEngine::scheduleClick(Voice& v, int path, const Arrival& a, double tim
   click.modal_impulse = v.click_force_.data();
   click.modal_transfer = v.click_transfer_.data();
   OscillatorBank& clicks = pathClicks(v, path);
-  if (settings_.realtime)
-    (void)clicks.addImpactNoAlloc(click);
-  else
-    (void)clicks.addImpact(click);
+  (void)clicks.addImpact(click);
 }
 
 const std::complex<double>* SoundEngine::throughAir(Voice& v, int path, const std::complex<double>* factors,
@@ -227,17 +224,11 @@ const std::complex<double>* SoundEngine::throughAir(Voice& v, int path, const st
 
 void SoundEngine::setExtraDamping(Voice& v, double time_s, const std::array<double, 3>& world_point, double per_s) {
   const double at_s = time_s + delayTo(world_point);
-  if (settings_.realtime)
-    (void)v.synth_.setExtraDampingNoAlloc(at_s, per_s);
-  else
-    v.synth_.setExtraDamping(at_s, per_s);
+  (void)v.synth_.setExtraDamping(at_s, per_s);
   if (!v.image_) return;  // the image rings in synth_ too
   // The image's modes change with the direct sound's, as they do when both ring in synth_: the
   // omni channel of an output with directions is then the mono render.
-  if (settings_.realtime)
-    (void)v.image_->synth.setExtraDampingNoAlloc(at_s, per_s);
-  else
-    v.image_->synth.setExtraDamping(at_s, per_s);
+  (void)v.image_->synth.setExtraDamping(at_s, per_s);
 }
 
 }  // namespace strike

@@ -92,6 +92,13 @@ void symmetricEigen3(std::array<double, 9> a, std::array<double, 3>& values,
   }
 }
 
+// The oscillators' settings: the engine's, with its allocation policy (EngineSettings::realtime).
+SynthSettings synthSettings(const EngineSettings& settings) {
+  SynthSettings synth = settings.synth;
+  synth.allocation = settings.realtime ? Allocation::Reserved : Allocation::Grow;
+  return synth;
+}
+
 // The bank's modes as the oscillators play them, with the voice's output weights.
 ModalObjectDesc modalObject(const ModeBank& bank, const std::vector<double>& weights) {
   ModalObjectDesc modal;
@@ -170,16 +177,16 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
     const std::complex<double> pole(-omega0 / M_SQRT2, omega0 / M_SQRT2);
     click_gain_[j] = omega0 > 0.0 ? omega0 * omega0 / pole : 0.0;
   }
-  click_synth_ = OscillatorBank(settings.synth, click);
-  if (image_) image_->click_synth = OscillatorBank(settings.synth, click);
+  click_synth_ = OscillatorBank(synthSettings(settings), click);
+  if (image_) image_->click_synth = OscillatorBank(synthSettings(settings), click);
   click_mono_.assign(std::max<uint32_t>(settings.max_block_frames, 1), 0.0f);
   clicks_ = true;
 }
 
 Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
     : bank_(desc.bank),
-      synth_(settings.synth, modalObject(*desc.bank, desc.weights)),
-      click_synth_(settings.synth, ModalObjectDesc{}),
+      synth_(synthSettings(settings), modalObject(*desc.bank, desc.weights)),
+      click_synth_(synthSettings(settings), ModalObjectDesc{}),
       projector_(*desc.bank, desc.locator) {
   const ModeBank& bank = *bank_;
   if (desc.use_rows) projector_.useRows(desc.rows);
@@ -187,7 +194,7 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
   // An output with directions hears the ground's image from below: a signal of its own.
   const bool pressure = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
   if (outputHasDirections(settings.output) && settings.ground.enabled && pressure)
-    image_ = std::make_unique<ImagePath>(settings.synth, modalObject(bank, desc.weights));
+    image_ = std::make_unique<ImagePath>(synthSettings(settings), modalObject(bank, desc.weights));
   const SynthStats bands = synth_.stats();
   rings_ = bands.modes_total > bands.modes_out_of_band;
   const size_t modes = bank.modeCount();

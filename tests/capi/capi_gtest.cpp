@@ -473,14 +473,17 @@ TEST(CApi, FourProducersWhileRendering) {
       static_cast<unsigned long long>(s.impacts_dropped_capacity));
 }
 
-// The allocation-free impact path gives the same samples as the allocating one.
+// A bank whose allocation is Reserved gives the same samples as one that grows, and refuses what
+// its reserve does not hold instead of growing it.
 TEST(OscillatorBankRealtime, NoAllocImpactsMatchAddImpact) {
   const strike::ModeBank bank = strike::test::makeTestBank();
   strike::ModalObjectDesc desc;
   desc.eigenvalues = bank.eigenvalues;
   desc.rayleigh_stiffness = bank.material.rayleigh_stiffness;
   desc.rayleigh_mass = bank.material.rayleigh_mass;
-  strike::OscillatorBank b{strike::SynthSettings{}, desc};
+  strike::SynthSettings realtime;
+  realtime.allocation = strike::Allocation::Reserved;
+  strike::OscillatorBank b{realtime, desc};
   b.reserveImpacts(4, 0.001);
   const double impulse[3] = {0, 0, 1e-2};
   std::vector<double> g(bank.modeCount());
@@ -490,17 +493,17 @@ TEST(OscillatorBankRealtime, NoAllocImpactsMatchAddImpact) {
   // Four reserved records: the fifth pending impact is refused instead of growing the pool.
   for (int k = 0; k < 5; ++k) {
     const strike::ImpactDesc d{0.002 * k + 1e-5, 2e-4, g.data(), strike::PulseShape::HalfSine};
-    EXPECT_EQ(b.addImpactNoAlloc(d), k < 4 ? strike::ImpactResult::Scheduled : strike::ImpactResult::NoCapacity) << k;
+    EXPECT_EQ(b.addImpact(d), k < 4 ? strike::ImpactResult::Scheduled : strike::ImpactResult::NoCapacity) << k;
   }
   // Too long a pulse for the reserve is refused, not grown.
   const strike::ImpactDesc long_pulse{0.0, 0.01, g.data(), strike::PulseShape::HalfSine};
-  EXPECT_EQ(b.addImpactNoAlloc(long_pulse), strike::ImpactResult::NoCapacity);
-  strike::OscillatorBank c{strike::SynthSettings{}, desc}, d2{strike::SynthSettings{}, desc};
+  EXPECT_EQ(b.addImpact(long_pulse), strike::ImpactResult::NoCapacity);
+  strike::OscillatorBank c{strike::SynthSettings{}, desc}, d2{realtime, desc};
   d2.reserveImpacts(8, 0.001);
   for (int k = 0; k < 6; ++k) {
     const strike::ImpactDesc d{0.002 * k + 1e-5, 2e-4, g.data(), strike::PulseShape::HalfSine};
     c.addImpact(d);
-    ASSERT_EQ(d2.addImpactNoAlloc(d), strike::ImpactResult::Scheduled);
+    ASSERT_EQ(d2.addImpact(d), strike::ImpactResult::Scheduled);
   }
   c.render(oa.data(), oa.size());
   d2.render(ob.data(), ob.size());

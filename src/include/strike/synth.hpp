@@ -36,6 +36,13 @@ inline double synthesizedTopHz(double max_freq_hz, double sample_rate_hz) {
   return std::min(max_freq_hz, kBandTopOfSampleRate * sample_rate_hz);
 }
 
+/// What an oscillator bank does when a pulse, a force step or a damping change needs more than
+/// it reserved (OscillatorBank::reserveImpacts): set once, for the bank's life.
+enum class Allocation {
+  Grow,      ///< offline renders: the reserve grows (allocates)
+  Reserved,  ///< real time: never allocates, locks or throws; what does not fit is dropped
+};
+
 struct SynthSettings {
   double sample_rate_hz = 48000.0;
   double min_freq_hz = 20.0;     ///< modes below are not synthesized
@@ -45,6 +52,7 @@ struct SynthSettings {
   double audibility_threshold = 1e-6;
   bool double_precision = false;     ///< reference path: double state, no SIMD (for accuracy studies)
   SimdLevel simd = SimdLevel::Auto;  ///< float path only; for tests and benchmarks
+  Allocation allocation = Allocation::Grow;
 };
 
 /// Samples between re-anchorings of the float oscillator state to its double-precision anchor
@@ -158,16 +166,15 @@ class OscillatorBank {
   OscillatorBank& operator=(OscillatorBank&&) noexcept;
 
   /// Schedules an impact. Impacts may be added in any order, but not before the current render
-  /// time (late ones start at the current sample). Copies modal_impulse. Not real-time safe: it
-  /// integrates the pulse for every mode (O(modes x pulse samples)) and allocates.
-  /// Contributions below audibility_threshold are dropped (the mode is not woken).
+  /// time (late ones start at the current sample). Copies modal_impulse. It integrates the pulse
+  /// for every mode (O(modes x pulse samples)). Contributions below audibility_threshold are
+  /// dropped (the mode is not woken). Allocation::Grow: may allocate. Allocation::Reserved:
+  /// real-time safe [audio-thread], on the thread that calls render(); NoCapacity when no
+  /// reserved record is free or the pulse is longer than reserved.
   ImpactResult addImpact(const ImpactDesc& impact);
   /// Preallocates records for max_pending impacts that are scheduled but not yet fully injected,
   /// each able to hold an impact on every mode with a pulse of up to max_pulse_s. Not real-time safe.
   void reserveImpacts(size_t max_pending, double max_pulse_s);
-  /// addImpact() without allocation, locks or exceptions: real-time safe [audio-thread], on the
-  /// thread that calls render(). Returns NoCapacity instead of growing the reserve.
-  ImpactResult addImpactNoAlloc(const ImpactDesc& impact);
   /// Renders the next `frames` mono samples into out (overwrites). Sample n of the first call is
   /// time n / sample_rate. Output units are those of radiation_weight (Pa at the listener with
   /// radiationWeights()). [audio-thread] Never allocates, locks or throws; sets FTZ/DAZ in MXCSR
@@ -193,17 +200,14 @@ class OscillatorBank {
   /// From time_s on, the object's ringing modes decay faster by extra_decay_per_s (1/s, amplitude;
   /// 0 restores the material's damping). Applied exactly at the first 128-sample block boundary
   /// at or after time_s (plus the object's delay): the pole moves left, the state carries on.
-  /// Models energy an object loses into what it rests on (contact damping). Not real-time safe.
-  void setExtraDamping(double time_s, double extra_decay_per_s);
-  /// setExtraDamping() without allocation [audio-thread]: false (nothing scheduled) when the
-  /// object already has 64 changes pending.
-  bool setExtraDampingNoAlloc(double time_s, double extra_decay_per_s);
-  /// Schedules a change of sustained force (ForceStepDesc). Not real-time safe (may grow the
-  /// impact records); Inaudible when no mode's ringing from it reaches the audibility threshold.
+  /// Models energy an object loses into what it rests on (contact damping). Allocation::Reserved:
+  /// real-time safe, false (nothing scheduled) when the object already has 64 changes pending.
+  bool setExtraDamping(double time_s, double extra_decay_per_s);
+  /// Schedules a change of sustained force (ForceStepDesc); Inaudible when no mode's ringing from
+  /// it reaches the audibility threshold. Allocation::Grow: may grow the impact records.
+  /// Allocation::Reserved: real-time safe, NoCapacity when fewer than three reserved impact
+  /// records are free.
   ImpactResult addForceStep(const ForceStepDesc& step);
-  /// addForceStep() without allocation [audio-thread]: NoCapacity when fewer than three reserved
-  /// impact records are free.
-  ImpactResult addForceStepNoAlloc(const ForceStepDesc& step);
   /// Prepares the object for continuous force input (setForceWeights, render with force). Not
   /// real-time safe (allocates a state per ringing mode and channel weights).
   void reserveForceInput();

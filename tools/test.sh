@@ -66,6 +66,7 @@ fi
 #            --via-library (the C API step by step, with rolling, sliding and resting contacts)
 #            runs under ASan for bar_drop, blocks_falling, coin_spin and spoon_scrapes_plate.
 #          TransferSolver.SphereWithYnmAccelerationGivesTheExactExteriorSolution,
+#            TransferSolver.TheToleranceConvergesAtTheOrderOfConstantElements,
 #            SphereDirectivity.*: fine BEM solves of a sphere against closed forms; the solver
 #            runs under ASan in the other TransferSolver and TransferRender tests.
 #          TransferRender.TheBarSolvedToThreeCutOffsSoundsTheSame: three transfer solves of one

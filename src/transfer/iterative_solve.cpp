@@ -53,11 +53,20 @@ double norm(const std::vector<cd>& a) { return std::sqrt(dot(a, a).real()); }
 Eigen::MatrixXcd solveGmres(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B, double tolerance,
                             size_t max_iterations, TwoParts& parts, IterativeReport* report) {
   const size_t n = static_cast<size_t>(A.rows());
-  Eigen::MatrixXcd X = Eigen::MatrixXcd::Zero(A.rows(), B.cols());
+  std::vector<cd> diagonal(n);
+  for (size_t i = 0; i < n; ++i) diagonal[i] = A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
+  return solveGmres([&](const std::vector<cd>& x, std::vector<cd>& y) { multiply(A, x, y, parts); }, diagonal, B,
+                    tolerance, max_iterations, report);
+}
+
+Eigen::MatrixXcd solveGmres(const MatrixProduct& product, const std::vector<cd>& diagonal, const Eigen::MatrixXcd& B,
+                            double tolerance, size_t max_iterations, IterativeReport* report) {
+  const size_t n = diagonal.size();
+  Eigen::MatrixXcd X = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(n), B.cols());
   // Right preconditioner M^-1 = diag(A)^-1: x = M^-1 u, solve A M^-1 u = b.
   std::vector<cd> inv_diag(n);
   for (size_t i = 0; i < n; ++i) {
-    const cd d = A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
+    const cd d = diagonal[i];
     inv_diag[i] = std::abs(d) > 0 ? 1.0 / d : cd(1.0);
   }
   IterativeReport done;
@@ -72,7 +81,7 @@ Eigen::MatrixXcd solveGmres(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B
     size_t iterations = 0;
     double residual = 1.0;
     while (iterations < max_iterations) {
-      multiply(A, x, ax, parts);
+      product(x, ax);
       for (size_t i = 0; i < n; ++i) r[i] = b[i] - ax[i];
       const double beta = norm(r);
       residual = beta / b_norm;
@@ -83,7 +92,7 @@ Eigen::MatrixXcd solveGmres(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B
       size_t j = 0;
       for (; j < kRestart && iterations < max_iterations; ++j, ++iterations) {
         for (size_t i = 0; i < n; ++i) z[i] = inv_diag[i] * V[j][i];
-        multiply(A, z, w, parts);
+        product(z, w);
         for (size_t l = 0; l <= j; ++l) {  // modified Gram-Schmidt
           const cd h = dot(V[l], w);
           H[l][j] = h;
@@ -126,7 +135,7 @@ Eigen::MatrixXcd solveGmres(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B
         x[i] += inv_diag[i] * sum;
       }
       if (residual <= tolerance) {
-        multiply(A, x, ax, parts);  // the true residual
+        product(x, ax);  // the true residual
         for (size_t i = 0; i < n; ++i) r[i] = b[i] - ax[i];
         residual = norm(r) / b_norm;
         if (residual <= tolerance) break;

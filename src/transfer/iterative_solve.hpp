@@ -4,7 +4,10 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <complex>
 #include <cstddef>
+#include <functional>
+#include <vector>
 
 #include "../modal/two_parts.hpp"
 
@@ -22,5 +25,14 @@ struct IterativeReport {
 /// same bits on one thread or two and whatever the cache sizes.
 Eigen::MatrixXcd solveGmres(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B, double tolerance,
                             size_t max_iterations, TwoParts& parts, IterativeReport* report = nullptr);
+
+/// y = A x for an operator given by its product (which must sum in a fixed order).
+using MatrixProduct =
+    std::function<void(const std::vector<std::complex<double>>& x, std::vector<std::complex<double>>& y)>;
+
+/// The same GMRES for an A given by its product and its diagonal (the preconditioner).
+Eigen::MatrixXcd solveGmres(const MatrixProduct& product, const std::vector<std::complex<double>>& diagonal,
+                            const Eigen::MatrixXcd& B, double tolerance, size_t max_iterations,
+                            IterativeReport* report = nullptr);
 
 }  // namespace strike::transfer

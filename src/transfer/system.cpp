@@ -10,6 +10,70 @@
 
 namespace strike::transfer {
 
+namespace {
+
+/// The square system as a hierarchical matrix (hmatrix.hpp), solved by GMRES over its product;
+/// the coarse system of the estimate is R A P (its rows the fine rows row_cluster, its columns
+/// the fine ones summed: the free term comes out right, row_cluster[j] being inside coarse
+/// cluster j), the fine blocks restricted.
+ModeSolve solveHierarchical(const Surface& s, const std::vector<NodeData>& data, double k, const NearCache& near,
+                            const BigTriangles& big, ModeSolve out,
+                            std::chrono::steady_clock::time_point assembly_start, TwoParts& parts,
+                            const SystemOptions& options) {
+  const Cut& cut = out.cut;
+  const size_t n = cut.nodes.size(), rhs = data.size();
+  const HSystem system =
+      assembleHSystem(s, cut, out.pieces, out.piece_data, big, data, near, k, options.hmatrix, parts);
+  const HMatrix& A = system.A;
+  out.matrix_bytes = A.bytes();
+  out.blocks = A.blocks.size();
+  out.low_rank_blocks = A.lowRankBlocks();
+  const Coarse coarse = coarsen(s, cut);
+  const size_t nc = coarse.count;
+  const bool coarse_solve = nc < n && nc > 0;
+  out.assembly_seconds = secondsSince(assembly_start);
+  const auto factor_start = std::chrono::steady_clock::now();
+  const auto R = static_cast<Eigen::Index>(rhs);
+  Eigen::MatrixXcd b(static_cast<Eigen::Index>(n), R);
+  for (size_t q = 0; q < rhs; ++q)
+    for (size_t i = 0; i < n; ++i) b(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(q)) = system.b[q * n + i];
+  const std::vector<cd> diagonal = A.diagonal();
+  std::array<IterativeReport, 2> reports;
+  Eigen::MatrixXcd P, pc;
+  // The fine and the coarse solve side by side, each product on its own thread.
+  parts.run(size_t{2}, size_t{1}, [&](size_t begin, size_t, int) {
+    if (begin == 0) {
+      P = solveGmres([&](const std::vector<cd>& x, std::vector<cd>& y) { A.multiply(x, y); }, diagonal, b,
+                     options.iterative_tolerance, 2000, &reports[0]);
+      return;
+    }
+    if (!coarse_solve) return;
+    const HMatrix Ac = A.restricted(coarse.row_cluster, coarse.of_cluster, nc);
+    Eigen::MatrixXcd bc(static_cast<Eigen::Index>(nc), R);
+    for (size_t j = 0; j < nc; ++j) bc.row(static_cast<Eigen::Index>(j)) = b.row(coarse.row_cluster[j]);
+    auto product = [&](const std::vector<cd>& x, std::vector<cd>& y) { Ac.multiply(x, y); };
+    const std::vector<cd> coarse_diagonal = Ac.diagonal();
+    pc = solveGmres(product, coarse_diagonal, bc, options.iterative_tolerance, 2000, &reports[1]);
+  });
+  out.iterations = reports[0].iterations;
+  out.elements = n;
+  out.chief = 0;
+  out.p.resize(rhs);
+  out.p_diff.resize(rhs);
+  for (size_t q = 0; q < rhs; ++q) {
+    out.p[q] = P.col(static_cast<Eigen::Index>(q));
+    out.p_diff[q] = Eigen::VectorXcd::Zero(static_cast<Eigen::Index>(n));
+    if (!coarse_solve) continue;
+    for (size_t c = 0; c < n; ++c)
+      out.p_diff[q][static_cast<Eigen::Index>(c)] =
+          out.p[q][static_cast<Eigen::Index>(c)] - pc(coarse.of_cluster[c], static_cast<Eigen::Index>(q));
+  }
+  out.factor_seconds = secondsSince(factor_start);
+  return out;
+}
+
+}  // namespace
+
 ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, double k, size_t elements, size_t chief,
                       double k_rule, std::map<size_t, NearCache>& near_caches, TwoParts& parts,
                       const SystemOptions& options) {
@@ -25,6 +89,8 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
   const BigTriangles big = bigTriangles(s, out.pieces);
   const size_t n = cut.nodes.size(), rhs = data.size();
   chief = std::min(chief, s.chief_candidates.size());
+  if (chief == 0 && n > options.direct_max_elements && options.hierarchical)
+    return solveHierarchical(s, data, k, near, big, std::move(out), assembly_start, parts, options);
   const size_t rows = n + chief;
   const auto R = static_cast<Eigen::Index>(rhs);
   Eigen::MatrixXcd A = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(n));
@@ -109,6 +175,7 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
     for (size_t q = 0; q < rhs; ++q) out.p_diff[q] = Eigen::VectorXcd::Zero(static_cast<Eigen::Index>(n));
   }
   out.factor_seconds = secondsSince(factor_start);
+  out.matrix_bytes = static_cast<size_t>(A.size()) * sizeof(cd);
   return out;
 }
 

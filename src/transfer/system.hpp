@@ -8,6 +8,7 @@
 
 #include "../modal/two_parts.hpp"
 #include "clusters.hpp"
+#include "hmatrix.hpp"
 #include "near_quadrature.hpp"
 #include "pieces.hpp"
 #include "surface.hpp"
@@ -22,7 +23,9 @@ struct ModeSolve {
   Pieces pieces;
   PieceData piece_data;
   double assembly_seconds = 0.0, factor_seconds = 0.0;
-  size_t iterations = 0;  ///< GMRES iterations of the fine solve (0: a direct solve)
+  size_t iterations = 0;                   ///< GMRES iterations of the fine solve (0: a direct solve)
+  size_t matrix_bytes = 0;                 ///< what the fine system's matrix held (dense, or its blocks)
+  size_t low_rank_blocks = 0, blocks = 0;  ///< of a hierarchical matrix (0: dense)
 };
 
 /// How the systems are solved.
@@ -31,6 +34,10 @@ struct SystemOptions {
   /// others by single-precision LU refined in double (dense_solve.hpp).
   size_t direct_max_elements = 700;
   double iterative_tolerance = 1e-5;  ///< GMRES's relative residual
+  /// The iterative systems as hierarchical matrices (hmatrix.hpp: near-linear memory and
+  /// products); false: dense, as below direct_max_elements.
+  bool hierarchical = true;
+  HMatrixOptions hmatrix;
 };
 
 /// Solves the exterior Neumann problem for the boundary data `data` (one right-hand side each:

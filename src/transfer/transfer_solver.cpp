@@ -143,6 +143,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
   const std::vector<size_t> group_start = transferGroups(bank, settings);
   SystemOptions system_options;
   system_options.direct_max_elements = settings.direct_max_elements;
+  system_options.hierarchical = settings.hierarchical;
   system_options.iterative_tolerance = std::min(1e-5, 0.01 * settings.target_relative_error);
 
   // The near quadrature per cut, its rules chosen at the group's wavenumber rounded up to a

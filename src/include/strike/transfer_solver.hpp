@@ -73,6 +73,9 @@ struct TransferSettings {
   /// GMRES (a relative residual of min(1e-5, target / 100)), the others by a dense LU: with an
   /// element budget above it, thin walls get more unknowns at ~N^2 instead of N^3.
   uint32_t direct_max_elements = 700;
+  /// Those iterative systems as hierarchical matrices: well-separated blocks compressed by
+  /// adaptive cross approximation, memory and products ~ N log N (false: dense, N^2; a study).
+  bool hierarchical = true;
   /// Interior (CHIEF) points once k reaches the interior resonances (false: never; a study).
   bool chief = true;
   /// 2: the system's rows are assembled, and the far field summed at its directions, in two
@@ -99,9 +102,12 @@ struct TransferSettings {
 /// refined in double, which changes the last bits of a few coefficients; 5: a group's near
 /// quadrature rules chosen at its own wavenumber (rounded up to a quarter octave) instead of the
 /// bank's largest, and no group starting at the budget because a lower one missed the target
-/// there: a group's transfer depends on its own modes and the settings alone), so cached
-/// transfers are solved again rather than mixed with the new solver's.
-constexpr uint32_t kTransferSolverRevision = 5;
+/// there: a group's transfer depends on its own modes and the settings alone; 6: square systems
+/// above direct_max_elements as hierarchical matrices with adaptive cross approximation, which
+/// changes the solutions of budgets above 700 within the approximation's tolerance; the default
+/// budget's are the same bits), so cached transfers are solved again rather than mixed with the
+/// new solver's.
+constexpr uint32_t kTransferSolverRevision = 6;
 
 /// What one mode's solve cost and found (for studies and reports).
 struct TransferModeStats {

@@ -535,6 +535,7 @@ TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
   if (const char* max = std::getenv("STRIKE_TRANSFER_MAX_ELEMENTS")) settings.max_elements = std::atoi(max);
   if (const char* max = std::getenv("STRIKE_TRANSFER_DIRECT_MAX")) settings.direct_max_elements = std::atoi(max);
   if (const char* target = std::getenv("STRIKE_TRANSFER_TARGET")) settings.target_relative_error = std::atof(target);
+  if (const char* dense = std::getenv("STRIKE_TRANSFER_DENSE")) settings.hierarchical = std::atoi(dense) == 0;
   if (const char* every = std::getenv("STRIKE_TRANSFER_EVERY")) {  // every N-th mode only (N-1, 2N-1, ...)
     const size_t n = std::max(1, std::atoi(every)), vertices = bank->surfaceVertexCount();
     ModeBank kept = *bank;

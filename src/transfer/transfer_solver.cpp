@@ -151,17 +151,18 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
   std::map<size_t, NearCache> near_caches;
   double near_caches_k = -1.0;
 
-  // The time budget (settings.max_seconds): the last solve measured, and the modes it left
-  // coarser than the target asked.
+  // The time budget (settings.max_seconds): the last solve measured, the modes it left coarser
+  // than the target asked, and where it ended the transfer.
   MeasuredSolve measured;
-  size_t modes_cut = 0;
-  auto budgetAllows = [&](size_t first_mode, size_t group_modes, size_t elements, double k, size_t instead) {
+  size_t modes_cut = 0, modes_solved = modes;
+  using Kind = TransferBudgetStep::Kind;
+  auto budgetAllows = [&](Kind kind, size_t first_mode, size_t group_modes, size_t elements, double k) {
     if (!(settings.max_seconds > 0) || measured.elements == 0) return true;
     TransferBudgetStep step;
+    step.kind = kind;
     step.first_mode = first_mode;
     step.modes = group_modes;
     step.elements = elements;
-    step.instead_elements = instead;
     step.elapsed_s = secondsSince(start);
     step.forecast_s = forecastSolveSeconds(measured, elements, k, settings.direct_max_elements);
     step.budget_s = settings.max_seconds;
@@ -202,12 +203,17 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     // (not only the wavelength) sets the resolution, and the estimate sees it.
     size_t elements = elementsFor(s, settings, k);
     const size_t cap = settings.fixed_elements > 0 ? elements : std::min<size_t>(settings.max_elements, s.tris.size());
-    // A first solve forecast past the time budget is made with the fewest unknowns instead.
+    // A first solve forecast past the time budget is made with the fewest unknowns instead; when
+    // even that is, the transfer ends before this group.
     bool group_cut = false;
-    if (const size_t fewest = std::min<size_t>(settings.min_elements, s.tris.size());
-        elements > fewest && !budgetAllows(first, rhs, elements, k, fewest)) {
+    const size_t fewest = std::min<size_t>(settings.min_elements, s.tris.size());
+    if (elements > fewest && !budgetAllows(Kind::FirstSolve, first, rhs, elements, k)) {
       elements = fewest;
       group_cut = true;
+    }
+    if (elements <= fewest && !budgetAllows(Kind::Fewest, first, rhs, elements, k)) {
+      modes_solved = first;
+      break;
     }
     const double k_rule = ruleWavenumber(k);
     if (k_rule != near_caches_k) {
@@ -272,7 +278,7 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
         if (!done[r]) best = std::min(best, total[r] > 0 ? std::sqrt(diff[r] / total[r]) : 0.0);
       const double asked = static_cast<double>(elements) * best / settings.target_relative_error;
       elements = asked >= static_cast<double>(cap) ? cap : std::min(cap, elements * 5 / 2);
-      if (!budgetAllows(first, rhs, elements, k, 0)) {  // the modes not done keep this solve
+      if (!budgetAllows(Kind::Refinement, first, rhs, elements, k)) {  // the modes not done keep this solve
         group_cut = true;
         break;
       }
@@ -353,9 +359,9 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
                 "bem collocation, clustered constant elements (%u-%u), chief, target %.3g, %zu triangles",
                 settings.min_elements, settings.max_elements, settings.target_relative_error, s.tris.size());
   out.method = method;
-  if (modes_cut > 0) {  // said in the bank: its estimates are a time budget's, not the element budget's
-    std::snprintf(method, sizeof method, "; time budget %.3g s: %zu modes cut short of the target",
-                  settings.max_seconds, modes_cut);
+  if (modes_cut > 0 || modes_solved < modes) {  // said in the bank: a time budget's transfer
+    std::snprintf(method, sizeof method, "; time budget %.3g s: %zu modes cut short of the target, %zu left unsolved",
+                  settings.max_seconds, modes_cut, modes - modes_solved);
     out.method += method;
   }
   return out;

@@ -224,34 +224,39 @@ void printSummary(const PrecomputeSettings& settings, const PrecomputeResult& re
                  bank.modeCount() > worst_mode ? bank.frequencyHz(worst_mode) : 0.0, bank.transfer.method.c_str());
     size_t over = 0;
     for (float e : bank.transfer.relative_error) over += e > target ? 1 : 0;
+    // Heard modes the time budget left without a transfer.
+    const size_t heard = modesAtOrBelow(bank, settings.transfer_max_freq_hz);
+    const size_t unsolved = time_cuts > 0 && heard > bank.transfer.modeCount() ? heard - bank.transfer.modeCount() : 0;
     // What an estimate means for the sound: the error's level under the field's, and the
     // field's level within 20 log10(1 -+ e) dB.
     std::fprintf(stderr, "  transfer    tolerance %.3g%% (%.0f dB: a mode's level within %+.2f/%+.2f dB) %s",
                  100.0 * target, 20.0 * std::log10(target), 20.0 * std::log10(std::max(1e-6, 1.0 - target)),
-                 20.0 * std::log10(1.0 + target), over == 0 ? "met on every mode\n" : "NOT met: ");
+                 20.0 * std::log10(1.0 + target), over == 0 && unsolved == 0 ? "met on every mode\n" : "NOT met: ");
     if (over > 0 && time_cuts == 0)
       std::fprintf(stderr,
                    "%zu of %zu modes estimated worse (max %.0f dB, %+.1f dB); the element budget (%u unknowns) stops "
                    "them short (--transfer-max-elements; docs/acoustic-transfer.md)\n",
                    over, bank.transfer.modeCount(), 20.0 * std::log10(worst), 20.0 * std::log10(1.0 + worst),
                    settings.transfer.max_elements);
-    else if (over > 0)
+    else if (over > 0 || unsolved > 0)
       std::fprintf(stderr,
-                   "%zu of %zu modes estimated worse (max %.0f dB, %+.1f dB); the time budget (--max-seconds) cut %zu "
-                   "of the transfer's steps (within the element budget, %u unknowns); this bank depends on the "
-                   "machine's speed\n",
-                   over, bank.transfer.modeCount(), 20.0 * std::log10(worst), 20.0 * std::log10(1.0 + worst), time_cuts,
-                   settings.transfer.max_elements);
-    if (over == 0 && time_cuts > 0)
+                   "%zu of %zu modes estimated worse (max %.0f dB, %+.1f dB), %zu heard modes left unsolved; the time "
+                   "budget (--max-seconds) cut %zu of the transfer's steps (within the element budget, %u unknowns); "
+                   "this bank depends on the machine's speed\n",
+                   over, bank.transfer.modeCount(), worst > 0 ? 20.0 * std::log10(worst) : -INFINITY,
+                   20.0 * std::log10(1.0 + worst), unsolved, time_cuts, settings.transfer.max_elements);
+    else if (time_cuts > 0)
       std::fprintf(stderr,
                    "              the time budget (--max-seconds) cut %zu of the transfer's steps, none past the "
                    "tolerance\n",
                    time_cuts);
     if (bank.transfer.modeCount() < bank.modeCount())
       std::fprintf(stderr,
-                   "  heard       the transfer of the %zu modes up to %.0f Hz, what a render plays; the %zu above "
-                   "keep none (a render that plays them solves theirs)\n",
-                   bank.transfer.modeCount(), settings.transfer_max_freq_hz,
+                   "  heard       the transfer of the %zu modes up to %.0f Hz%s; the %zu above keep none (a render "
+                   "that plays them solves theirs)\n",
+                   bank.transfer.modeCount(),
+                   bank.transfer.modeCount() > 0 ? bank.frequencyHz(bank.transfer.modeCount() - 1) : 0.0,
+                   unsolved > 0 ? " (the time budget stopped it)" : ", what a render plays",
                    bank.modeCount() - bank.transfer.modeCount());
   }
   const std::vector<double>& error = bank.frequency_error_estimate;
@@ -459,17 +464,16 @@ int runModes(const std::vector<std::string>& raw_args) {
   settings.transfer.on_budget_step = [&time_cuts, quiet](const TransferBudgetStep& step) {
     time_cuts += step.made ? 0 : 1;
     if (quiet) return;
-    char instead[96] = "";
-    if (!step.made)
-      std::snprintf(instead, sizeof instead, ": not made, %s",
-                    step.instead_elements > 0
-                        ? ("solved with " + std::to_string(step.instead_elements) + " unknowns instead").c_str()
-                        : "the modes keep their last solve");
+    using Kind = TransferBudgetStep::Kind;
+    const char* refused = step.kind == Kind::Refinement   ? ": not made, the modes keep their last solve"
+                          : step.kind == Kind::FirstSolve ? ": not made; the fewest unknowns instead, if they fit"
+                                                          : ": not made, the transfer ends here (these modes and "
+                                                            "those above keep none)";
     std::fprintf(stderr,
                  "strike modes: transfer time budget: modes %zu-%zu, %zu unknowns, %.1f s spent + %.1f s "
-                 "forecast %s %g s%s\n",
+                 "forecast %s %.3g s%s\n",
                  step.first_mode, step.first_mode + step.modes - 1, step.elements, step.elapsed_s, step.forecast_s,
-                 step.made ? "<=" : ">", step.budget_s, instead);
+                 step.made ? "<=" : ">", step.budget_s, step.made ? "" : refused);
   };
   if (!args.has("--similar") && (args.has("--cache") || args.has("--no-cache")))
     return reportError("modes", badInput("--cache and --no-cache go with --similar (a direct solve is not cached)"));

@@ -45,11 +45,16 @@ namespace strike {
 /// `elements` unknowns for the group of modes [first_mode, first_mode + modes), from its
 /// forecast (the rates measured on the solve before it, scaled to its unknowns).
 struct TransferBudgetStep {
+  enum class Kind {
+    Refinement,  ///< not made: the group keeps the solve it has
+    FirstSolve,  ///< the group's first solve; not made: tried again with the fewest unknowns
+    Fewest,      ///< the group's first solve with the fewest unknowns; not made: the transfer
+                 ///< ends before this group (it and the groups above keep none)
+  };
+  Kind kind = Kind::Refinement;
   size_t first_mode = 0, modes = 0;
-  size_t elements = 0;          ///< the unknowns of the solve forecast
-  size_t instead_elements = 0;  ///< when not made: the group's first solve is made with these; 0: a
-                                ///< refinement step, the group keeps the solve it has
-  double elapsed_s = 0.0;       ///< since the solve started
+  size_t elements = 0;     ///< the unknowns of the solve forecast
+  double elapsed_s = 0.0;  ///< since the solve started
   double forecast_s = 0.0;
   double budget_s = 0.0;
   bool made = false;
@@ -83,12 +88,14 @@ struct TransferSettings {
   /// eigen-solve's block stage). The bits do not depend on it.
   int threads = 2;
   /// Time budget of the solve, seconds from its start (0: none; not part of a bank cache key).
-  /// Before each refinement step (and each group's first solve) the step's time is forecast from
+  /// Before each refinement step and each group's first solve the step's time is forecast from
   /// the rates measured on the solve before it; a step forecast to end past the budget is not
-  /// made: the group keeps its coarser solve (a first solve drops to min_elements), with the
-  /// estimate of that solve. Each group gets at least one solve, and the rigid translation's
-  /// dipole is always solved. What is decided depends on the machine's speed: the bank does
-  /// too (docs/cli.md).
+  /// made: a refinement leaves the group its coarser solve (with that solve's estimate), a first
+  /// solve is tried with the fewest unknowns (min_elements), and when even that does not fit the
+  /// transfer ends there: it holds the groups below (a prefix of the modes; a render that plays
+  /// the others solves theirs). The first solve of all is always made (it measures the rates),
+  /// and so is the rigid translation's dipole. What is decided depends on the machine's speed:
+  /// the bank does too (docs/cli.md).
   double max_seconds = 0.0;
   /// Told each decision of the time budget (optional).
   std::function<void(const TransferBudgetStep&)> on_budget_step;

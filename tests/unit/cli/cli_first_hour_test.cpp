@@ -63,9 +63,11 @@ TEST(FirstHourMemory, ASolveForecastOverMaxMemoryIsRefusedWithItsForecastAndWrit
   EXPECT_NE(zero.err.find("--max-memory = 0"), std::string::npos) << zero.err;
 }
 
-// --max-seconds bounds the transfer too: a budget the eigen-solve alone overruns leaves the
-// transfer its first solve of each group and no refinement, and the summary says NOT met and
-// why; the bank is whole and exits 0. A budget that never binds changes nothing in the transfer.
+// --max-seconds bounds the transfer too: with a budget the eigen-solve alone overruns, the
+// transfer's first solve is made (it measures the rates), its refinement is not, and the groups
+// above are left without a transfer (a render that plays them solves theirs); the summary says
+// NOT met and why, the bank is whole and the command exits 0. A budget that never binds changes
+// nothing in the transfer.
 TEST(FirstHourTime, ATransferOverMaxSecondsKeepsItsCoarserSolvesAndSaysSo) {
   const std::string dir = folder("time");
   // A steel block: three modes, each refined from its first solve when no budget stops it.
@@ -85,16 +87,15 @@ TEST(FirstHourTime, ATransferOverMaxSecondsKeepsItsCoarserSolvesAndSaysSo) {
                    c = readBank(dir + "/loose.modes");
   ASSERT_TRUE(a && b && c);
   EXPECT_EQ(a->checkConsistency(), "");
-  ASSERT_EQ(a->transfer.modeCount(), b->transfer.modeCount());
-  ASSERT_GT(b->transfer.modeCount(), 0u);
+  ASSERT_GT(b->transfer.modeCount(), 1u);
+  ASSERT_GE(a->transfer.modeCount(), 1u);  // the first solve, always made
+  EXPECT_LT(a->transfer.modeCount(), b->transfer.modeCount());
+  EXPECT_NE(cut.err.find("left unsolved"), std::string::npos) << cut.err;
   EXPECT_NE(a->transfer.method.find("time budget"), std::string::npos) << a->transfer.method;
-  // Cut short: no estimate better than the unbounded solve's, at least one worse.
-  bool worse = false;
-  for (size_t i = 0; i < b->transfer.modeCount(); ++i) {
+  // Cut short: no estimate better than the unbounded solve's, the first worse (not refined).
+  for (size_t i = 0; i < a->transfer.modeCount(); ++i)
     EXPECT_GE(a->transfer.relative_error[i], 0.999f * b->transfer.relative_error[i]) << i;
-    worse = worse || a->transfer.relative_error[i] > 1.001f * b->transfer.relative_error[i];
-  }
-  EXPECT_TRUE(worse);
+  EXPECT_GT(a->transfer.relative_error[0], 1.001f * b->transfer.relative_error[0]);
   // A budget that never binds: the same transfer, to the bit.
   EXPECT_EQ(c->transfer.method, b->transfer.method);
   EXPECT_EQ(c->transfer.order, b->transfer.order);

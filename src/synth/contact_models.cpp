@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "strike/contact_model.hpp"
+#include "voice_state.hpp"
 
 namespace strike {
 namespace {

@@ -21,6 +21,7 @@
 
 #include "strike/contact_model.hpp"
 #include "strike/engine.hpp"
+#include "voice_state.hpp"
 
 namespace strike {
 namespace {
@@ -64,15 +65,15 @@ double partnerTrackSpeed(const EngineContact& c) {
 }
 
 double SoundEngine::contactDuration(uint32_t slot, const ContactPartner& partner, double normal_speed_m_s) const {
-  const Voice* v = voice(slot);
+  const VoiceState* v = state(slot);
   return v ? hertzDuration(*v, partner, normal_speed_m_s) : 0.0;
 }
 
-double SoundEngine::hertzDuration(const Voice& v, const ContactPartner& p, double speed) const {
+double SoundEngine::hertzDuration(const VoiceState& v, const ContactPartner& p, double speed) const {
   // A partner that is a voice and gives no material of its own: its bank's material, its contact
   // radius and mass (what libstrike's contact call does for two objects).
   if (p.youngs_pa <= 0.0 && p.voice != kNoVoice) {
-    if (const Voice* q = voice(p.voice)) {
+    if (const VoiceState* q = state(p.voice)) {
       const double tau = hertzContactDuration(v.youngs_pa_, v.poisson_, v.contact_radius_m_, v.mass_kg_, q->youngs_pa_,
                                               q->poisson_, q->contact_radius_m_, q->mass_kg_, speed);
       return std::min(tau, settings_.max_contact_duration_s);
@@ -97,7 +98,7 @@ void SoundEngine::beginStep(double step_end_s, double step_s) {
 void SoundEngine::contact(const EngineContact& c) {
   const bool own_step = !step_.open;
   if (own_step) beginStep(c.time_s, 0.0);
-  Voice* v = voice(c.voice);
+  VoiceState* v = state(c.voice);
   if (!v) {
     ++stats_.stale;
     if (own_step) endStep();
@@ -119,7 +120,7 @@ void SoundEngine::contact(const EngineContact& c) {
   if (own_step) endStep();
 }
 
-void SoundEngine::sustainedContact(Voice& v, const ResolvedContact& rc, const double* modal) {
+void SoundEngine::sustainedContact(VoiceState& v, const ResolvedContact& rc, const double* modal) {
   const EngineContact& c = *rc.reported;
   const std::array<double, 3>& point = rc.point;
   const std::array<double, 3>& impulse = rc.impulse;
@@ -158,11 +159,11 @@ void SoundEngine::sustainedContact(Voice& v, const ResolvedContact& rc, const do
 void SoundEngine::endStep() {
   if (!step_.open) return;
   for (uint32_t slot = 0; slot < slots_.size(); ++slot)
-    if (slots_[slot]) endStepFor(*slots_[slot]);
+    if (slots_[slot]) endStepFor(*slots_[slot]->state_);
   step_.open = false;
 }
 
-void SoundEngine::endStepFor(Voice& v) {
+void SoundEngine::endStepFor(VoiceState& v) {
   // A step's force acts over the step: centred on the step, its change ramps over one step.
   const double step_start_s = step_.end_s - step_.length_s;
   const double change_at_s = step_start_s - 0.5 * step_.length_s;
@@ -180,13 +181,13 @@ void SoundEngine::endStepFor(Voice& v) {
     } else if (v.is_static_ && v.partner_count_ > 0 && !v.partners_overflow_) {
       keep = true;
       for (uint32_t k = 0; k < v.partner_count_; ++k) {
-        const Voice* p = voice(v.partners_[k]);
+        const VoiceState* p = state(v.partners_[k]);
         keep = keep && p && p->asleep_;
       }
     }
   }
   const bool load_change = v.in_step_ ? !steady : v.holding_ && !keep;
-  continuousEndStep(v, load_change);  // issue 18 (contact_sources.cpp)
+  continuousEndStep(v, load_change);  // contact_sources.cpp
   if (v.in_step_) {
     if (!steady) {
       for (size_t i = 0; i < v.modal_.size(); ++i) v.modal_[i] = v.step_force_[i] - v.held_force_[i];
@@ -218,7 +219,7 @@ void SoundEngine::endStepFor(Voice& v) {
 }
 
 void SoundEngine::impact(const EngineImpact& d) {
-  Voice* v = voice(d.voice);
+  VoiceState* v = state(d.voice);
   if (!v) {
     ++stats_.stale;
     return;
@@ -256,19 +257,14 @@ void SoundEngine::impact(const EngineImpact& d) {
 }
 
 void SoundEngine::reset() {
-  for (Voice* v : slots_) {
+  for (Voice* installed : slots_) {
+    VoiceState* v = installed ? installed->state_.get() : nullptr;
     if (!v) continue;
     v->synth_.reset();
     v->click_synth_.reset();
     if (v->image_) v->image_->synth.reset(), v->image_->click_synth.reset();
-    std::fill(v->step_force_.begin(), v->step_force_.end(), 0.0);
-    std::fill(v->held_force_.begin(), v->held_force_.end(), 0.0);
-    v->step_load_ = {};
-    v->held_load_ = {};
-    v->holding_ = v->in_step_ = v->span_open_ = false;
-    v->partner_count_ = 0;
-    v->last_sustained_s_ = -1.0;
-    resetContinuous(*v);  // issue 18
+    v->resetLoad();
+    resetContinuous(*v);
     v->fresh_ = true;
   }
   step_ = Step{};

@@ -16,6 +16,7 @@
 #include <cmath>
 
 #include "strike/engine.hpp"
+#include "voice_state.hpp"
 
 namespace strike {
 namespace {
@@ -28,23 +29,23 @@ double curvature(double radius_m) { return radius_m > 0.0 && std::isfinite(radiu
 
 }  // namespace
 
-void SoundEngine::continuousContact(Voice& v, const EngineContact& c, const std::array<double, 3>& world) {
+void SoundEngine::continuousContact(VoiceState& v, const EngineContact& c, const std::array<double, 3>& world) {
   if (!(c.normal_force_n > 0.0) || !std::isfinite(c.normal_force_n)) return;
   // A body with no mode in the band (a marble, a small block) would drive nothing: its rolling is
   // heard through its partner's modes, whose own source reads this body's roughness.
   if (!v.rings_) return;
   const ContactPartner& p = c.partner;
-  const Voice* pv = p.voice != kNoVoice ? voice(p.voice) : nullptr;
+  const VoiceState* pv = p.voice != kNoVoice ? state(p.voice) : nullptr;
   const SurfaceRoughness& partner_roughness = pv ? pv->roughness_ : p.roughness;
   if (!(v.roughness_.rms_m > 0.0) && !(partner_roughness.rms_m > 0.0)) return;
   const uint64_t key = p.voice != kNoVoice ? p.voice : (partner_roughness.seed | (uint64_t(1) << 63));
-  Voice::Source* source = nullptr;
-  for (Voice::Source& s : v.sources_)
+  VoiceState::Source* source = nullptr;
+  for (VoiceState::Source& s : v.sources_)
     if (s.used && s.key == key) source = &s;
   if (!source) {
     // A new pair starts only when its surfaces move: resting contacts never start a generator.
     if (std::max(trackSpeed(c), partnerTrackSpeed(c)) < RoughContact::kStillSpeed_m_s) return;
-    for (Voice::Source& s : v.sources_)
+    for (VoiceState::Source& s : v.sources_)
       if (!s.used) {
         source = &s;
         break;
@@ -84,7 +85,7 @@ void SoundEngine::continuousContact(Voice& v, const EngineContact& c, const std:
     source->stepped = false;
     ++stats_.continuous_contacts;
   }
-  Voice::Source& s = *source;
+  VoiceState::Source& s = *source;
   if (!s.stepped) {
     s.stepped = true;
     s.force_n = s.speed_n = s.partner_speed_n = s.patch_n = 0.0;
@@ -106,9 +107,9 @@ void SoundEngine::continuousContact(Voice& v, const EngineContact& c, const std:
   for (size_t i = 0; i < s.modal.size(); ++i) s.modal[i] += v.modal_[i];
 }
 
-void SoundEngine::continuousEndStep(Voice& v, bool load_change_follows) {
+void SoundEngine::continuousEndStep(VoiceState& v, bool load_change_follows) {
   for (uint32_t ch = 0; ch < kForceChannels; ++ch) {
-    Voice::Source& s = v.sources_[ch];
+    VoiceState::Source& s = v.sources_[ch];
     if (!s.used || !s.stepped) continue;
     s.stepped = false;
     const double n = s.force_n;
@@ -152,10 +153,10 @@ void SoundEngine::continuousEndStep(Voice& v, bool load_change_follows) {
   }
 }
 
-bool SoundEngine::renderContactForces(Voice& v, size_t frames) {
+bool SoundEngine::renderContactForces(VoiceState& v, size_t frames) {
   bool any = false;
   for (uint32_t ch = 0; ch < kForceChannels; ++ch) {
-    Voice::Source& s = v.sources_[ch];
+    VoiceState::Source& s = v.sources_[ch];
     v.force_ptrs_[ch] = nullptr;
     if (!s.used) continue;
     float* out = v.force_.data() + static_cast<size_t>(ch) * settings_.max_block_frames;
@@ -183,8 +184,8 @@ bool SoundEngine::renderContactForces(Voice& v, size_t frames) {
   return any;
 }
 
-void SoundEngine::resetContinuous(Voice& v) {
-  for (Voice::Source& s : v.sources_) {
+void SoundEngine::resetContinuous(VoiceState& v) {
+  for (VoiceState::Source& s : v.sources_) {
     s.used = false;
     s.stepped = false;
   }

@@ -8,6 +8,7 @@
 
 #include "strike/contact_model.hpp"
 #include "strike/engine.hpp"
+#include "voice_state.hpp"
 
 namespace strike {
 namespace {
@@ -40,18 +41,32 @@ void SoundEngine::addContactModel(std::unique_ptr<ContactModel> model) {
 bool SoundEngine::install(uint32_t slot, Voice* voice) {
   if (slot >= slots_.size() || slots_[slot] || !voice) return false;
   slots_[slot] = voice;
-  voice->fresh_ = true;
+  VoiceState& v = *voice->state_;
+  v.fresh_ = true;
   // Its oscillators start on the engine's clock, so a contact's time means the same in every voice.
-  const uint64_t at = static_cast<uint64_t>(std::llround(voice->synth_.time() * settings_.synth.sample_rate_hz));
+  const uint64_t at = static_cast<uint64_t>(std::llround(v.synth_.time() * settings_.synth.sample_rate_hz));
   if (frames_ > at) {
-    voice->synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
-    voice->click_synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
-    if (voice->image_) {
-      voice->image_->synth.skip(nullptr, static_cast<size_t>(frames_ - at));
-      voice->image_->click_synth.skip(nullptr, static_cast<size_t>(frames_ - at));
+    v.synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
+    v.click_synth_.skip(nullptr, static_cast<size_t>(frames_ - at));
+    if (v.image_) {
+      v.image_->synth.skip(nullptr, static_cast<size_t>(frames_ - at));
+      v.image_->click_synth.skip(nullptr, static_cast<size_t>(frames_ - at));
     }
   }
   return true;
+}
+
+VoiceState* SoundEngine::state(uint32_t slot) const {
+  Voice* v = voice(slot);
+  return v ? v->state_.get() : nullptr;
+}
+
+OscillatorBank& SoundEngine::pathSynth(VoiceState& v, int path) const {
+  return path > 0 && v.image_ ? v.image_->synth : v.synth_;
+}
+
+OscillatorBank& SoundEngine::pathClicks(VoiceState& v, int path) const {
+  return path > 0 && v.image_ ? v.image_->click_synth : v.click_synth_;
 }
 
 Voice* SoundEngine::uninstall(uint32_t slot) {
@@ -62,11 +77,11 @@ Voice* SoundEngine::uninstall(uint32_t slot) {
 }
 
 void SoundEngine::setPose(uint32_t slot, const Pose& pose, bool asleep) {
-  if (Voice* v = voice(slot)) v->pose_ = pose, v->asleep_ = asleep;
+  if (VoiceState* v = state(slot)) v->pose_ = pose, v->asleep_ = asleep;
 }
 
 void SoundEngine::setGain(uint32_t slot, float gain) {
-  if (Voice* v = voice(slot)) v->gain_ = gain;
+  if (VoiceState* v = state(slot)) v->gain_ = gain;
 }
 
 void SoundEngine::setListener(const Pose& pose) { listener_ = pose; }
@@ -80,7 +95,7 @@ double SoundEngine::delayTo(const std::array<double, 3>& world_point) const {
 // The listener model (listener.hpp): the level from the distance of the body's centre of mass
 // now; each path's channel gains from its direction in the listener's frame (spatializer.hpp):
 // the direct sound from the centre of mass, the ground's image from its mirror image.
-void SoundEngine::updateGains(Voice& v) {
+void SoundEngine::updateGains(VoiceState& v) {
   const std::array<double, 3> centre = v.pose_.toWorld(v.centre_m_);
   const double d = distance(centre, listener_.position_m);
   const double g =
@@ -130,11 +145,12 @@ void SoundEngine::render(float* const* out, size_t frames) {
   const uint32_t channels = settings_.channels;
   for (uint32_t c = 0; c < channels; ++c) std::fill(out[c], out[c] + frames, 0.0f);
   uint64_t active = 0;
-  for (Voice* v : slots_) {
+  for (Voice* installed : slots_) {
+    VoiceState* v = installed ? installed->state_.get() : nullptr;
     if (!v) continue;
     updateGains(*v);
     if (frames == 0) continue;
-    if (Voice::ImagePath* image = v->image_.get()) {
+    if (VoiceState::ImagePath* image = v->image_.get()) {
       const bool clicking = !image->click_synth.idle();
       if (image->synth.idle() && !clicking) {
         std::copy(image->target_gain, image->target_gain + channels, image->cur_gain);
@@ -187,7 +203,8 @@ void SoundEngine::enforceBudget(uint64_t& active) {
   const uint64_t budget = settings_.max_active_modes;
   if (budget == 0 || active <= budget) return;
   std::fill(histogram_.begin(), histogram_.end(), 0u);
-  for (Voice* v : slots_) {
+  for (Voice* installed : slots_) {
+    VoiceState* v = installed ? installed->state_.get() : nullptr;
     if (!v) continue;
     const size_t n = v->synth_.activeModeLevels(v->levels_.data(), v->levels_.size());
     for (size_t k = 0; k < n; ++k) ++histogram_[histogramBin(v->levels_[k] * v->level_gain2_)];
@@ -213,7 +230,8 @@ void SoundEngine::enforceBudget(uint64_t& active) {
   std::memcpy(&threshold, &top_bits, sizeof threshold);
   if (cut == kHistogramBins - 1) threshold = HUGE_VALF;
   active = 0;
-  for (Voice* v : slots_) {
+  for (Voice* installed : slots_) {
+    VoiceState* v = installed ? installed->state_.get() : nullptr;
     if (!v) continue;
     stats_.modes_culled += v->synth_.sleepModesAtOrBelow(threshold, v->level_gain2_);
     active += v->synth_.activeModeCount();
@@ -227,7 +245,8 @@ void SoundEngine::enforceBudget(uint64_t& active) {
 EngineStats SoundEngine::stats() const {
   EngineStats s = stats_;
   s.modes_total = s.modes_out_of_band = s.mode_samples = s.forced_mode_samples = s.image_mode_samples = 0;
-  for (const Voice* v : slots_) {
+  for (const Voice* installed : slots_) {
+    const VoiceState* v = installed ? installed->state_.get() : nullptr;
     if (!v) continue;
     const SynthStats vs = v->synth_.stats();
     s.modes_total += vs.modes_total;

@@ -33,10 +33,11 @@
 #include <cstring>
 
 #include "strike/engine.hpp"
+#include "voice_state.hpp"
 
 namespace strike {
 
-int SoundEngine::arrivals(const Voice& v, const std::array<double, 3>& world_point, Arrival out[2]) const {
+int SoundEngine::arrivals(const VoiceState& v, const std::array<double, 3>& world_point, Arrival out[2]) const {
   const bool directional = !v.far_field_[0].empty();
   // The transfer's phases are about its centre: its sound leaves from there. Otherwise from the
   // contact, toward the centre of mass's direction.
@@ -85,8 +86,8 @@ double sinAngleBetween(const std::array<double, 3>& a, const std::array<double, 
 
 }  // namespace
 
-void SoundEngine::radiationToward(Voice& v, const Arrival paths[], int count, const std::complex<double>* factors[2],
-                                  Reuse reuse, int also_to) {
+void SoundEngine::radiationToward(VoiceState& v, const Arrival paths[], int count,
+                                  const std::complex<double>* factors[2], Reuse reuse, int also_to) {
   const bool directional = !v.far_field_[0].empty();
   int evaluate[2];  // the paths whose factors are evaluated now
   int evaluations = 0;
@@ -97,7 +98,7 @@ void SoundEngine::radiationToward(Voice& v, const Arrival paths[], int count, co
     const bool wanted = k < count;
     if (!wanted && (evaluations == 0 || !directional)) break;  // no pass to ride along with
     if (!directional && a.gain == 1.0) continue;
-    Voice::PathTransfer& p = v.path_transfer_[static_cast<size_t>(k)];
+    VoiceState::PathTransfer& p = v.path_transfer_[static_cast<size_t>(k)];
     if (wanted) factors[k] = p.factor.data();
     if (p.valid && std::memcmp(&p.gain, &a.gain, sizeof a.gain) == 0) {
       // The same bits (not ==, which equates -0 and +0): a reuse gives exactly what an evaluation would.
@@ -128,7 +129,7 @@ void SoundEngine::radiationToward(Voice& v, const Arrival paths[], int count, co
   std::complex<double>* far_field[2] = {v.far_field_[0].data(), v.far_field_[1].data()};
   evaluateFarFields(v.transfer_, static_cast<size_t>(evaluations), weights, far_field);
   for (int e = 0; e < evaluations; ++e) {
-    Voice::PathTransfer& p = v.path_transfer_[static_cast<size_t>(evaluate[e])];
+    VoiceState::PathTransfer& p = v.path_transfer_[static_cast<size_t>(evaluate[e])];
     const std::complex<double>* f = far_field[e];
     // The modes with a transfer, then the others as a voice without one hears them (its gain).
     const size_t heard = v.inv_rms_.size();
@@ -137,7 +138,7 @@ void SoundEngine::radiationToward(Voice& v, const Arrival paths[], int count, co
   }
 }
 
-void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
+void SoundEngine::scheduleImpact(VoiceState& v, const double* modal, double time_s, double duration_s, PulseShape shape,
                                  const std::array<double, 3>& world_point, const std::array<double, 3>& impulse_local) {
   Arrival paths[2];
   const int count = arrivals(v, world_point, paths);
@@ -164,7 +165,7 @@ void SoundEngine::scheduleImpact(Voice& v, const double* modal, double time_s, d
   }
 }
 
-void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double time_s, double ramp_s,
+void SoundEngine::scheduleForceStep(VoiceState& v, const double* modal_change, double time_s, double ramp_s,
                                     const std::array<double, 3>& world_point) {
   Arrival paths[2];
   const int count = arrivals(v, world_point, paths);
@@ -191,7 +192,7 @@ void SoundEngine::scheduleForceStep(Voice& v, const double* modal_change, double
 // K_j lambda_j q_j' with K_j = rho M_j (d . e_j) / (4 pi c). The oscillators' output is
 // Re(factor b g y) with b = -i p^2 R / omega_d and q' = g Im(p y) / omega_d, so
 // factor = K_j lambda_j / p_j gives it (R = the voice's pressure scale / reference distance).
-void SoundEngine::scheduleClick(Voice& v, int path, const Arrival& a, double time_s, double duration_s,
+void SoundEngine::scheduleClick(VoiceState& v, int path, const Arrival& a, double time_s, double duration_s,
                                 const std::array<double, 3>& impulse_local) {
   const double inv_mass = 1.0 / v.mass_kg_;
   const double k_air = kAirDensity_kg_m3 / (4.0 * M_PI * kSpeedOfSoundAir_m_s);
@@ -211,7 +212,7 @@ void SoundEngine::scheduleClick(Voice& v, int path, const Arrival& a, double tim
   (void)clicks.addImpact(click);
 }
 
-const std::complex<double>* SoundEngine::throughAir(Voice& v, int path, const std::complex<double>* factors,
+const std::complex<double>* SoundEngine::throughAir(VoiceState& v, int path, const std::complex<double>* factors,
                                                     double distance_m) {
   if (v.air_np_per_m_.empty()) return factors;
   std::vector<std::complex<double>>& out = v.air_factor_[static_cast<size_t>(path)];
@@ -222,7 +223,8 @@ const std::complex<double>* SoundEngine::throughAir(Voice& v, int path, const st
   return out.data();
 }
 
-void SoundEngine::setExtraDamping(Voice& v, double time_s, const std::array<double, 3>& world_point, double per_s) {
+void SoundEngine::setExtraDamping(VoiceState& v, double time_s, const std::array<double, 3>& world_point,
+                                  double per_s) {
   const double at_s = time_s + delayTo(world_point);
   (void)v.synth_.setExtraDamping(at_s, per_s);
   if (!v.image_) return;  // the image rings in synth_ too

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "strike/engine.hpp"
+#include "voice_state.hpp"
 
 namespace strike {
 
@@ -111,7 +112,7 @@ ModalObjectDesc modalObject(const ModeBank& bank, const std::vector<double>& wei
 
 }  // namespace
 
-void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings) {
+void VoiceState::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings) {
   const ModeBank& bank = *bank_;
   const size_t modes = bank.modeCount();
   pressure_ = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
@@ -183,10 +184,10 @@ void Voice::setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings
   clicks_ = true;
 }
 
-Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
-    : bank_(desc.bank),
+VoiceState::VoiceState(const VoiceDesc& desc, const EngineSettings& settings)
+    : AccelerationClicks(synthSettings(settings)),
+      bank_(desc.bank),
       synth_(synthSettings(settings), modalObject(*desc.bank, desc.weights)),
-      click_synth_(synthSettings(settings), ModalObjectDesc{}),
       projector_(*desc.bank, desc.locator) {
   const ModeBank& bank = *bank_;
   if (desc.use_rows) projector_.useRows(desc.rows);
@@ -233,6 +234,10 @@ Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
   }
 }
 
+Voice::Voice(const VoiceDesc& desc, const EngineSettings& settings)
+    : state_(std::make_unique<VoiceState>(desc, settings)) {}
 Voice::~Voice() = default;
+const ModeBank& Voice::bank() const { return *state_->bank_; }
+SynthStats Voice::synthStats() const { return state_->synth_.stats(); }
 
 }  // namespace strike

@@ -62,9 +62,9 @@ class VoiceInput {
 
  private:
   friend class SoundEngine;
-  VoiceInput(SoundEngine& engine, Voice& voice) : engine_(engine), voice_(voice) {}
+  VoiceInput(SoundEngine& engine, VoiceState& voice) : engine_(engine), voice_(voice) {}
   SoundEngine& engine_;
-  Voice& voice_;
+  VoiceState& voice_;
 };
 
 /// A way a contact sounds.

@@ -258,6 +258,8 @@ struct EngineStats {
   double continuous_last_force_s = -1.0;
 };
 
+struct VoiceState;  // src/synth/voice_state.hpp
+
 /// One sounding body. Built off the audio thread (allocates everything it will need).
 class Voice {
  public:
@@ -265,105 +267,12 @@ class Voice {
   ~Voice();
   Voice(const Voice&) = delete;
   Voice& operator=(const Voice&) = delete;
-  const ModeBank& bank() const { return *bank_; }
-  SynthStats synthStats() const { return synth_.stats(); }
+  const ModeBank& bank() const;
+  SynthStats synthStats() const;
 
  private:
   friend class SoundEngine;
-  friend class VoiceInput;
-  void setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings);  // sound_paths.cpp's data
-  std::shared_ptr<const ModeBank> bank_;
-  OscillatorBank synth_;
-  OscillatorBank click_synth_;     ///< acceleration noise: three filters, one per axis (sound_paths.cpp)
-  bool rings_ = false;             ///< has a mode in the synthesized band
-  std::vector<float> click_mono_;  ///< max_block_frames
-  ContactProjector projector_;
-  std::vector<double> modal_;       ///< #modes: projection scratch
-  std::vector<double> step_force_;  ///< #modes: this step's sustained modal force (N / sqrt(kg))
-  std::vector<double> held_force_;  ///< #modes: the sustained modal force in force now
-  std::vector<float> mono_;         ///< max_block_frames
-  std::vector<float> levels_;       ///< #modes: budget scratch
-  // Radiation toward the listener (radiation.cpp).
-  bool pressure_ = false;             ///< output is pressure (VoiceDesc::pressure_scale > 0)
-  std::vector<double> sh_;            ///< spherical harmonics scratch, (max order + 1)^2
-  SphericalHarmonicsTable sh_table_;  ///< their recurrence's constants to the max order
-  CompactTransfer transfer_;          ///< the bank's transfer as evaluations read it
-  /// Scratch for one pass over the transfer's coefficients, which evaluates up to two directions
-  /// (the paths that need it): each one's farFieldWeights of sh_, and its F_i for the #modes.
-  std::array<std::vector<float>, 2> weights_;
-  std::array<std::vector<std::complex<double>>, 2> far_field_;
-  /// The per-mode factors handed to the oscillators for one path (direct, ground image), kept
-  /// with the direction and gain they were evaluated for: a body that has not turned relative to
-  /// the listener since its last event (resting, static, or several events in one physics step)
-  /// reuses them, bit for bit, instead of evaluating its far field again.
-  struct PathTransfer {
-    std::vector<std::complex<double>> factor;  ///< #modes
-    std::array<double, 3> direction{};
-    double gain = 0.0;
-    bool valid = false;
-  };
-  std::array<PathTransfer, 2> path_transfer_;
-  /// Air absorption (EngineSettings::air_absorption): per mode, nepers of amplitude per metre;
-  /// and per path, the factors with the air's gain in them (scratch).
-  std::vector<double> air_np_per_m_;
-  std::array<std::vector<std::complex<double>>, 2> air_factor_;
-  std::vector<double> inv_rms_;                           ///< #modes: 1 / rms_d |F_i| (0 for a silent mode)
-  bool clicks_ = false;                                   ///< acceleration noise (a free body with mass)
-  std::array<std::array<double, 3>, 3> click_axis_{};     ///< principal axes of the dipole tensor, mesh frame
-  std::array<double, 3> click_moment_m3_{};               ///< its eigenvalues
-  std::array<std::complex<double>, 3> click_gain_{};      ///< lambda_j / p_j of each click filter
-  std::array<double, 3> click_force_{};                   ///< scratch: rigid acceleration impulse per axis
-  std::array<std::complex<double>, 3> click_transfer_{};  ///< scratch
-  std::array<double, 3> centre_m_{};                      ///< centre of mass, mesh frame
-  double size_m_ = 1.0;                                   ///< largest extent of its surface (load moments over it)
-  double youngs_pa_ = 0, poisson_ = 0, mass_kg_ = 0, contact_radius_m_ = 0;
-  bool is_static_ = false;
-  // Pose and level (engine thread).
-  Pose pose_;
-  bool asleep_ = false;
-  float gain_ = 1.0f;
-  float cur_gain_[kMaxOutputChannels] = {}, target_gain_[kMaxOutputChannels] = {};
-  /// The ground's image as a signal of its own (an output with directions and a ground: it
-  /// arrives from below), with its own oscillators, clicks and gains; null otherwise, when the
-  /// image is mixed into synth_ with the direct sound.
-  struct ImagePath {
-    ImagePath(const SynthSettings& s, const ModalObjectDesc& modes) : synth(s, modes), click_synth(s, {}) {}
-    OscillatorBank synth;
-    OscillatorBank click_synth;
-    float cur_gain[kMaxOutputChannels] = {}, target_gain[kMaxOutputChannels] = {};
-  };
-  std::unique_ptr<ImagePath> image_;
-  float level_gain2_ = 0.0f;
-  bool fresh_ = true;
-  // Contact scheduler state (contact_scheduler.cpp).
-  bool in_step_ = false;                ///< has sustained contact in the open step
-  std::array<double, 6> step_load_{};   ///< force (N) and moment / size (N) of the open step
-  std::array<double, 6> held_load_{};   ///< of the held force
-  bool holding_ = false;                ///< held_force_ is not zero
-  std::array<uint32_t, 8> partners_{};  ///< voices it touched in its last sustained step
-  uint32_t partner_count_ = 0;
-  bool partners_overflow_ = false;  ///< more than 8: a static body keeps no load when they sleep
-  double last_sustained_s_ = -1.0;  ///< time of its last sustained contact
-  bool span_open_ = false;          ///< contact damping in force
-  // Continuous contacts (contact_sources.cpp): one generator per partner it rolls or slides on,
-  // each a force channel of its oscillator bank.
-  struct Source {
-    bool used = false;
-    uint64_t key = 0;  ///< partner voice, or the partner's surface seed
-    RoughContact generator;
-    double delay_s = 0.0;
-    // This step's contact points, summed.
-    bool stepped = false;
-    double force_n = 0.0, speed_n = 0.0, partner_speed_n = 0.0, patch_n = 0.0;  // * N
-    std::array<double, 3> spot_n{}, partner_spot_n{}, world_n{};                // * N
-    std::vector<double> modal;                                                  ///< #modes: the step's modal impulses
-    ContactPartner partner;
-  };
-  SurfaceRoughness roughness_;
-  double restitution_ = 0.5;
-  std::array<Source, kForceChannels> sources_;
-  std::vector<float> force_;  ///< kForceChannels x max_block_frames
-  std::array<const float*, kForceChannels> force_ptrs_{};
+  std::unique_ptr<VoiceState> state_;
 };
 
 class SoundEngine {
@@ -415,19 +324,21 @@ class SoundEngine {
     double end_s = 0.0, length_s = 0.0;
   };
   friend class VoiceInput;
+  /// The state of the voice in `slot`, or null.
+  VoiceState* state(uint32_t slot) const;
   /// A sustained contact's share of its body's load over the open step (VoiceInput::sustain).
-  void sustainedContact(Voice& v, const ResolvedContact& c, const double* modal);
-  void endStepFor(Voice& v);
-  void scheduleImpact(Voice& v, const double* modal, double time_s, double duration_s, PulseShape shape,
+  void sustainedContact(VoiceState& v, const ResolvedContact& c, const double* modal);
+  void endStepFor(VoiceState& v);
+  void scheduleImpact(VoiceState& v, const double* modal, double time_s, double duration_s, PulseShape shape,
                       const std::array<double, 3>& world_point, const std::array<double, 3>& impulse_local);
-  void scheduleForceStep(Voice& v, const double* modal_change, double time_s, double ramp_s,
+  void scheduleForceStep(VoiceState& v, const double* modal_change, double time_s, double ramp_s,
                          const std::array<double, 3>& world_point);
-  double hertzDuration(const Voice& v, const ContactPartner& p, double speed) const;
+  double hertzDuration(const VoiceState& v, const ContactPartner& p, double speed) const;
   // Continuous contacts (contact_sources.cpp).
-  void continuousContact(Voice& v, const EngineContact& c, const std::array<double, 3>& world);
-  void continuousEndStep(Voice& v, bool load_change_follows);
-  bool renderContactForces(Voice& v, size_t frames);
-  void resetContinuous(Voice& v);
+  void continuousContact(VoiceState& v, const EngineContact& c, const std::array<double, 3>& world);
+  void continuousEndStep(VoiceState& v, bool load_change_follows);
+  bool renderContactForces(VoiceState& v, size_t frames);
+  void resetContinuous(VoiceState& v);
   double delayTo(const std::array<double, 3>& world_point) const;
   /// The paths from a voice's source point to the listener: the direct one and, with a ground,
   /// its image (sound_paths.cpp; only for a voice whose output is pressure). Returns how many (1
@@ -438,7 +349,7 @@ class SoundEngine {
     double distance_m = 0.0;            ///< the path's length
     std::array<double, 3> direction{};  ///< toward the (image) listener, mesh frame, unit
   };
-  int arrivals(const Voice& v, const std::array<double, 3>& world_point, Arrival out[2]) const;
+  int arrivals(const VoiceState& v, const std::array<double, 3>& world_point, Arrival out[2]) const;
   /// The per-mode factors for the arrivals along paths [0, count) (0: direct, 1: ground image)
   /// into factors[path]; nullptr when the factor is 1 for every mode. Impacts and load changes
   /// reuse a path's last factors only for the same direction to the bit; a continuous (rolling,
@@ -448,26 +359,25 @@ class SoundEngine {
   /// change later in the step: the pass reads memory, so a second direction is nearly free.
   enum class Reuse { SameDirection, WithinTolerance };
   static constexpr double kContinuousTransferTolerance = 1e-3;  ///< of a mode's loudest far field
-  void radiationToward(Voice& v, const Arrival paths[], int count, const std::complex<double>* factors[2],
+  void radiationToward(VoiceState& v, const Arrival paths[], int count, const std::complex<double>* factors[2],
                        Reuse reuse = Reuse::SameDirection, int also_to = 0);
-  void scheduleClick(Voice& v, int path, const Arrival& a, double time_s, double duration_s,
+  void scheduleClick(VoiceState& v, int path, const Arrival& a, double time_s, double duration_s,
                      const std::array<double, 3>& impulse_local);
-  void updateGains(Voice& v);
+  void updateGains(VoiceState& v);
   /// The path's factors times each mode's air absorption over distance_m (the voice's scratch),
   /// or `factors` itself when the air absorbs nothing.
-  const std::complex<double>* throughAir(Voice& v, int path, const std::complex<double>* factors, double distance_m);
+  const std::complex<double>* throughAir(VoiceState& v, int path, const std::complex<double>* factors,
+                                         double distance_m);
   /// Mixes `mono` (the voice's path signal) into out with gains ramped from cur to target.
   void mixPath(const float* mono, float* cur, const float* target, float* const* out, size_t frames) const;
   /// Where the ground's mirror image of `point` is, when the image path exists for it.
   bool imageOf(const std::array<double, 3>& point, std::array<double, 3>& image) const;
   /// The synth a path's pulses go to: synth_ for the direct sound, and for the image too unless
   /// it has its own signal.
-  OscillatorBank& pathSynth(Voice& v, int path) const { return path > 0 && v.image_ ? v.image_->synth : v.synth_; }
-  OscillatorBank& pathClicks(Voice& v, int path) const {
-    return path > 0 && v.image_ ? v.image_->click_synth : v.click_synth_;
-  }
+  OscillatorBank& pathSynth(VoiceState& v, int path) const;
+  OscillatorBank& pathClicks(VoiceState& v, int path) const;
   /// Contact damping on from time_s (event time, before the delay) heard from world_point.
-  void setExtraDamping(Voice& v, double time_s, const std::array<double, 3>& world_point, double per_s);
+  void setExtraDamping(VoiceState& v, double time_s, const std::array<double, 3>& world_point, double per_s);
   void enforceBudget(uint64_t& active);
 
   EngineSettings settings_;

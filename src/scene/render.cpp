@@ -394,7 +394,8 @@ Status prepareBody(const Scene& scene, const RenderSettings& settings, double ma
 /// forecast needs its factor's symbolic analysis, made in the solve) plus, with the acoustic
 /// transfer, the larger of its own forecast (transferMemoryForecastBytes) and what it was measured
 /// to take above the eigen-solve: 0.36 GB on box:0.2,0.1,0.05 (896 triangles, 9 modes; the
-/// forecast says 33 MB), nothing on assets/meshes/glass.obj (0.47 GB peak either way).
+/// forecast, which counts the near quadrature since solver revision 6, says 0.94 GB; before it
+/// said 33 MB), nothing on assets/meshes/glass.obj (0.47 GB peak either way).
 double solveForecastBytes(const Body& body) {
   constexpr double kTransferMeasuredBytes = 0.5e9;
   const double dofs = body.mesh ? 3.0 * static_cast<double>(body.mesh->mesh.nodes.rows()) : 0.0;

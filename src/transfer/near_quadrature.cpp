@@ -34,6 +34,18 @@ void nearRule(const V3& x, const V3& a, const V3& b, const V3& c, const V3& norm
 
 }  // namespace
 
+size_t nearCacheBytes(const NearCache& c) {
+  return (c.begin.capacity() + c.near_begin.capacity() + c.near_first.capacity()) * sizeof(size_t) +
+         (c.r.capacity() + c.inv_r.capacity() + c.w_g.capacity() + c.w_dn.capacity()) * sizeof(double) +
+         (c.tri.capacity() + c.near_tris.capacity()) * sizeof(uint32_t);
+}
+
+size_t nearCacheBytes(const std::map<size_t, NearCache>& caches) {
+  size_t total = 0;
+  for (const auto& entry : caches) total += nearCacheBytes(entry.second);
+  return total;
+}
+
 NearCache buildNearCache(const Surface& s, const Cut& cut, double k_ref) {
   NearCache out;
   const size_t rows = cut.nodes.size() + s.chief_candidates.size();

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <vector>
 
 #include "clusters.hpp"
@@ -33,6 +34,10 @@ struct NearCache {
   std::vector<uint32_t> near_tris;          // their points: [near_first[i], near_first[i + 1])
   std::vector<size_t> near_first;
 };
+
+/// The bytes the caches hold (their vectors' capacities).
+size_t nearCacheBytes(const NearCache& cache);
+size_t nearCacheBytes(const std::map<size_t, NearCache>& caches);
 
 /// The near quadrature of every row of `cut`, then of every interior candidate, at k_ref.
 NearCache buildNearCache(const Surface& s, const Cut& cut, double k_ref);

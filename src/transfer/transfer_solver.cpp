@@ -224,7 +224,8 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     std::vector<double> total(rhs, 0.0);
     std::vector<char> done(rhs, 0);
     std::vector<uint32_t> mode_elements(rhs, 0), mode_chief(rhs, 0), mode_iterations(rhs, 0);
-    std::vector<int> mode_cap(rhs, n_cap);  // the order up to which the mode's far field was projected
+    size_t group_matrix_bytes = 0, group_near_bytes = 0;  // the most the group's solves held
+    std::vector<int> mode_cap(rhs, n_cap);                // the order up to which the mode's far field was projected
     diff.assign(rhs, 0.0);
     energy.assign(rhs * (n_cap + 1), 0.0);
     coef.assign(rhs, {});
@@ -234,6 +235,8 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
     while (true) {
       const size_t chief = chiefPointsFor(s, settings, k, elements);
       const ModeSolve solved = solveSystem(s, data, k, elements, chief, k_rule, near_caches, parts, system_options);
+      group_matrix_bytes = std::max(group_matrix_bytes, solved.matrix_bytes);
+      group_near_bytes = std::max(group_near_bytes, nearCacheBytes(near_caches));
       ++solves;
       assembly_seconds += solved.assembly_seconds;
       factor_seconds += solved.factor_seconds;
@@ -323,6 +326,8 @@ Result<AcousticTransfer> solveAcousticTransfer(const ModeBank& bank, const Trans
         st.far_field_seconds = far_field_seconds / static_cast<double>(rhs);
         st.solves = solves;
         st.iterations = mode_iterations[r];
+        st.matrix_bytes = group_matrix_bytes;
+        st.near_cache_bytes = group_near_bytes;
       }
     }
     if (progress) progress("transfer", static_cast<double>(last) / static_cast<double>(modes + 1));

@@ -364,14 +364,17 @@ Status transferOptions(const ParsedArgs& args, PrecomputeSettings& settings, boo
   uint64_t elements = static_cast<uint64_t>(*budget);
   if (settings.max_memory_bytes > 0) {
     // Half the budget for the largest system and its coarse copy (the rest: mesh, bank, caches).
-    while (elements > 16 && transferSystemBytes(elements) > 0.5 * settings.max_memory_bytes)
+    while (elements > 16 && transferSystemBytes(elements, settings.transfer.direct_max_elements,
+                                                settings.transfer.hierarchical) > 0.5 * settings.max_memory_bytes)
       elements = elements * 9 / 10;
   }
   settings.transfer.max_elements = static_cast<uint32_t>(elements);
   if (!quiet)
-    std::fprintf(stderr, "strike modes: transfer budget %llu unknowns (forecast %.0f MB for its largest system)%s\n",
-                 static_cast<unsigned long long>(elements), transferSystemBytes(elements) / 1e6,
-                 elements < static_cast<uint64_t>(*budget) ? ", lowered to fit the memory budget (--max-memory)" : "");
+    std::fprintf(
+        stderr, "strike modes: transfer budget %llu unknowns (forecast %.0f MB for its largest system)%s\n",
+        static_cast<unsigned long long>(elements),
+        transferSystemBytes(elements, settings.transfer.direct_max_elements, settings.transfer.hierarchical) / 1e6,
+        elements < static_cast<uint64_t>(*budget) ? ", lowered to fit the memory budget (--max-memory)" : "");
   return {};
 }
 

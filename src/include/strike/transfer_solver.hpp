@@ -28,6 +28,8 @@
 // bits on one thread), as are the fine solve and the error estimate's coarse one.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -129,15 +131,27 @@ struct TransferModeStats {
   double far_field_seconds = 0.0;  ///< of `seconds`: the spherical-harmonic projection
   uint32_t solves = 0;             ///< systems solved (refinement steps)
   uint32_t iterations = 0;         ///< GMRES iterations of the kept solve (0: a direct solve)
+  /// What its group's solves held at most, counted by the solver: the fine system's matrix
+  /// (dense, or the hierarchical matrix's blocks) and the near quadrature caches.
+  uint64_t matrix_bytes = 0, near_cache_bytes = 0;
 };
 
 /// The memory of the largest system of a solve with `elements` unknowns, forecast before it is
-/// allocated: the matrix in double and its single-precision copy (LU), and the error estimate's
-/// coarse system beside it (about half the unknowns), 24 bytes per entry; the interior points'
-/// rows (at most a tenth more) included.
-inline double transferSystemBytes(uint64_t elements) {
-  const double n = static_cast<double>(elements), rows = 1.1 * n, coarse = 0.5 * n + 0.1 * n;
-  return 24.0 * (rows * n + coarse * 0.5 * n);
+/// allocated. Dense (at most direct_max_elements unknowns, or without the hierarchical matrix):
+/// the matrix in double and its single-precision copy (LU), and the error estimate's coarse
+/// system beside it (about half the unknowns), 24 bytes per entry; the interior points' rows (at
+/// most a tenth more) included. Hierarchical (src/transfer/hmatrix.hpp): 16 bytes per value,
+/// n min(n, 40 sqrt(n)) values (measured on the 4 mm bench plate: 1400 a row at 1473 unknowns,
+/// 2000-2200 at 2931, against 38 sqrt(n) and 40 sqrt(n)), the coarse system's restriction half
+/// that, and GMRES's two bases of 61 vectors.
+inline double transferSystemBytes(uint64_t elements, uint32_t direct_max_elements = 700, bool hierarchical = true) {
+  const double n = static_cast<double>(elements);
+  if (!hierarchical || elements <= direct_max_elements) {
+    const double rows = 1.1 * n, coarse = 0.5 * n + 0.1 * n;
+    return 24.0 * (rows * n + coarse * 0.5 * n);
+  }
+  const double per_row = std::min(n, 40.0 * std::sqrt(n));
+  return 16.0 * (1.5 * n * per_row + 2.0 * 61.0 * n);
 }
 
 /// The groups of modes that share one solve (modes of nearly one frequency: a degenerate pair

@@ -7,9 +7,12 @@
 
 #include <cmath>
 #include <complex>
+#include <cstdlib>
 #include <vector>
 
+#include "strike/bank.hpp"
 #include "strike/mesh.hpp"
+#include "strike/precompute.hpp"
 #include "strike/transfer_solver.hpp"
 #include "transfer/assembly.hpp"
 #include "transfer/hmatrix.hpp"
@@ -178,6 +181,48 @@ TEST(HMatrix, ATransferThroughItIsTheDenseSolvesWithinTheTolerance) {
   for (int i = 0; i < 3; ++i)
     EXPECT_NEAR(runs[1].translation_dipole_m3[i * 4], runs[0].translation_dipole_m3[i * 4],
                 1e-4 * std::abs(runs[0].translation_dipole_m3[8]));
+}
+
+// The transfer's memory forecast (transferMemoryForecastBytes, checked before a solve against
+// --max-memory) against what the solver counts it holds (TransferModeStats: the fine matrix and
+// the near quadrature caches): at least that, and within 4x of it, on the thin disc solved
+// through the hierarchical matrix and through dense LU (ka 4, the forecast's top frequency
+// the mode's).
+TEST(HMatrix, TheMemoryForecastBoundsWhatTheSolverHolds) {
+  const double c_air = 343.0, ka = 4.0, k = ka / 0.1;
+  for (const uint32_t direct_max : {300u, 1000u}) {
+    ModeBank bank = discBank(0.1, 0.004, 0.006);
+    bank.eigenvalues.push_back(std::pow(k * c_air, 2));
+    bank.max_freq_hz = k * c_air / (2 * M_PI);
+    for (size_t v = 0; v < bank.surfaceVertexCount(); ++v)
+      for (int c = 0; c < 3; ++c) bank.shapes.push_back(c == 2 ? 1.0f : 0.0f);
+    TransferSettings settings;
+    settings.speed_of_sound_m_s = c_air;
+    settings.max_elements = 900;
+    settings.direct_max_elements = direct_max;
+    std::vector<TransferModeStats> stats;
+    Result<AcousticTransfer> t = solveAcousticTransfer(bank, settings, {}, &stats);
+    ASSERT_TRUE(t) << t.error().message;
+    const double held = static_cast<double>(stats[0].matrix_bytes + stats[0].near_cache_bytes);
+    const double forecast = transferMemoryForecastBytes(bank, settings);
+    std::printf("  direct max %u: %u unknowns, matrix %.1f MB, near %.1f MB; forecast %.1f MB (%.2fx)\n", direct_max,
+                stats[0].elements, stats[0].matrix_bytes / 1e6, stats[0].near_cache_bytes / 1e6, forecast / 1e6,
+                forecast / held);
+    EXPECT_GT(stats[0].matrix_bytes, 0u);
+    EXPECT_GE(forecast, held);
+    EXPECT_LE(forecast, 4.0 * held);
+  }
+}
+
+// Development aid, not run by ctest: STRIKE_TRANSFER_BANK=path.modes prints the forecast.
+TEST(HMatrix, DISABLED_PrintsTheForecastOfABankFromTheEnvironment) {
+  const char* path = std::getenv("STRIKE_TRANSFER_BANK");
+  ASSERT_NE(path, nullptr);
+  Result<ModeBank> bank = readBank(path);
+  ASSERT_TRUE(bank) << bank.error().message;
+  TransferSettings settings;
+  if (const char* max = std::getenv("STRIKE_TRANSFER_MAX_ELEMENTS")) settings.max_elements = std::atoi(max);
+  std::printf("forecast %.1f MB\n", transferMemoryForecastBytes(*bank, settings) / 1e6);
 }
 
 }  // namespace

@@ -536,6 +536,11 @@ TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
   if (const char* max = std::getenv("STRIKE_TRANSFER_DIRECT_MAX")) settings.direct_max_elements = std::atoi(max);
   if (const char* target = std::getenv("STRIKE_TRANSFER_TARGET")) settings.target_relative_error = std::atof(target);
   if (const char* dense = std::getenv("STRIKE_TRANSFER_DENSE")) settings.hierarchical = std::atoi(dense) == 0;
+  if (const char* first = std::getenv("STRIKE_TRANSFER_FIRST")) {  // the first N modes only
+    const size_t n = std::min<size_t>(std::max(1, std::atoi(first)), bank->modeCount());
+    bank->eigenvalues.resize(n);
+    bank->shapes.resize(n * bank->surfaceVertexCount() * 3);
+  }
   if (const char* every = std::getenv("STRIKE_TRANSFER_EVERY")) {  // every N-th mode only (N-1, 2N-1, ...)
     const size_t n = std::max(1, std::atoi(every)), vertices = bank->surfaceVertexCount();
     ModeBank kept = *bank;
@@ -560,10 +565,10 @@ TEST(TransferSolver, DISABLED_PrintsTheSolveOfABankFromTheEnvironment) {
   for (size_t i = 0; i < stats.size(); ++i)
     std::printf(
         "%3zu %8.1f Hz ka %6.2f elements %4u chief %3u order %3u estimate %7.4f %6.3f s (solves %u, assembly %.3f, "
-        "factor %.3f, far field %.3f, iterations %u)\n",
+        "factor %.3f, far field %.3f, iterations %u, matrix %.1f MB, near %.1f MB)\n",
         i, bank->frequencyHz(i), stats[i].ka, stats[i].elements, stats[i].chief_points, stats[i].order,
         stats[i].relative_error, stats[i].seconds, stats[i].solves, stats[i].assembly_seconds, stats[i].factor_seconds,
-        stats[i].far_field_seconds, stats[i].iterations);
+        stats[i].far_field_seconds, stats[i].iterations, stats[i].matrix_bytes / 1e6, stats[i].near_cache_bytes / 1e6);
   // Against a reference transfer of the same modes (a bank solved tighter): the true error of
   // each mode's far field (rms over directions, Parseval), beside its estimate.
   // (STRIKE_TRANSFER_REFERENCE: a bank file holding it; STRIKE_TRANSFER_REFERENCE_ELEMENTS: solved

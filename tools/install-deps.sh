@@ -13,6 +13,7 @@ packages=(
   libbullet-dev          # rigid-body simulation, double-precision libraries (zlib)
   libsndfile1-dev        # WAV/FLAC (LGPL)
   libfftw3-dev           # FFT analysis (GPL: tool and tests only)
+  libmysofa-dev          # SOFA head-related responses for binaural output (BSD: tools only; its libmysofa1 ships the MIT KEMAR set)
   nlohmann-json3-dev     # JSON (MIT)
   libgtest-dev           # tests
   lv2-dev                # examples/lv2 plugin headers (ISC)

@@ -241,12 +241,15 @@ py::object eventsArray(const RenderResult& r) {
 PyRenderResult renderParsed(Result<Scene>&& parsed, double rate, double duration, double gain,
                             const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
                             bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads,
-                            const std::string& output) {
+                            const std::string& output, const std::string& hrtf) {
   Scene scene = take(std::move(parsed));
   RenderSettings settings;
   const std::optional<OutputFormat> format = parseOutputFormat(output);
-  if (!format) raise(badInput("output = '" + output + "' (must be mono, stereo, ambix1, ambix2 or ambix3)"));
+  if (!format) raise(badInput("output = '" + output + "' (must be mono, stereo, binaural, ambix1, ambix2 or ambix3)"));
   settings.output_format = *format;
+  if (!hrtf.empty() && *format != OutputFormat::Binaural)
+    raise(badInput("hrtf = '" + hrtf + "' needs output = 'binaural'"));
+  settings.hrtf_file = hrtf;
   settings.sample_rate_hz = rate;
   settings.duration_s = duration;
   settings.gain = gain;
@@ -440,19 +443,19 @@ PYBIND11_MODULE(_strike, m) {
                                return d;
                              })
       .def("clear", &RenderSession::clear);
-  m.def("render_file", [](const std::string& path, double rate, double duration, double gain,
-                          const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
-                          bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads,
-                            const std::string& output) {
-    return renderParsed(loadScene(path), rate, duration, gain, cache_dir, max_tets, max_events, similar,
-                        transfer, std::move(session), solve_threads, output);
-  });
+  m.def("render_file",
+        [](const std::string& path, double rate, double duration, double gain, const std::string& cache_dir,
+           int64_t max_tets, int64_t max_events, bool similar, bool transfer, std::shared_ptr<RenderSession> session,
+           unsigned solve_threads, const std::string& output, const std::string& hrtf) {
+          return renderParsed(loadScene(path), rate, duration, gain, cache_dir, max_tets, max_events, similar, transfer,
+                              std::move(session), solve_threads, output, hrtf);
+        });
   m.def("render_text", [](const std::string& text, const std::string& path, double rate, double duration, double gain,
                           const std::string& cache_dir, int64_t max_tets, int64_t max_events, bool similar,
                           bool transfer, std::shared_ptr<RenderSession> session, unsigned solve_threads,
-                            const std::string& output) {
+                          const std::string& output, const std::string& hrtf) {
     return renderParsed(parseScene(text, path), rate, duration, gain, cache_dir, max_tets, max_events, similar,
-                        transfer, std::move(session), solve_threads, output);
+                        transfer, std::move(session), solve_threads, output, hrtf);
   });
   m.def("default_cache_dir", &defaultCacheDir);
   m.def("default_max_tets", []() { return static_cast<int64_t>(kDefaultMaxTets); });

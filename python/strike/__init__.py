@@ -281,7 +281,7 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
            base_dir: Union[str, os.PathLike, None] = None, max_tets: Optional[int] = None,
            max_events: Optional[int] = None, similar: bool = False, session: Optional[Session] = None,
            transfer: bool = True, solve_threads: int = 0,
-           output: str = "mono") -> RenderResult:
+           output: str = "mono", hrtf: Union[str, os.PathLike, None] = None) -> RenderResult:
     """Renders a collision scene, as ``strike render SCENE.json -o OUT.wav`` does (same engine,
     same samples; :meth:`RenderResult.save` writes the CLI's bytes).
 
@@ -300,8 +300,11 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
     solve_threads: how many of the banks this render computes are solved at once, each on a thread
         (0, default: one per core, as far as the memory forecast allows; 1: one after another, as
         the batch's workers do, which use every core already). The same bytes either way.
-    output: the channels (``--output``, docs/listener.md): "mono" (default), "stereo", or
-        "ambix1", "ambix2", "ambix3" (AmbiX: ACN order, SN3D); audio is then (frames, channels).
+    output: the channels (``--output``, docs/listener.md): "mono" (default), "stereo", "binaural"
+        (left and right ear), or "ambix1", "ambix2", "ambix3" (AmbiX: ACN order, SN3D); audio is
+        then (frames, channels).
+    hrtf: the binaural output's head-related responses (``--hrtf``): an AES69 SOFA file; None
+        (default): the MIT KEMAR set of Debian's libmysofa.
         The listener's orientation is the scene's ``listener.orientation`` or ``listener.look_at``.
     The GIL is released during the render.
     """
@@ -330,7 +333,8 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
         anchor = os.path.join(os.path.abspath(os.fspath(base_dir or ".")), "<scene dict>")
         try:
             native = _strike.render_text(json.dumps(scene), anchor, rate_hz, duration_s, gain, cache_dir, max_tets,
-                                         max_events, bool(similar), bool(transfer), session, solve_threads, str(output))
+                                         max_events, bool(similar), bool(transfer), session, solve_threads, str(output),
+                                         "" if hrtf is None else os.fspath(hrtf))
         except InputError as error:
             # The anchor is no file: messages name the dict (and where its paths resolve) instead.
             message = str(error)
@@ -341,7 +345,8 @@ def render(scene: Union[str, os.PathLike, Mapping[str, Any]], rate: Optional[flo
         return RenderResult(native, scene)
     path = os.fspath(scene)
     native = _strike.render_file(path, rate_hz, duration_s, gain, cache_dir, max_tets, max_events, bool(similar),
-                                 bool(transfer), session, solve_threads, str(output))
+                                 bool(transfer), session, solve_threads, str(output),
+                                 "" if hrtf is None else os.fspath(hrtf))
     return RenderResult(native, path)
 
 

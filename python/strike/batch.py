@@ -114,7 +114,8 @@ def _render(job, out_dir: str, cache_dir: str, similar: bool):
     try:
         # One solve at a time: the workers are one per core already, and each forecasts its memory alone.
         result = strike.render(job.scene, rate=job.rate, duration=job.duration, gain=job.gain, cache=cache_dir,
-                               base_dir=job.base_dir, similar=similar, session=_session(), solve_threads=1)
+                               base_dir=job.base_dir, similar=similar, session=_session(), solve_threads=1,
+                               output=job.output, hrtf=job.hrtf)
     except strike.InputError as e:
         return {"id": job.id, "status": "failed", "error": f"line {job.line} (id {job.id}): {e}",
                 "seconds": time.perf_counter() - start}
@@ -149,6 +150,7 @@ def _finish(job, result, start: float, render_s: float, out_dir: str, cache_dir:
             "similar": similar,
             "strike_version": strike.__version__,
             "audio": {"file": job.id + ".wav", "format": "float", "rate": result.rate, "frames": int(result.audio.shape[0]),
+                      "output": job.output, "channels": 1 if result.audio.ndim == 1 else int(result.audio.shape[1]),
                       "sha256": _sha256(partial_wav)},
             "banks": report["banks"],
             "cache_dir": os.path.abspath(cache_dir) if cache_dir else None,

@@ -11,7 +11,9 @@ Each line is a JSON object with exactly one of:
                 ID-000000, ID-000001, ... after the index: a dataset of 10^5 scenes is one line);
 
 and optionally "id" (the output name, [A-Za-z0-9._-], default the line number as 000001),
-"rate", "duration", "gain" (override the scene's), "seed" (recorded; required with "random").
+"rate", "duration", "gain" (override the scene's), "seed" (recorded; required with "random"),
+"output" (the channels, as ``strike render --output``: "mono" (default), "stereo", "binaural",
+"ambix1", "ambix2", "ambix3") and "hrtf" (a SOFA file for "binaural"; default the MIT KEMAR set).
 Relative paths (in the line and in an inline scene) resolve against the manifest's folder.
 Blank lines and lines starting with # are skipped.
 """
@@ -27,7 +29,9 @@ from typing import Any, Optional
 from .random_scenes import SpecError, draw_scene
 
 _ID = re.compile(r"^[A-Za-z0-9._-]{1,200}$")
-_KEYS = {"id", "scene", "template", "parameters", "random", "seed", "index", "count", "first", "rate", "duration", "gain"}
+_KEYS = {"id", "scene", "template", "parameters", "random", "seed", "index", "count", "first", "rate", "duration", "gain",
+         "output", "hrtf"}
+_OUTPUTS = ("mono", "stereo", "binaural", "ambix1", "ambix2", "ambix3")
 _PLACEHOLDER = re.compile(r"^\$\{([A-Za-z_][A-Za-z0-9_]*)\}$")
 
 
@@ -48,11 +52,16 @@ class Job:
     rate: Optional[float] = None
     duration: Optional[float] = None
     gain: float = 1.0
+    output: str = "mono"
+    hrtf: Optional[str] = None       # absolute path, or None: the default set
 
     def key(self) -> str:
         """Hash of everything that decides the output: a done render with another key is redone."""
-        text = json.dumps({"scene": self.scene, "base_dir": self.base_dir, "rate": self.rate,
-                           "duration": self.duration, "gain": self.gain}, sort_keys=True)
+        decided = {"scene": self.scene, "base_dir": self.base_dir, "rate": self.rate, "duration": self.duration,
+                   "gain": self.gain}
+        if self.output != "mono" or self.hrtf is not None:  # mono keeps the keys it had
+            decided.update(output=self.output, hrtf=self.hrtf)
+        text = json.dumps(decided, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -170,9 +179,19 @@ def _parse_one(line: Any, number: int, files: _Files) -> Job:
         raise ValueError("parameters go with a template")
     if "index" in line and kinds[0] != "random":
         raise ValueError("index goes with a random spec")
+    output = line.get("output", "mono")
+    if output not in _OUTPUTS:
+        raise ValueError(f"output = {json.dumps(output)} (must be one of {', '.join(_OUTPUTS)})")
+    hrtf = line.get("hrtf")
+    if hrtf is not None:
+        if not isinstance(hrtf, str) or not hrtf:
+            raise ValueError(f"hrtf = {json.dumps(hrtf)} (must be a SOFA file path)")
+        if output != "binaural":
+            raise ValueError(f"hrtf = {json.dumps(hrtf)} goes with \"output\": \"binaural\"")
+        hrtf = os.path.normpath(os.path.join(files.base_dir, hrtf))
     return Job(id=job_id, line=number, scene=scene, base_dir=base, source=line, parameters=parameters, seed=seed,
                rate=_number(line, "rate", 8000, 384000), duration=_number(line, "duration", 1e-9, 3600),
-               gain=_number(line, "gain", 1e-300, 1e300) or 1.0)
+               gain=_number(line, "gain", 1e-300, 1e300) or 1.0, output=output, hrtf=hrtf)
 
 
 def read_manifest(path: str) -> list:

@@ -146,3 +146,35 @@ def test_bad_manifest_lines_name_the_line_key_and_value(manifest, tmp_path):
     r = batch(bad, "-o", tmp_path / "out", "--shard", "1/1", "--cache", tmp_path / "cache")
     assert r.returncode == 1 and "id drop00" in r.stderr and "unknown material 'unobtainium'" in r.stderr, r.stderr
     assert not (tmp_path / "out" / "drop00.wav").exists() and (tmp_path / "out" / "drop01.wav").exists()
+
+
+def test_output_per_line_renders_binaural_and_ambisonics_as_the_cli(serial, manifest, cli, tmp_path):
+    # A line's "output" is `strike render --output`: the same samples as the CLI's render of its scene.
+    import numpy as np
+    from conftest import wav_float_samples
+    lines = [json.loads(line) for line in manifest.read_text().splitlines()[1:3]]
+    lines[0]["output"], lines[1]["output"] = "binaural", "ambix1"
+    (tmp_path / "template.json").write_text((manifest.parent / "template.json").read_text())
+    (tmp_path / "two.jsonl").write_text("\n".join(json.dumps(line) for line in lines))
+    cache = serial[0].parent / "serial-cache"
+    r = batch(tmp_path / "two.jsonl", "-o", tmp_path / "out", "--shard", "1/1", "--cache", cache)
+    assert r.returncode == 0, r.stderr
+    for line, channels in zip(lines, (2, 4)):
+        meta = json.loads((tmp_path / "out" / (line["id"] + ".json")).read_text())
+        assert meta["audio"]["output"] == line["output"] and meta["audio"]["channels"] == channels
+        (tmp_path / "scene.json").write_text(json.dumps(meta["scene"]))
+        wav = tmp_path / "cli.wav"
+        r = run([cli, "render", tmp_path / "scene.json", "-o", wav, "--cache", cache, "--output", line["output"], "--quiet"])
+        assert r.returncode == 0, r.stderr
+        batch_samples = wav_float_samples(tmp_path / "out" / (line["id"] + ".wav"))
+        assert np.abs(batch_samples).max() > 1e-4
+        assert np.array_equal(batch_samples.view(np.uint32), wav_float_samples(wav).view(np.uint32))
+    # A bad output, and an hrtf without binaural, name the line, key and value.
+    lines[1]["output"] = "octo"
+    (tmp_path / "bad.jsonl").write_text("\n".join(json.dumps(line) for line in lines))
+    r = batch(tmp_path / "bad.jsonl", "-o", tmp_path / "bad")
+    assert r.returncode == 1 and 'bad.jsonl:2: error: output = "octo"' in r.stderr, r.stderr
+    lines[1]["output"], lines[1]["hrtf"] = "stereo", "head.sofa"
+    (tmp_path / "bad.jsonl").write_text("\n".join(json.dumps(line) for line in lines))
+    r = batch(tmp_path / "bad.jsonl", "-o", tmp_path / "bad")
+    assert r.returncode == 1 and 'bad.jsonl:2: error: hrtf = "head.sofa" goes with' in r.stderr, r.stderr

@@ -118,6 +118,16 @@ def test_output_formats_equal_the_cli_and_turn_with_the_listener(repo, cli, cach
     assert np.abs(difference).max() < 4e-6
     with pytest.raises(strike.InputError, match="output = 'octo'"):
         strike.render(scene, duration=0.4, cache=cache_dir, output="octo")
+    # Binaural (the KEMAR set by default, read by the package as by the CLI): the CLI's samples.
+    wav = tmp_path / "binaural.wav"
+    r = run([cli, "render", tmp_path / "scene.json", "-o", wav, "--duration", "0.4", "--cache", cache_dir,
+             "--output", "binaural", "--quiet"])
+    assert r.returncode == 0, r.stderr
+    binaural = strike.render(scene, duration=0.4, cache=cache_dir, output="binaural")
+    assert binaural.audio.shape == (19200, 2)
+    assert np.array_equal(binaural.audio.reshape(-1).view(np.uint32), wav_float_samples(wav).view(np.uint32))
+    with pytest.raises(strike.InputError, match="missing.sofa"):
+        strike.render(scene, duration=0.4, cache=cache_dir, output="binaural", hrtf=tmp_path / "missing.sofa")
 
 
 def test_modes_and_hit_equal_the_cli(cli, tmp_path):

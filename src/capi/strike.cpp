@@ -254,6 +254,31 @@ STRIKE_API strike_context_config STRIKE_CALL strike_context_config_default(void)
 
 namespace {
 
+/// A binaural output's responses, copied from the caller's arrays, or why they cannot be.
+Result<std::shared_ptr<const HrtfSet>> hrtfFromOutput(const strike_output_desc& output, double sample_rate_hz) {
+  if (output.struct_size < offsetof(strike_output_desc, hrtf_right) + sizeof output.hrtf_right)
+    return badInput("output: struct_size = " + std::to_string(output.struct_size) +
+                    " does not cover the hrtf_* fields STRIKE_OUTPUT_BINAURAL needs (set it to "
+                    "sizeof(strike_output_desc))");
+  if (output.hrtf_count < 4 || output.hrtf_count > (1u << 20))
+    return badInput("output: hrtf_count = " + std::to_string(output.hrtf_count) + " (must be 4 .. 1048576)");
+  if (output.hrtf_length < 1 || output.hrtf_length > 16384)
+    return badInput("output: hrtf_length = " + std::to_string(output.hrtf_length) + " (must be 1 .. 16384)");
+  if (!output.hrtf_directions || !output.hrtf_left || !output.hrtf_right)
+    return badInput("output: hrtf_directions, hrtf_left and hrtf_right must not be NULL");
+  auto set = std::make_shared<HrtfSet>();
+  set->sample_rate_hz = sample_rate_hz;
+  set->taps = output.hrtf_length;
+  const size_t count = output.hrtf_count, values = count * output.hrtf_length;
+  set->directions.resize(count);
+  for (size_t i = 0; i < count; ++i)
+    for (size_t k = 0; k < 3; ++k) set->directions[i][k] = output.hrtf_directions[3 * i + k];
+  set->left.assign(output.hrtf_left, output.hrtf_left + values);
+  set->right.assign(output.hrtf_right, output.hrtf_right + values);
+  if (const std::string why = prepareHrtfSet(*set); !why.empty()) return badInput("output: hrtf: " + why);
+  return std::shared_ptr<const HrtfSet>(std::move(set));
+}
+
 /// strike_context_create with the output's format: from config->channels (mono or stereo), or
 /// from a strike_output_desc.
 strike_status createContext(const strike_context_config* config, const strike_output_desc* output,
@@ -294,6 +319,7 @@ strike_status createContext(const strike_context_config* config, const strike_ou
       case STRIKE_OUTPUT_AMBIX1: format = OutputFormat::Ambix1; break;
       case STRIKE_OUTPUT_AMBIX2: format = OutputFormat::Ambix2; break;
       case STRIKE_OUTPUT_AMBIX3: format = OutputFormat::Ambix3; break;
+      case STRIKE_OUTPUT_BINAURAL: format = OutputFormat::Binaural; break;
       default:
         logRejected(c, "output: format = " + std::to_string(output->format) + " (must be a STRIKE_OUTPUT_* value)");
         return STRIKE_ERR_INVALID_ARG;
@@ -321,6 +347,15 @@ strike_status createContext(const strike_context_config* config, const strike_ou
       logRejected(c, why);
       return STRIKE_ERR_INVALID_ARG;
     }
+  }
+  std::shared_ptr<const HrtfSet> hrtf;
+  if (format == OutputFormat::Binaural) {
+    Result<std::shared_ptr<const HrtfSet>> copied = hrtfFromOutput(*output, c.sample_rate_hz);
+    if (!copied) {
+      logRejected(c, copied.error().message);
+      return STRIKE_ERR_INVALID_ARG;
+    }
+    hrtf = std::move(*copied);
   }
   cfg.channels = outputChannels(format);  // what strike_render() checks
 
@@ -355,6 +390,7 @@ strike_status createContext(const strike_context_config* config, const strike_ou
     e.synth.max_freq_hz = cfg.max_freq_hz;
     e.synth.audibility_threshold = cfg.audibility_threshold;
     e.output = format;
+    e.hrtf = hrtf;
     e.air_absorption = air_absorption;
     e.air = air;
     e.channels = cfg.channels;

@@ -2,6 +2,7 @@
 // The two-phase render. Follow renderScene() from top to bottom: bodies, simulation, banks for
 // what was heard, impacts into the oscillator bank, audio.
 #include "strike/render.hpp"
+#include "strike/sofa_hrtf.hpp"
 
 #include <sys/stat.h>
 
@@ -1101,6 +1102,12 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   run.substep = settings.substep_s;  // simulate() refuses steps outside (0, 1 ms]
   run.max_freq_hz = synthesizedTopHz(scene.max_freq_hz, run.rate);
   run.engine_settings = renderEngineSettings(scene, settings, run.rate, run.max_freq_hz);
+  if (settings.output_format == OutputFormat::Binaural) {  // before any solve: a bad file fails at once
+    Result<std::shared_ptr<const HrtfSet>> hrtf =
+        loadSofaHrtf(settings.hrtf_file.empty() ? kDefaultHrtfFile : settings.hrtf_file, run.rate);
+    if (!hrtf) return hrtf.error();
+    run.engine_settings.hrtf = std::move(*hrtf);
+  }
   run.heard_hz = synthesizedTopHz(run.engine_settings.synth.max_freq_hz, run.rate);
   run.ground_surface = groundSurface(scene);  // for the simulation and the sound
   run.report().objects = scene.objects.size();

@@ -265,6 +265,7 @@ void SoundEngine::reset() {
     if (v->image_) v->image_->synth.reset(), v->image_->click_synth.reset();
     v->resetLoad();
     resetContinuous(*v);
+    for (BinauralPath& path : v->binaural_) path.clear();
     v->fresh_ = true;
   }
   step_ = Step{};

@@ -106,10 +106,13 @@ void SoundEngine::updateGains(VoiceState& v) {
     v.target_gain_[0] = static_cast<float>(g);
   else
     spatialGains(format, listener_.toLocalPoint(centre), d, g, v.target_gain_);
+  if (v.binaural_[0].ready()) v.binaural_[0].aim(listener_.toLocalPoint(centre), v.fresh_);
   std::array<double, 3> image;
-  if (v.image_ && imageOf(centre, image))
+  if (v.image_ && imageOf(centre, image)) {
     spatialGains(format, listener_.toLocalPoint(image), distance(image, listener_.position_m), g,
                  v.image_->target_gain);
+    if (v.binaural_[1].ready()) v.binaural_[1].aim(listener_.toLocalPoint(image), v.fresh_);
+  }
   if (v.fresh_) {
     std::copy(v.target_gain_, v.target_gain_ + settings_.channels, v.cur_gain_);
     if (v.image_) std::copy(v.image_->target_gain, v.image_->target_gain + settings_.channels, v.image_->cur_gain);
@@ -126,8 +129,16 @@ bool SoundEngine::imageOf(const std::array<double, 3>& point, std::array<double,
   return true;
 }
 
-void SoundEngine::mixPath(const float* m, float* cur, const float* target, float* const* out, size_t frames) const {
+void SoundEngine::mixPath(float* m, float* cur, const float* target, BinauralPath& binaural, float* const* out,
+                          size_t frames) const {
   const float inv = 1.0f / static_cast<float>(frames);
+  if (binaural.ready()) {  // both ears' level is one gain; the direction is in the filters
+    const float g0 = cur[0], dg = (target[0] - g0) * inv;
+    for (size_t n = 0; n < frames; ++n) m[n] *= g0 + dg * static_cast<float>(n + 1);
+    binaural.process(m, frames, out[0], out[1]);
+    std::copy(target, target + settings_.channels, cur);
+    return;
+  }
   for (uint32_t c = 0; c < settings_.channels; ++c) {
     const float g0 = cur[c], dg = (target[c] - g0) * inv;
     float* o = out[c];
@@ -138,6 +149,14 @@ void SoundEngine::mixPath(const float* m, float* cur, const float* target, float
     }
     cur[c] = target[c];
   }
+}
+
+// A silent path's filters still hold its last samples: they ring out through zeros.
+void SoundEngine::flushBinaural(VoiceState& v, int path, float* const* out, size_t frames) const {
+  BinauralPath& binaural = v.binaural_[path];
+  if (!binaural.ringing()) return;
+  std::fill(v.mono_.begin(), v.mono_.begin() + static_cast<std::ptrdiff_t>(frames), 0.0f);
+  binaural.process(v.mono_.data(), frames, out[0], out[1]);
 }
 
 void SoundEngine::render(float* const* out, size_t frames) {
@@ -156,6 +175,7 @@ void SoundEngine::render(float* const* out, size_t frames) {
         std::copy(image->target_gain, image->target_gain + channels, image->cur_gain);
         image->synth.skip(nullptr, frames);
         image->click_synth.skip(nullptr, frames);
+        flushBinaural(*v, 1, out, frames);
       } else {
         image->synth.skip(v->mono_.data(), frames);
         if (clicking) {
@@ -164,7 +184,7 @@ void SoundEngine::render(float* const* out, size_t frames) {
         } else {
           image->click_synth.skip(nullptr, frames);
         }
-        mixPath(v->mono_.data(), image->cur_gain, image->target_gain, out, frames);
+        mixPath(v->mono_.data(), image->cur_gain, image->target_gain, v->binaural_[1], out, frames);
         active += image->synth.activeModeCount();
       }
     }
@@ -174,6 +194,7 @@ void SoundEngine::render(float* const* out, size_t frames) {
       std::copy(v->target_gain_, v->target_gain_ + channels, v->cur_gain_);
       v->synth_.skip(nullptr, frames);  // keeps its clock: its next pulse lands at the right sample
       v->click_synth_.skip(nullptr, frames);
+      flushBinaural(*v, 0, out, frames);
       continue;
     }
     if (driven)
@@ -186,7 +207,7 @@ void SoundEngine::render(float* const* out, size_t frames) {
     } else {
       v->click_synth_.skip(nullptr, frames);
     }
-    mixPath(v->mono_.data(), v->cur_gain_, v->target_gain_, out, frames);
+    mixPath(v->mono_.data(), v->cur_gain_, v->target_gain_, v->binaural_[0], out, frames);
     active += v->synth_.activeModeCount();
   }
   enforceBudget(active);

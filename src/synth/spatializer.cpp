@@ -10,7 +10,7 @@ namespace strike {
 uint32_t outputChannels(OutputFormat format) {
   const uint32_t order = ambisonicOrder(format);
   if (order > 0) return (order + 1) * (order + 1);
-  return format == OutputFormat::Stereo ? 2 : 1;
+  return format == OutputFormat::Stereo || format == OutputFormat::Binaural ? 2 : 1;
 }
 
 bool outputHasDirections(OutputFormat format) { return format != OutputFormat::Mono; }
@@ -31,13 +31,14 @@ const char* outputFormatName(OutputFormat format) {
     case OutputFormat::Ambix1: return "ambix1";
     case OutputFormat::Ambix2: return "ambix2";
     case OutputFormat::Ambix3: return "ambix3";
+    case OutputFormat::Binaural: return "binaural";
   }
   return "mono";
 }
 
 std::optional<OutputFormat> parseOutputFormat(const std::string& name) {
-  for (OutputFormat f :
-       {OutputFormat::Mono, OutputFormat::Stereo, OutputFormat::Ambix1, OutputFormat::Ambix2, OutputFormat::Ambix3})
+  for (OutputFormat f : {OutputFormat::Mono, OutputFormat::Stereo, OutputFormat::Ambix1, OutputFormat::Ambix2,
+                         OutputFormat::Ambix3, OutputFormat::Binaural})
     if (name == outputFormatName(f)) return f;
   return std::nullopt;
 }
@@ -112,6 +113,10 @@ void spatialGains(OutputFormat format, const std::array<double, 3>& local, doubl
                   float* gains) {
   if (format == OutputFormat::Mono) {
     gains[0] = static_cast<float>(level);
+    return;
+  }
+  if (format == OutputFormat::Binaural) {  // the direction is the head-related filters' (hrtf.hpp)
+    gains[0] = gains[1] = static_cast<float>(level);
     return;
   }
   if (format == OutputFormat::Stereo) {

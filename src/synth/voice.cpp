@@ -196,6 +196,10 @@ VoiceState::VoiceState(const VoiceDesc& desc, const EngineSettings& settings)
   const bool pressure = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
   if (outputHasDirections(settings.output) && settings.ground.enabled && pressure)
     image_ = std::make_unique<ImagePath>(synthSettings(settings), modalObject(bank, desc.weights));
+  if (settings.output == OutputFormat::Binaural && settings.hrtf) {
+    binaural_[0].init(settings.hrtf, std::max<uint32_t>(settings.max_block_frames, 1));
+    if (image_) binaural_[1].init(settings.hrtf, std::max<uint32_t>(settings.max_block_frames, 1));
+  }
   const SynthStats bands = synth_.stats();
   rings_ = bands.modes_total > bands.modes_out_of_band;
   const size_t modes = bank.modeCount();

@@ -138,6 +138,8 @@ struct VoiceState : LoadTracker, ContinuousSources, PathTransfers, AccelerationC
     float cur_gain[kMaxOutputChannels] = {}, target_gain[kMaxOutputChannels] = {};
   };
   std::unique_ptr<ImagePath> image_;
+  /// A binaural output's filters of each path (direct, ground image); not ready() otherwise.
+  std::array<BinauralPath, 2> binaural_;
   float level_gain2_ = 0.0f;
   bool fresh_ = true;
 };

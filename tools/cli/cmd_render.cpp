@@ -57,10 +57,14 @@ CommandSpec renderSpec() {
        "polarity of some modes against a render without it. With the transfer, one transfer per shape,\n"
        "wave speed E/rho and number of modes kept, scaled to every size and density (cached)"},
       {"--max-events", "N", "stop if the simulation records more contact events (memory cap); default 20000000"},
-      {"--output", "mono|stereo|ambix1|ambix2|ambix3",
+      {"--output", "mono|stereo|binaural|ambix1|ambix2|ambix3",
        "the channels written (docs/listener.md): mono (default), stereo (a constant-power pan),\n"
-       "or Ambisonics of order 1-3 in AmbiX (ACN order, SN3D; 4, 9 or 16 channels), each path\n"
-       "(direct, ground image) from its own direction in the listener's frame"},
+       "binaural (left and right ear through head-related responses, see --hrtf), or Ambisonics\n"
+       "of order 1-3 in AmbiX (ACN order, SN3D; 4, 9 or 16 channels), each path (direct, ground\n"
+       "image) from its own direction in the listener's frame"},
+      {"--hrtf", "FILE.sofa",
+       "the head-related responses of --output binaural: an AES69 SOFA file (SimpleFreeFieldHRIR);\n"
+       "default the MIT KEMAR set of Debian's libmysofa (/usr/share/libmysofa/MIT_KEMAR_normal_pinna.sofa)"},
       {"--simd", "KERNEL", kSimdHelp},
       {"--via-library", "",
        "send the simulation through libstrike's C API, step by step, as a game would\n"
@@ -239,8 +243,13 @@ int runRender(const std::vector<std::string>& raw_args) {
     const std::optional<OutputFormat> format = parseOutputFormat(args.text("--output"));
     if (!format)
       return reportError("render", badInput("--output = " + args.text("--output") +
-                                            " (must be mono, stereo, ambix1, ambix2 or ambix3)"));
+                                            " (must be mono, stereo, binaural, ambix1, ambix2 or ambix3)"));
     settings.output_format = *format;
+  }
+  if (args.has("--hrtf")) {
+    if (settings.output_format != OutputFormat::Binaural)
+      return reportError("render", badInput("--hrtf " + args.text("--hrtf") + " needs --output binaural"));
+    settings.hrtf_file = args.text("--hrtf");
   }
   if (args.has("--via-library")) settings.output = libraryOutput(settings.gain);
   settings.similar_reuse = args.has("--similar");

@@ -57,6 +57,18 @@ class LibraryOutput final : public SoundOutput {
       case OutputFormat::Ambix1: output.format = STRIKE_OUTPUT_AMBIX1; break;
       case OutputFormat::Ambix2: output.format = STRIKE_OUTPUT_AMBIX2; break;
       case OutputFormat::Ambix3: output.format = STRIKE_OUTPUT_AMBIX3; break;
+      case OutputFormat::Binaural: output.format = STRIKE_OUTPUT_BINAURAL; break;
+    }
+    // A binaural output's responses, as the host read them (the SOFA file, read by the render).
+    std::vector<double> directions;
+    if (engine.output == OutputFormat::Binaural && engine.hrtf) {
+      const HrtfSet& hrtf = *engine.hrtf;
+      for (const std::array<double, 3>& d : hrtf.directions) directions.insert(directions.end(), d.begin(), d.end());
+      output.hrtf_count = static_cast<uint32_t>(hrtf.directions.size());
+      output.hrtf_length = hrtf.taps;
+      output.hrtf_directions = directions.data();
+      output.hrtf_left = hrtf.left.data();
+      output.hrtf_right = hrtf.right.data();
     }
     output.air_absorption = engine.air_absorption ? 1 : 0;
     output.air_temperature_c = engine.air.temperature_c;

@@ -44,6 +44,7 @@
 #include "strike/air_absorption.hpp"
 #include "strike/bank.hpp"
 #include "strike/contact_noise.hpp"
+#include "strike/hrtf.hpp"
 #include "strike/listener.hpp"
 #include "strike/spatializer.hpp"
 #include "strike/synth.hpp"
@@ -97,6 +98,9 @@ struct EngineSettings {
   /// How each path reaches the output's channels (spatializer.hpp); its channel count wins over
   /// `channels`. With directions and a ground, the ground's image is a signal of its own.
   OutputFormat output = OutputFormat::Mono;
+  /// The head-related responses of a binaural output, at synth.sample_rate_hz (prepareHrtfSet
+  /// done); a binaural output without them hears both ears alike.
+  std::shared_ptr<const HrtfSet> hrtf;
   uint32_t max_voices = 64;
   uint32_t max_block_frames = 1024;  ///< largest render() call
   /// Ringing modes over all voices; above it at the end of a render call the quietest (at the
@@ -368,8 +372,12 @@ class SoundEngine {
   /// or `factors` itself when the air absorbs nothing.
   const std::complex<double>* throughAir(VoiceState& v, int path, const std::complex<double>* factors,
                                          double distance_m);
-  /// Mixes `mono` (the voice's path signal) into out with gains ramped from cur to target.
-  void mixPath(const float* mono, float* cur, const float* target, float* const* out, size_t frames) const;
+  /// Mixes `mono` (the voice's path signal) into out with gains ramped from cur to target, then
+  /// through the path's binaural filters when they are ready (`mono` is scaled in place then).
+  void mixPath(float* mono, float* cur, const float* target, BinauralPath& binaural, float* const* out,
+               size_t frames) const;
+  /// Runs a silent path's binaural filters on zeros while its last input is still in them.
+  void flushBinaural(VoiceState& v, int path, float* const* out, size_t frames) const;
   /// Where the ground's mirror image of `point` is, when the image path exists for it.
   bool imageOf(const std::array<double, 3>& point, std::array<double, 3>& image) const;
   /// The synth a path's pulses go to: synth_ for the direct sound, and for the image too unless

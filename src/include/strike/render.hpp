@@ -106,6 +106,9 @@ struct RenderSettings {
   double substep_s = 1e-3;
   /// The channels written (`strike render --output`; spatializer.hpp): mono by default.
   OutputFormat output_format = OutputFormat::Mono;
+  /// The binaural output's head-related responses: an AES69 SOFA file (`--hrtf`); empty: the MIT
+  /// KEMAR set Debian's libmysofa installs (kDefaultHrtfFile). Read at the render's sample rate.
+  std::string hrtf_file;
   /// The synthesizer's kernel (SynthSettings::simd): kernels differ only in the last bits.
   SimdLevel simd = SimdLevel::Auto;
   ProgressFn progress;

@@ -10,6 +10,8 @@
 // Formats:
 //  - Mono: the level alone, one channel (the default; both paths share one signal then).
 //  - Stereo: a constant-power pan by the direction's x component (left, right).
+//  - Binaural: two channels (left ear, right ear); the level here, the direction by the path's
+//    head-related filters (hrtf.hpp), which the engine runs after these gains.
 //  - AmbiX of order N = 1..3: (N+1)^2 channels in ACN order with SN3D normalisation, the
 //    real spherical harmonics without the Condon-Shortley phase [Nachbar, Zotter, Deleflie &
 //    Sontacchi 2011, "AmbiX - a suggested Ambisonics format"], evaluated at the direction of
@@ -23,7 +25,7 @@
 
 namespace strike {
 
-enum class OutputFormat { Mono, Stereo, Ambix1, Ambix2, Ambix3 };
+enum class OutputFormat { Mono, Stereo, Ambix1, Ambix2, Ambix3, Binaural };
 
 /// The largest channel count of any format (third-order Ambisonics).
 constexpr uint32_t kMaxOutputChannels = 16;
@@ -33,7 +35,7 @@ uint32_t outputChannels(OutputFormat format);
 bool outputHasDirections(OutputFormat format);
 /// 0 for mono and stereo, else N.
 uint32_t ambisonicOrder(OutputFormat format);
-/// "mono", "stereo", "ambix1", "ambix2", "ambix3".
+/// "mono", "stereo", "ambix1", "ambix2", "ambix3", "binaural".
 const char* outputFormatName(OutputFormat format);
 /// The format of one of those names, or nothing.
 std::optional<OutputFormat> parseOutputFormat(const std::string& name);

@@ -256,7 +256,11 @@ enum {
    *  order, SN3D normalisation, x forward, y left, z up. */
   STRIKE_OUTPUT_AMBIX1 = 2,
   STRIKE_OUTPUT_AMBIX2 = 3,
-  STRIKE_OUTPUT_AMBIX3 = 4
+  STRIKE_OUTPUT_AMBIX3 = 4,
+  /** (0.4, added later) 2 channels (left ear, right ear): each path through head-related impulse
+   *  responses interpolated to its direction, which the host hands over in strike_output_desc's
+   *  hrtf_* fields (read from a SOFA file, for example; libstrike reads no file). */
+  STRIKE_OUTPUT_BINAURAL = 5
 };
 
 /** (0.4, added later) The output of a context, for strike_context_create_with_output(). Later versions
@@ -270,6 +274,19 @@ typedef struct strike_output_desc {
   double air_temperature_c;             /**< -50 .. 60; default 20 */
   double air_relative_humidity_percent; /**< 0 .. 100; default 50 */
   double air_pressure_kpa;              /**< 50 .. 200; default 101.325 */
+  /** (0.4, added later) STRIKE_OUTPUT_BINAURAL's head-related impulse responses, measured in
+   *  hrtf_count directions (at least 4), hrtf_length samples each at the context's sample rate
+   *  (1 .. 16384). Read only for that format, and only when struct_size covers hrtf_right;
+   *  copied during the call (the caller may free them after). Interpolated between the
+   *  measured directions by modified Shepard weighting of the three nearest, aligned on their
+   *  onsets (docs/listener.md). Defaults: 0 and NULL. */
+  uint32_t hrtf_count;
+  uint32_t hrtf_length;
+  /** hrtf_count x 3 doubles: each measurement's source direction seen from the head's centre,
+   *  in the SOFA frame (x forward, y left, z up; any non-zero length). */
+  const double* hrtf_directions;
+  const float* hrtf_left;  /**< hrtf_count x hrtf_length: the left ear's responses */
+  const float* hrtf_right; /**< hrtf_count x hrtf_length: the right ear's responses */
 } strike_output_desc;
 
 /** Defaults (mono). [any-thread] */
@@ -277,11 +294,13 @@ STRIKE_API strike_output_desc STRIKE_CALL strike_output_desc_default(void);
 
 /**
  * (0.4, added later) strike_context_create() with an output format: config->channels is ignored, and
- * strike_render() takes the format's channel count (1, 2, 4, 9 or 16). With a format that has
+ * strike_render() takes the format's channel count (1, 2, 4, 9 or 16; 2 for binaural). With a format that has
  * directions and a reflecting ground, the ground's image is rendered as a signal of its own
  * (twice the oscillators of the objects it reaches) and arrives from below. Refusals as
  * strike_context_create(), and STRIKE_ERR_INVALID_ARG for a NULL output, a struct_size too small
- * for `format`, an unknown format or air values out of range (logged). [main-thread]
+ * for `format`, an unknown format, air values out of range, or a binaural format without
+ * valid responses (struct_size too small for them, a count, length or pointer missing, a
+ * direction of no length, a value not finite) (logged). [main-thread]
  */
 STRIKE_API strike_status STRIKE_CALL strike_context_create_with_output(const strike_context_config* config,
                                                                        const strike_output_desc* output,

@@ -195,14 +195,16 @@ TEST_P(ViaLibrary, EqualsTheRenderWithin100dB) {
   fs::remove_all(dir);
 }
 
-// Every output format goes through the same engine both ways: stereo and Ambisonics of the
-// bar drop (a ground, so the image is a signal of its own) equal through libstrike too.
+// Every output format goes through the same engine both ways: stereo, binaural (the KEMAR
+// responses handed to libstrike through strike_output_desc) and Ambisonics of the bar drop (a
+// ground, so the image is a signal of its own) equal through libstrike too; and binaural twice
+// gives the same bytes.
 TEST(ViaLibraryOutputs, EqualsTheRenderInEveryOutputFormat) {
   const std::string dir = testing::TempDir() + "/via_library_outputs_" + std::to_string(static_cast<long>(getpid()));
   fs::create_directories(dir + "/cache");
   const std::string scene = shellQuoted(std::string(STRIKE_SOURCE_DIR) + "/examples/scenes/bar-drop.json");
   const std::string common = " --duration 0.6 --cache " + shellQuoted(dir + "/cache") + " --quiet";
-  for (const char* format : {"stereo", "ambix3"}) {
+  for (const char* format : {"stereo", "binaural", "ambix3"}) {
     const std::string output = std::string(" --output ") + format;
     const auto direct = runCli("render " + scene + " -o " + shellQuoted(dir + "/direct.wav") + common + output);
     ASSERT_EQ(direct.exit_code, 0) << direct.err;
@@ -210,12 +212,22 @@ TEST(ViaLibraryOutputs, EqualsTheRenderInEveryOutputFormat) {
         runCli("render " + scene + " -o " + shellQuoted(dir + "/library.wav") + common + output + " --via-library");
     ASSERT_EQ(library.exit_code, 0) << library.err;
     const AudioBuffer a = read(dir + "/direct.wav"), b = read(dir + "/library.wav");
-    EXPECT_EQ(a.channels, format == std::string("stereo") ? 2 : 16);
+    EXPECT_EQ(a.channels, format == std::string("ambix3") ? 16 : 2);
     EXPECT_EQ(a.channels, b.channels);
     double peak = 0.0;
     for (float v : a.samples) peak = std::max(peak, std::abs(double(v)));
     EXPECT_GT(peak, 1e-4) << format << " is silent: nothing compared";
     EXPECT_TRUE(a.samples == b.samples) << format << ": " << compare(a, b).summary;
+    if (format == std::string("binaural")) {
+      const auto again = runCli("render " + scene + " -o " + shellQuoted(dir + "/again.wav") + common + output);
+      ASSERT_EQ(again.exit_code, 0) << again.err;
+      EXPECT_TRUE(read(dir + "/again.wav").samples == a.samples) << "binaural: two renders differ";
+      const auto refused = runCli("render " + scene + " -o " + shellQuoted(dir + "/bad.wav") + common + output +
+                                  " --hrtf " + shellQuoted(dir + "/missing.sofa"));
+      EXPECT_EQ(refused.exit_code, 1);
+      EXPECT_NE(refused.err.find("missing.sofa"), std::string::npos) << refused.err;
+      EXPECT_FALSE(fs::exists(dir + "/bad.wav"));
+    }
   }
   fs::remove_all(dir);
 }

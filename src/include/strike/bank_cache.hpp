@@ -2,9 +2,10 @@
 // The bank cache folder (`--cache DIR`, default ~/.cache/strike): list, measure and prune it
 // (`strike cache`), and the size cap a render applies after writing to it (issue 15, item 14).
 //
-// Entries are the files "<16 hex digits>.modes" (the content-hash key of src/scene/render.cpp),
-// ".pieces" (convex pieces) and ".transfer" (the unit transfers of `--similar` renders with the
-// acoustic transfer: a bank file of eigenvalues and transfer, no surface; normalized_problem.hpp);
+// Entries are the files "<16 hex digits>.modes" (bankCacheKey's content hash, as the render's bank
+// source looks banks up: src/scene/bank_source_direct.cpp), ".pieces" (convex pieces) and
+// ".transfer" (the unit transfers of `--similar` renders with the acoustic transfer: a bank file of
+// eigenvalues and transfer, no surface; normalized_problem.hpp);
 // nothing else in the folder is touched except write temporaries ("*.modes.tmp-*") left behind
 // by a crash more than a day ago. A render marks an entry it reads as used (its modification
 // time), so pruning removes the least recently used first. Removal is an unlink: a render that

@@ -53,7 +53,7 @@ std::string hex(uint64_t key) {
   return text;
 }
 
-/// What the render asks of object i's precompute (src/scene/render.cpp, prepareBody).
+/// What the render asks of object i's precompute (src/scene/render.cpp, precomputeSettings).
 PrecomputeSettings objectSettings(const Scene& scene, size_t i, double rate_hz) {
   const SceneObject& object = scene.objects[i];
   PrecomputeSettings settings;

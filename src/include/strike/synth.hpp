@@ -143,7 +143,7 @@ enum class ImpactResult {
 };
 
 struct SynthStats {
-  uint64_t modes_total = 0;        ///< over all objects
+  uint64_t modes_total = 0;        ///< of the object
   uint64_t modes_out_of_band = 0;  ///< never synthesized (below min or above max frequency)
   uint64_t impacts = 0;
   uint64_t impacts_inaudible = 0;  ///< changed no mode above the threshold
@@ -212,7 +212,7 @@ class OscillatorBank {
   /// real-time safe (allocates a state per ringing mode and channel weights).
   void reserveForceInput();
   /// Schedules a channel's weights (ForceWeightsDesc) without allocation [audio-thread]. False
-  /// when the object was not reserved, the channel is out of range, or 4 changes are pending.
+  /// when the object was not reserved, the channel is out of range, or 8 changes are pending.
   bool setForceWeights(const ForceWeightsDesc& weights);
   /// render() with force signals: force[c] (or force itself, or any
   /// entry, null: zeros) holds `frames` samples of channel c, in newtons, each held over its

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# Installs the `strike` Python package (README, Python) for Debian's python3, from this clone, with
+# Installs the `strike` Python package (docs/install.md) for Debian's python3, from this clone, with
 # Debian packages only (tools/install-deps.sh: python3-dev, pybind11-dev, python3-numpy,
 # python3-distributed): builds build/release and installs into PREFIX (default ~/.local), i.e.
 # PREFIX/lib/python3.11/site-packages/strike, which /usr/bin/python3 searches for ~/.local, and

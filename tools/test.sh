@@ -45,14 +45,14 @@ tsan_build_and_tests() {
 stage "install dependencies" bash tools/install-deps.sh
 stage "runtime-only build + tests" runtime_only_build_and_tests
 stage "ci build (-Werror)" ci_build
-# Fuzz smoke (issue 7): every parser's libFuzzer target, built with clang + ASan + UBSan (build-fuzz/;
+# Fuzz smoke: every parser's libFuzzer target, built with clang + ASan + UBSan (build-fuzz/;
 # the parsers and what they link only, no solver: tools.scene_file_parser_links_no_solver), runs 10 s
 # over its seed corpus, two targets at a time (one process each: CI's 2 cores);
 # a crash, leak, UB, >10 s input or >2 GB RSS fails CI. STRIKE_FUZZ_SMOKE=0 skips it.
 if [ "${STRIKE_FUZZ_SMOKE:-1}" = 1 ]; then
   stage "fuzz smoke" env STRIKE_FUZZ_JOBS="${STRIKE_FUZZ_JOBS:-2}" bash tools/fuzz.sh "${STRIKE_FUZZ_SECONDS:-10}"
 fi
-# Sanitizers (issue 7). STRIKE_SANITIZERS=0 skips both.
+# Sanitizers. STRIKE_SANITIZERS=0 skips both.
 #  asan: the CLI and every test program at -O1 -g with assertions, ASan + UBSan; UB aborts
 #        (-fno-sanitize-recover), leaks fail (detect_leaks=1): options in CMakePresets.json.
 #        Its test preset leaves out a few tests (filter.exclude) that are slow under ASan only

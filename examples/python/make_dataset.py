@@ -4,7 +4,7 @@
 
     /usr/bin/python3 examples/python/make_dataset.py [-o dataset/] [--count 12] [--workers 2]
 
-Needs the strike package (README, Python) and Debian's python3-matplotlib. Each step is a cell:
+Needs the strike package (docs/install.md) and Debian's python3-matplotlib. Each step is a cell:
 run it top to bottom, or paste the cells into a notebook.
 """
 import argparse

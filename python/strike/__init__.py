@@ -32,7 +32,7 @@ except ImportError as _missing:  # another python3 first on PATH (pyenv, conda, 
         f"strike needs numpy, which {_sys.executable} (Python {_sys.version.split()[0]}) cannot import. "
         "Use Debian's python3 with its numpy (apt install python3-numpy; /usr/bin/python3), or a venv that "
         "sees it: /usr/bin/python3 -m venv --system-site-packages VENV, then, in the Strike repository, "
-        "VENV/bin/pip install --no-build-isolation ./python (README, Python)") from _missing
+        "VENV/bin/pip install --no-build-isolation ./python (docs/install.md)") from _missing
 try:
     from . import _strike
 except ImportError as _missing:
@@ -40,7 +40,7 @@ except ImportError as _missing:
         f"strike's compiled module strike._strike does not load in {_sys.executable} "
         f"(Python {_sys.version.split()[0]}): {_missing}. It is built for the Python that built it; "
         "install the package with this one: python3 -m pip install --no-build-isolation ./python "
-        "(README, Python)") from _missing
+        "(docs/install.md)") from _missing
 from ._version import __version__
 
 Bank = _strike.Bank

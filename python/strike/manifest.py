@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""Batch manifests: JSON lines, one render per line (README, Datasets; docs/datasets.md).
+"""Batch manifests: JSON lines, one render per line (docs/datasets.md).
 
 Each line is a JSON object with exactly one of:
 

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""Randomized scenes, reproducibly (README, Datasets; docs/datasets.md).
+"""Randomized scenes, reproducibly (docs/datasets.md).
 
 A *random spec* is a scene template (the scene format) in which any value may be a distribution:
 

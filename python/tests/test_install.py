@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-# Installing and importing the package as a Python user does (README, Python).
+# Installing and importing the package as a Python user does (docs/install.md).
 import os
 import pathlib
 import subprocess

@@ -17,7 +17,7 @@ BAR = "box:0.3,0.02,0.02"  # examples/scenes/bar-drop.json's bar
 
 
 def test_imports_from_a_fresh_install(build_dir, tmp_path):
-    # `cmake --install --component python --prefix P` (README, Python) and nothing else on the path.
+    # `cmake --install --component python --prefix P` (docs/install.md) and nothing else on the path.
     r = run(["cmake", "--install", build_dir, "--component", "python", "--prefix", tmp_path])
     assert r.returncode == 0, r.stderr
     site = tmp_path / "lib" / f"python{sys.version_info.major}.{sys.version_info.minor}" / "site-packages"

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // libstrike, main-thread half: the extern "C" shims of strike.h for the context, banks and
 // objects. The audio-thread half (impacts, physics steps, render) is strike_audio.cpp; the
-// context's layout is context.hpp. Every exported body sits in one guard that maps exceptions
-// to status codes, so nothing throws across the ABI.
+// context's layout and the step queue's records are capi_internal.hpp. Every exported body sits
+// in one guard that maps exceptions to status codes, so nothing throws across the ABI.
 //
 // Design (see strike.h for the thread contract):
 //  - One engine: the context owns the SoundEngine that `strike render` runs (strike/engine.hpp):

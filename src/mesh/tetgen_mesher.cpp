@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // tetrahedralize(): a closed triangle surface -> a quality Tet4 mesh through TetGen's library
 // API. This file links TetGen (AGPL-3.0); the strike_tetgen target is used by the command-line
-// tool only, never by the runtime library (see README, licences).
+// tool only, never by the runtime library (see README, Licence).
 //
 // TetGen reports failure by throwing an int (its terminatetetgen() in TETLIBRARY mode) and may
 // loop or crash on surfaces that are open or self-intersecting, so the surface is checked first

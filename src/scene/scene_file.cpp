@@ -298,7 +298,7 @@ Result<SceneObject> object(const json& value, const Where& where, const std::str
         "needs \"material\" (a name like \"steel\" or an object with youngs_pa, poisson, density_kg_m3)");
   }
   if (value.contains("units")) {
-    // A mesh exported in millimetres read as metres is 1000x too large (issue 15: a 264,000-tonne
+    // A mesh exported in millimetres read as metres is 1000x too large (a 264,000-tonne
     // mug); the file's unit is declared here instead of rescaling the file.
     Result<std::string> units = text(value["units"], where.at("units"));
     if (!units) return units.error();

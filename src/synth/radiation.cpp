@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Listener model: how loud each mode is at the listener, per unit modal acceleration.
 //
-// Banks of format 5 carry an acoustic transfer (acoustic_transfer.hpp, solved with the body as an
+// Banks of format 5 and later carry an acoustic transfer (acoustic_transfer.hpp, solved with the body as an
 // obstacle); their weights are its rms over directions, and the engine applies the direction
 // per impact (sound_paths.cpp). What follows is the model of older banks, and of radiation_m2.
 //
@@ -35,10 +35,11 @@
 //  - the body as an obstacle: patches radiate as if the body were acoustically transparent (no
 //    scattering, no baffle), so the fluid's added-mass reaction (x1.5 for a translating sphere)
 //    and shadowing are missing,
-//  - the phase and direction of the sound (magnitude only, rms over directions), the near field
-//    (d ~ body size), ground reflection, the room, and air absorption.
-// A precomputed acoustic transfer (James, Barbic & Pai 2006) would replace R_i without changing
-// the synthesizer.
+//  - the phase and direction of the sound (magnitude only, rms over directions) and the near
+//    field (d ~ body size). The ground's image and air absorption are the paths' (sound_paths.cpp,
+//    air_absorption.cpp) and the room is left out, with either model.
+// The precomputed acoustic transfer (James, Barbic & Pai 2006; solved in src/transfer) replaces
+// R_i for the modes it holds (pressureWeights below) without changing the synthesizer.
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// One output level convention everywhere (issue 15, item 7): the same tap at the same distance
+// One output level convention everywhere: the same tap at the same distance
 // through libstrike's strike_render() and through `strike hit` gives the same level, 1.0 = 20 Pa,
 // and output_full_scale_pa = 1 gives pascals, 20 times more. Before, libstrike wrote pascals and
 // the CLI 1.0 = 20 Pa: the two differed by 26 dB.

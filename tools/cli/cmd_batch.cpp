@@ -58,7 +58,7 @@ int runBatch(const std::vector<std::string>& args) {
   (void)args;
   std::fputs(
       "strike batch: error: this strike was built without the Python package (STRIKE_BUILD_PYTHON=OFF); "
-      "see README, Python\n",
+      "see docs/install.md\n",
       stderr);
   return 1;
 #else
@@ -86,7 +86,7 @@ int runBatch(const std::vector<std::string>& args) {
   for (std::string& a : command) argv.push_back(a.data());
   argv.push_back(nullptr);
   ::execv(argv[0], argv.data());
-  std::fprintf(stderr, "strike batch: error: cannot run %s: %s (install python3; see README, Python)\n",
+  std::fprintf(stderr, "strike batch: error: cannot run %s: %s (install python3; see docs/install.md)\n",
                STRIKE_PYTHON_EXECUTABLE, std::strerror(errno));
   return 1;
 #endif

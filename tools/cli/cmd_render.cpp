@@ -286,7 +286,7 @@ int runRender(const std::vector<std::string>& raw_args) {
   if (args.has("--events")) {
     Status events = writeEventsCsv(args.text("--events"), *result);
     if (!events) {
-      // A failed command leaves no output (issue 7): the WAV is whole, but the run is not.
+      // A failed command leaves no output: the WAV is whole, but the run is not.
       std::remove(output.c_str());
       return reportError("render", events.error());
     }

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Output paths are checked before any work: a render that simulates for 20 s and solves an
-// eigenproblem must not then fail on a typo in -o (issue 15, item 9).
+// eigenproblem must not then fail on a typo in -o.
 #pragma once
 
 #include <string>

@@ -286,7 +286,7 @@ def glass_obj(segments=40):
 
 def mug_obj(segments=48, outer_r=0.04, height=0.11, wall=0.004, base=0.006, name="mug", n_wall=11):
     """A mug without handle (an open cylinder shell on a flat bottom): 8 cm across, 11 cm tall,
-    4 mm wall, 6 mm base -- the thin-walled shape of issue 15 (wall / size = 0.036)."""
+    4 mm wall, 6 mm base -- a thin-walled shape, where linear tets lock (wall / size = 0.036)."""
     prof = [(0.0, 0.0), (outer_r * 0.5, 0.0), (outer_r, 0.0)]
     for i in range(1, n_wall + 1):  # outer wall, straight
         prof.append((outer_r, height * i / n_wall))

@@ -95,7 +95,7 @@ struct AudioAnalysis {
 /// Analyses the mixdown (mean of channels).
 /// Several impacts (impact_onsets_s): over a window spanning two impacts a mode is the same
 /// line twice, delayed by dt, i.e. multiplied by a comb of period 1/dt Hz whose teeth pass every
-/// test below (issue 15: four taps of a 5567 Hz mode gave 20 peaks 5558-5576 Hz and 2.45 /s for
+/// test below (four taps of a 5567 Hz mode gave 20 peaks 5558-5576 Hz and 2.45 /s for
 /// 38.3 /s). Between impacts the sound is one free ring, so each segment (2 ms after an onset to
 /// 1 ms before the next, at least 40 ms) is analysed as below on its own, and the lines merged:
 /// a line within max(min_separation_bins, its -3 dB half width d / 2 pi) of a stronger one from

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // The bank cache folder (`--cache DIR`, default ~/.cache/strike): list, measure and prune it
-// (`strike cache`), and the size cap a render applies after writing to it (issue 15, item 14).
+// (`strike cache`), and the size cap a render applies after writing to it.
 //
 // Entries are the files "<16 hex digits>.modes" (bankCacheKey's content hash, as the render's bank
 // source looks banks up: src/scene/bank_source_direct.cpp), ".pieces" (convex pieces) and

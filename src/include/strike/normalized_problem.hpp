@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Every computed bank comes from a solve of its object's normalized problem, scaled by
-// similarBank() (issue 19, item 4). The normalized problem keeps only what the mode shapes
+// similarBank(). The normalized problem keeps only what the mode shapes
 // depend on: the shape at unit size, the Poisson ratio, the element order, the mesh resolution
 // relative to the size, and the number of modes; its material is a fixed reference one. Objects
 // that differ only by size, Young's modulus and density share it, so a dataset that draws sizes
@@ -63,7 +63,7 @@ uint64_t normalizedBankCacheKey(uint64_t mesh_hash, const NormalizedProblem& pro
 Result<ModeBank> scaleNormalizedBank(const ModeBank& normalized, const NormalizedProblem& problem,
                                      const PrecomputeSettings& actual, uint64_t mesh_hash);
 
-// ---- The acoustic transfer of similar banks (issue 17) ----------------------------------------
+// ---- The acoustic transfer of similar banks ----------------------------------------
 // The transfer depends on ka of each mode, which similarity changes only through the material:
 // scaled by s from the unit size and made of E, rho, a mode's omega is the normalized one times
 // sqrt((E/rho) / (E_ref/rho_ref)) / s and the body's radius s times the unit one, so ka is the

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Scenes that cannot be right, caught before (or after) the simulation and named with numbers
-// (issue 15, item 10): bodies starting inside the ground or inside each other (they fly apart
+// Scenes that cannot be right, caught before (or after) the simulation and named with numbers:
+// bodies starting inside the ground or inside each other (they fly apart
 // with a bang that is the solver's, not the scene's), sizes and masses no sounding object has (a
 // mesh in millimetres read as metres), and dynamic bodies that nothing ever strikes.
 // Warnings, not errors: each of these can be meant.

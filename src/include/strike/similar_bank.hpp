@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Exact similarity of linear-elastic modes (issue 19, item 4). An object that differs from a
+// Exact similarity of linear-elastic modes. An object that differs from a
 // solved one only by a uniform scale s of its geometry and by Young's modulus E and density rho
 // (the same Poisson ratio) has K' = (E'/E) s K and M' = (rho'/rho) s^3 M on the scaled mesh, so
 // the same mode shapes with

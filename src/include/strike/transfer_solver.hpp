@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The acoustic transfer solver (issue 17): for every mode of a bank, the far field that its
+// The acoustic transfer solver: for every mode of a bank, the far field that its
 // surface acceleration radiates with the body as an acoustic obstacle, as spherical-harmonic
 // coefficients (acoustic_transfer.hpp for the conventions). Target strike_precompute (Eigen).
 //

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Bank format 4 (`strike modes --compact`): shapes as 16-bit integers with a scale per mode
-// (issue 15, item 14). Half the shape bytes; every value within scale / 2 = max|phi_i| / 65534.
+// Bank format 4 (`strike modes --compact`): shapes as 16-bit integers with a scale per mode.
+// Half the shape bytes; every value within scale / 2 = max|phi_i| / 65534.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The bad-input catalogue (issue 7): malformed or hostile inputs across every format, each run
+// The bad-input catalogue: malformed or hostile inputs across every format, each run
 // through the built `strike` binary under a time and memory limit. Every case must exit with code
 // 1, name the file (and line or key) and say what was expected, and leave no output file and no
 // temporary file. The test prints one table line per case and the count.

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Nothing lost on interruption (issue 7): SIGINT/SIGTERM during `strike modes`, `hit` and `render`
+// Nothing lost on interruption: SIGINT/SIGTERM during `strike modes`, `hit` and `render`
 // leaves neither the output nor a temporary file, and the process still dies by that signal; two
 // renders sharing one cache folder do not corrupt it.
 #include <fcntl.h>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Nothing lost when the disk fills (issue 7): `strike modes`, `hit` and `render` whose writes fail
+// Nothing lost when the disk fills: `strike modes`, `hit` and `render` whose writes fail
 // for lack of space exit 1 with a message naming the file, and leave neither the output nor a
 // temporary file nor a corrupt cache entry.
 //

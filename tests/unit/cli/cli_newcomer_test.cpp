@@ -245,7 +245,7 @@ TEST(NewcomerScenes, AMeshInMillimetresIsFlaggedAndUnitsMmScalesIt) {
 
 TEST(NewcomerSilence, AFreeBodyWithNoAudibleModeClicksAStaticOneIsSilent) {
   // 5 mm steel cubes: first elastic mode ~ 300 kHz, nothing below 20 kHz. The falling one still
-  // clicks (acceleration noise, issue 17); the static one it lands on cannot move, so it is silent.
+  // clicks (acceleration noise); the static one it lands on cannot move, so it is silent.
   const std::string dir = folder("silent");
   write(dir + "/pebble.json", R"({"duration": 0.2, "ground": {"reflection": false}, "objects": [
     {"name": "anvil", "mesh": "box:0.005,0.005,0.005", "material": "steel", "static": true, "position": [0, 0, 0.0025]},

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Contact physics end to end through `strike render`: bodies resting on concave (mesh) shapes
-// fall asleep and go silent, and restitution and friction come from the scene (issue 15 items
-// 4, 8 and 12).
+// fall asleep and go silent, and restitution and friction come from the scene.
 #include <gtest/gtest.h>
 #include <unistd.h>
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Short failure messages for byte-for-byte and value-for-value comparisons. EXPECT_EQ on two
 // WAV files' bytes prints both files as escaped strings: a failing determinism test once wrote
-// 7 MB of log (issue 15, item 15). These print a few lines instead:
+// 7 MB of log. These print a few lines instead:
 //   EXPECT_TRUE(test::sameBytes(a, b)) << "two renders differ";
 //   EXPECT_TRUE(test::sameValues(x, y)) << "energy traces differ";
 // Bytes: the sizes, the first differing offset with the bytes there, how many bytes differ, and

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The user-visible side of issue 6 through the `strike` binary: the error estimate in
+// The accuracy work as a user sees it, through the `strike` binary: the error estimate in
 // `strike modes` and `strike info`, --no-error-estimate, --tolerance, `strike bench accuracy` and
 // `strike bench leftout`.
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Stiff and extreme precompute cases (issue 6, part 2), each with its expectation stated next to
+// Stiff and extreme precompute cases, each with its expectation stated next to
 // it. Synth-side extremes (damping, 60 s rings, linearity, pulse durations, allocation-free
 // rendering) are covered in tests/unit/synth; see the table in the issue-6 report.
 #include <gtest/gtest.h>

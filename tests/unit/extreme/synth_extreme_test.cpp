@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Synth-side extremes (issue 6, part 2) not already covered in tests/unit/synth: impulses over
+// Synth-side extremes not already covered in tests/unit/synth: impulses over
 // 13 decades, sample rates 8-192 kHz, modes far above Nyquist (a stiff object), and a 10-minute
 // render whose memory stays flat. Each expectation is stated next to its test.
 #include <gtest/gtest.h>

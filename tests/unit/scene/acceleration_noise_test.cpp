@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Acceleration noise (issue 17): a small steel ball, whose elastic modes are all ultrasonic,
+// Acceleration noise: a small steel ball, whose elastic modes are all ultrasonic,
 // dropped on a rigid ground clicks as a rigid sphere translating with the Hertz pulse's
 // acceleration radiates. The closed form is the exact rigid sphere [Morse & Ingard 1968, 7.2]:
 //   P(w) = rho / (4 pi c r) 2 pi a^3 cos(theta) (-i w) A(w) 2 / (2 - 2 i x - x^2),  x = w a / c,

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The documentation lives in this repository (issue 15, item 5): nothing points users at files
+// The documentation lives in this repository: nothing points users at files
 // they do not have, and every key the scene parser accepts is documented.
 #include <gtest/gtest.h>
 

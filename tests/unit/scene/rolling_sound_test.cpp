@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Rolling and sliding sound end to end (issue 18): Bullet's contacts, the contact state, the
+// Rolling and sliding sound end to end: Bullet's contacts, the contact state, the
 // rough-contact generators and the oscillator banks, through renderScene().
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Scenes that cannot be right are named with their numbers (issue 15, item 10).
+// Scenes that cannot be right are named with their numbers.
 #include "strike/scene_checks.hpp"
 
 #include <gtest/gtest.h>

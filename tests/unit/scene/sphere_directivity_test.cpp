@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// A free elastic sphere struck radially, heard at several angles (issue 17). A radial impulse at
+// A free elastic sphere struck radially, heard at several angles. A radial impulse at
 // the pole excites, of each spheroidal multiplet of degree n (Lamb 1882), the combination that is
 // axisymmetric about the strike axis; its surface normal velocity is proportional to
 // P_n(cos theta), and a sphere radiates a normal velocity Y_n exactly as h_n(kr) / h_n'(ka) Y_n,

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// examples/scenes/spoon-scrapes-plate.json end to end (issue 18): a hand drives a steel spoon
+// examples/scenes/spoon-scrapes-plate.json end to end: a hand drives a steel spoon
 // over a ceramic plate (scene key "path") at three speeds, stops it, lifts it off. The speeds
 // and times come from the example's own keyframes.
 #include <gtest/gtest.h>

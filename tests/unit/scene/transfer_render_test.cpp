@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The acoustic transfer heard end to end (issue 17): the sound of a struck bar no longer
+// The acoustic transfer heard end to end: the sound of a struck bar no longer
 // depends on the eigen-solver's arbitrary choices, and a mode is loud along its vibration and
 // quiet off its end. Banks are solved here (PrecomputeSettings::acoustic_transfer).
 #include <gtest/gtest.h>

@@ -324,7 +324,7 @@ SimBodyDesc makeCoin(const std::string& name, double r, double h, double mass_kg
 // spinning at 30 rad/s on its edge, tilted 70 degrees, sliding at 0.15 m/s. It may wobble down
 // like Euler's disk but must never gain energy, and after 6 s it must lie flat (centre at half
 // its thickness, 1.15 mm, within 0.5 mm), at rest, and silent: no impact (approach faster than
-// render.cpp's 5 cm/s) in the last second.
+// the engine's impact rule, 5 cm/s: EngineSettings::impact_speed_m_s) in the last second.
 TEST(SimEnergy, SpinningCoinComesToRestFlatAndSilent) {
   SimBodyDesc coin = makeCoin("coin", 0.0116, 0.0023, 8.3e-3);
   coin.position_m = {0, 0, 0.045};

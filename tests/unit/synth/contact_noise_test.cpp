@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Rolling, sliding and scraping (issue 18): the continuous force input of the oscillator bank,
+// Rolling, sliding and scraping: the continuous force input of the oscillator bank,
 // the rough-contact force generator against the closed forms of its linearized model
 // (docs/contact.md, "Rolling, sliding and scraping"), and the engine's contact sources.
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// `strike bench accuracy -o DIR`: the reproducible accuracy study of issue 6 (bench.cpp parses
+// `strike bench accuracy -o DIR`: the reproducible accuracy study (bench.cpp parses
 // the command line).
 //  - accuracy-fem.csv / .svg: mode frequency error (true, against Timoshenko theory, and the
 //    bank's own estimate) against precompute time, Tet4 and Tet10, 4 resolutions each, on the
@@ -9,7 +9,7 @@
 //  - accuracy-synth.csv: float vs double oscillator state at 16-192 kHz, and culling thresholds at
 //    48 kHz, against a double-precision reference render of the same impact at the same rate:
 //    time-domain error, spectral error (FFT peak frequency and level) and run time;
-//  - accuracy-transfer.csv: the acoustic transfer solver (issue 17) on the analytic sphere: a
+//  - accuracy-transfer.csv: the acoustic transfer solver on the analytic sphere: a
 //    sphere R = 5 cm (2420 triangles) whose surface acceleration is Y_nm radiates exactly
 //    A h_n(kr) Y_nm; far-field error (rms over directions, level in dB and phase in degrees of the
 //    Y_nm coefficient) and the solver's own estimate against unknowns and seconds, n = 1 and 3,
@@ -316,7 +316,7 @@ struct TransferRow {
   double seconds, relative, level_db, phase_deg, estimate;
 };
 
-/// The analytic sphere of issue 17 at fixed resolutions: surface acceleration Y_nm (radial) on a
+/// The analytic sphere at fixed resolutions: surface acceleration Y_nm (radial) on a
 /// sphere of radius a radiates p = A h_n(kr) Y_nm, A = -rho / (k h_n'(ka)) (e^{-i omega t}), so
 /// the far-field coefficient is -rho (-i)^{n+1} / (k^2 h_n'(ka)) and every other one is zero.
 Result<std::vector<TransferRow>> transferStudy() {

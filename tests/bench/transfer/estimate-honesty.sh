@@ -32,7 +32,7 @@ for object in ${OBJECTS:-mug glass bowl plate}; do
   # The modes only (the default max-freq, 20 kHz: every mode is heard at 48 kHz).
   [ -f "$bank" ] || "$strike" modes "${mesh[$object]}" --material "${material[$object]}" ${options[$object]} \
     --no-transfer --no-error-estimate --quiet -o "$bank"
-  echo "=== $object (every ${every[$object]}th mode, reference $reference unknowns at a tenth of the target)"
+  echo "=== $object (1 mode in ${every[$object]}, reference $reference unknowns at a tenth of the target)"
   STRIKE_TRANSFER_BANK=$bank STRIKE_TRANSFER_EVERY=${every[$object]} STRIKE_TRANSFER_REFERENCE_ELEMENTS=$reference \
     "$solver" --gtest_also_run_disabled_tests --gtest_filter='TransferSolver.DISABLED_PrintsTheSolveOfABankFromTheEnvironment' |
     grep -v '^\[\|^Running main\|^Note:'

@@ -169,6 +169,7 @@ void SoundEngine::render(float* const* out, size_t frames) {
     if (!v) continue;
     updateGains(*v);
     if (frames == 0) continue;
+    bool image_sounds = false;  // this call's image is in image->signal
     if (VoiceState::ImagePath* image = v->image_.get()) {
       const bool clicking = !image->click_synth.idle();
       if (image->synth.idle() && !clicking) {
@@ -177,20 +178,23 @@ void SoundEngine::render(float* const* out, size_t frames) {
         image->click_synth.skip(nullptr, frames);
         flushBinaural(*v, 1, out, frames);
       } else {
-        image->synth.skip(v->mono_.data(), frames);
+        float* signal = image->signal.data();
+        image->synth.skip(signal, frames);
         if (clicking) {
           image->click_synth.render(v->click_mono_.data(), frames);
-          for (size_t n = 0; n < frames; ++n) v->mono_[n] += v->click_mono_[n];
+          for (size_t n = 0; n < frames; ++n) signal[n] += v->click_mono_[n];
         } else {
           image->click_synth.skip(nullptr, frames);
         }
+        std::copy(signal, signal + frames, v->mono_.begin());
         mixPath(v->mono_.data(), image->cur_gain, image->target_gain, v->binaural_[1], out, frames);
         active += image->synth.activeModeCount();
+        image_sounds = true;
       }
     }
     const bool driven = renderContactForces(*v, frames);  // continuous contacts' forces
     const bool clicking = !v->click_synth_.idle();
-    if (!driven && v->synth_.idle() && !clicking) {
+    if (!driven && v->synth_.idle() && !clicking && !image_sounds) {
       std::copy(v->target_gain_, v->target_gain_ + channels, v->cur_gain_);
       v->synth_.skip(nullptr, frames);  // keeps its clock: its next pulse lands at the right sample
       v->click_synth_.skip(nullptr, frames);
@@ -206,6 +210,10 @@ void SoundEngine::render(float* const* out, size_t frames) {
       for (size_t n = 0; n < frames; ++n) v->mono_[n] += v->click_mono_[n];
     } else {
       v->click_synth_.skip(nullptr, frames);
+    }
+    if (image_sounds) {  // synth_ carries both paths: the direct sound is the rest
+      const float* image = v->image_->signal.data();
+      for (size_t n = 0; n < frames; ++n) v->mono_[n] -= image[n];
     }
     mixPath(v->mono_.data(), v->cur_gain_, v->target_gain_, v->binaural_[0], out, frames);
     active += v->synth_.activeModeCount();

@@ -154,6 +154,7 @@ void SoundEngine::scheduleImpact(VoiceState& v, const double* modal, double time
     impact.modal_transfer = transfer[k];
     OscillatorBank& synth = pathSynth(v, k);
     const ImpactResult r = synth.addImpact(impact);
+    if (k > 0 && v.image_) (void)v.synth_.addImpact(impact);  // synth_ carries both paths (voice_state.hpp)
     if (k == 0) {  // one impact, however many paths it takes
       switch (r) {
         case ImpactResult::Scheduled: ++stats_.impacts; break;
@@ -180,6 +181,7 @@ void SoundEngine::scheduleForceStep(VoiceState& v, const double* modal_change, d
     step.modal_transfer = transfer[k];
     OscillatorBank& synth = pathSynth(v, k);
     const ImpactResult r = synth.addForceStep(step);
+    if (k > 0 && v.image_) (void)v.synth_.addForceStep(step);
     if (k > 0) continue;
     if (r == ImpactResult::NoCapacity)
       ++stats_.impacts_dropped;
@@ -210,6 +212,7 @@ void SoundEngine::scheduleClick(VoiceState& v, int path, const Arrival& a, doubl
   click.modal_transfer = v.click_transfer_.data();
   OscillatorBank& clicks = pathClicks(v, path);
   (void)clicks.addImpact(click);
+  if (path > 0 && v.image_) (void)v.click_synth_.addImpact(click);
 }
 
 const std::complex<double>* SoundEngine::throughAir(VoiceState& v, int path, const std::complex<double>* factors,

@@ -195,7 +195,8 @@ VoiceState::VoiceState(const VoiceDesc& desc, const EngineSettings& settings)
   // An output with directions hears the ground's image from below: a signal of its own.
   const bool pressure = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
   if (outputHasDirections(settings.output) && settings.ground.enabled && pressure)
-    image_ = std::make_unique<ImagePath>(synthSettings(settings), modalObject(bank, desc.weights));
+    image_ = std::make_unique<ImagePath>(synthSettings(settings), modalObject(bank, desc.weights),
+                                         std::max<uint32_t>(settings.max_block_frames, 1));
   if (settings.output == OutputFormat::Binaural && settings.hrtf) {
     binaural_[0].init(settings.hrtf, std::max<uint32_t>(settings.max_block_frames, 1));
     if (image_) binaural_[1].init(settings.hrtf, std::max<uint32_t>(settings.max_block_frames, 1));

@@ -129,12 +129,16 @@ struct VoiceState : LoadTracker, ContinuousSources, PathTransfers, AccelerationC
   float gain_ = 1.0f;
   float cur_gain_[kMaxOutputChannels] = {}, target_gain_[kMaxOutputChannels] = {};
   /// The ground's image as a signal of its own (an output with directions and a ground: it
-  /// arrives from below), with its own oscillators, clicks and gains; null otherwise, when the
-  /// image is mixed into synth_ with the direct sound.
+  /// arrives from below), with its own oscillators, clicks and gains; null otherwise. The image
+  /// rings in synth_ too, as in mono: synth_ carries both paths and the direct sound is synth_'s
+  /// signal less the image's. Both paths' modes then sleep when their sum does, as in mono, and
+  /// the sum of the paths (the omni channel) is the mono render to the rounding of a float.
   struct ImagePath {
-    ImagePath(const SynthSettings& s, const ModalObjectDesc& modes) : synth(s, modes), click_synth(s, {}) {}
+    ImagePath(const SynthSettings& s, const ModalObjectDesc& modes, size_t max_block_frames)
+        : synth(s, modes), click_synth(s, {}), signal(max_block_frames, 0.0f) {}
     OscillatorBank synth;
     OscillatorBank click_synth;
+    std::vector<float> signal;  ///< max_block_frames: this render call's image, oscillators and clicks
     float cur_gain[kMaxOutputChannels] = {}, target_gain[kMaxOutputChannels] = {};
   };
   std::unique_ptr<ImagePath> image_;

@@ -380,8 +380,8 @@ class SoundEngine {
   void flushBinaural(VoiceState& v, int path, float* const* out, size_t frames) const;
   /// Where the ground's mirror image of `point` is, when the image path exists for it.
   bool imageOf(const std::array<double, 3>& point, std::array<double, 3>& image) const;
-  /// The synth a path's pulses go to: synth_ for the direct sound, and for the image too unless
-  /// it has its own signal.
+  /// The synth a path's pulses go to: synth_ for the direct sound, and for the image when it has
+  /// no signal of its own (when it has, its pulses go to synth_ as well: voice_state.hpp).
   OscillatorBank& pathSynth(VoiceState& v, int path) const;
   OscillatorBank& pathClicks(VoiceState& v, int path) const;
   /// Contact damping on from time_s (event time, before the delay) heard from world_point.

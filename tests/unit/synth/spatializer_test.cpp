@@ -70,14 +70,15 @@ TEST(Spatializer, AmbixGainsAreTheSn3dHarmonicsOfTheClosedForms) {
   EXPECT_EQ(outputChannels(OutputFormat::Ambix2), 9u);
 }
 
-// One 1 kHz mode, no directivity (a bank of format 4: heard alike in every direction).
-std::shared_ptr<ModeBank> oneModeBank() {
+// One 1 kHz mode, no directivity (a bank of format 4: heard alike in every direction), decaying
+// at rayleigh_mass / 2 per second.
+std::shared_ptr<ModeBank> oneModeBank(double rayleigh_mass = 2.0) {
   auto bank = std::make_shared<ModeBank>();
   ModeBank& b = *bank;
   b.material.youngs_pa = 200e9;
   b.material.poisson = 0.3;
   b.material.density_kg_m3 = 7800;
-  b.material.rayleigh_mass = 2.0;
+  b.material.rayleigh_mass = rayleigh_mass;
   b.mass_kg = 0.1;
   b.eigenvalues = {std::pow(2.0 * M_PI * 1000.0, 2)};
   b.surface_positions = {0, 0, 0, 0.01, 0, 0, 0, 0.01, 0};
@@ -96,17 +97,19 @@ struct Listener {
 
 /// Planar channels of one struck body heard by `listener` in `format`.
 std::vector<std::vector<float>> strike(OutputFormat format, const std::array<double, 3>& body_at,
-                                       const Listener& listener, GroundReflection ground = {}, size_t frames = 9600) {
+                                       const Listener& listener, GroundReflection ground = {}, size_t frames = 9600,
+                                       double audibility_threshold = 0.0, double rayleigh_mass = 2.0,
+                                       uint64_t* active_at_end = nullptr) {
   EngineSettings settings;
   settings.synth.sample_rate_hz = kRate;
-  settings.synth.audibility_threshold = 0.0;
+  settings.synth.audibility_threshold = audibility_threshold;
   settings.max_voices = 1;
   settings.max_block_frames = 256;
   settings.ground = ground;
   settings.realtime = false;
   settings.output = format;
   SoundEngine engine(settings);
-  const auto bank = oneModeBank();
+  const auto bank = oneModeBank(rayleigh_mass);
   VoiceDesc desc;
   desc.bank = bank;
   desc.weights = radiationWeights(*bank, settings.reference_distance_m);
@@ -131,6 +134,7 @@ std::vector<std::vector<float>> strike(OutputFormat format, const std::array<dou
     for (uint32_t c = 0; c < channels; ++c) blocks[c] = out[c].data() + at;
     engine.render(blocks, std::min<size_t>(256, frames - at));
   }
+  if (active_at_end) *active_at_end = engine.stats().active_modes;
   return out;
 }
 
@@ -209,6 +213,48 @@ TEST(Spatializer, OmniChannelEqualsTheMonoRender) {
     }
     ASSERT_GT(energy, 0.0);
     EXPECT_LT(10.0 * std::log10(error / energy + 1e-300), -100.0) << outputFormatName(format);
+  }
+}
+
+// The same with the audibility threshold of a render (1e-6 full scale), through the moment the
+// modes sleep under it: the image rings in synth_ too, so both paths' modes sleep when their sum
+// does, as in mono, and W is still the mono render (it differed by up to the threshold when each
+// path's modes slept on their own).
+TEST(Spatializer, OmniChannelEqualsTheMonoRenderWhileTheModesFallAsleep) {
+  GroundReflection ground;
+  ground.enabled = true;
+  ground.reflection = -0.8;  // the paths' modes cancel in part: their sum sleeps before either alone
+  Listener listener;
+  listener.position = {0, -1, 0.4};
+  listener.orientation = yaw(-60.0);
+  const std::array<double, 3> body = {0.5, 0.8, 0.3};
+  const size_t frames = 48000;
+  const double rayleigh_mass = 60.0;  // 30 / s: asleep within the second
+  uint64_t mono_active = 1;
+  const auto mono = strike(OutputFormat::Mono, body, listener, ground, frames, 1e-6, rayleigh_mass, &mono_active)[0];
+  EXPECT_EQ(mono_active, 0u);  // the modes did sleep
+  size_t last_sound = 0;
+  double peak = 0.0;
+  for (size_t n = 0; n < frames; ++n)
+    if (mono[n] != 0.0f) last_sound = n, peak = std::max(peak, std::abs(double(mono[n])));
+  EXPECT_LT(last_sound, frames - 4800) << "the mode never slept";
+  EXPECT_GT(last_sound, 4800u);
+  for (OutputFormat format : {OutputFormat::Stereo, OutputFormat::Ambix1, OutputFormat::Ambix3}) {
+    uint64_t active = 1;
+    const auto channels = strike(format, body, listener, ground, frames, 1e-6, rayleigh_mass, &active);
+    EXPECT_EQ(active, 0u) << outputFormatName(format);
+    if (format == OutputFormat::Stereo) continue;  // all asleep with mono: checked
+    double error = 0.0, energy = 0.0, worst = 0.0;
+    for (size_t n = 0; n < frames; ++n) {
+      const double d = double(channels[0][n]) - mono[n];
+      error += d * d;
+      energy += double(mono[n]) * mono[n];
+      worst = std::max(worst, std::abs(d));
+    }
+    std::printf("  %s: W - mono %.1f dB (energy), worst sample %.1f dB re peak\n", outputFormatName(format),
+                10.0 * std::log10(error / energy + 1e-300), 20.0 * std::log10(worst / peak + 1e-300));
+    EXPECT_LT(10.0 * std::log10(error / energy + 1e-300), -100.0) << outputFormatName(format);
+    EXPECT_LT(worst, 1e-5 * peak) << outputFormatName(format);
   }
 }
 

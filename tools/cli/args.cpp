@@ -172,13 +172,16 @@ std::string wrapHelp(const std::string& text, size_t indent, size_t width) {
   size_t column = indent;
   std::istringstream lines(text);
   std::string line;
-  bool first_line = true;
+  bool first_line = true, previous_empty = false;
   while (std::getline(lines, line)) {
-    if (!first_line) out += "\n" + std::string(indent, ' '), column = indent;
+    const bool keeps_break = line.empty() || previous_empty || line[0] == ' ' || line.rfind("- ", 0) == 0;
+    if (!first_line && keeps_break) out += "\n" + std::string(indent, ' '), column = indent;
+    // A reflowed line continues the previous one's words (the word loop adds the space).
+    bool first_word = first_line || keeps_break;
     first_line = false;
+    previous_empty = line.empty();
     std::istringstream words(line);
     std::string word;
-    bool first_word = true;
     while (words >> word) {
       if (!first_word && column + 1 + word.size() > width) {
         out += "\n" + std::string(indent, ' ');

@@ -50,7 +50,9 @@ std::string helpText(const CommandSpec& spec);
 /// continuation lines under the first.
 constexpr size_t kHelpWidth = 100;
 /// `text` word-wrapped to `width` columns, its lines after the first indented by `indent`
-/// (the first starts at column `indent`); the text's own line breaks are kept.
+/// (the first starts at column `indent`). The text's own line breaks are reflowed, so a source
+/// line written a little longer or shorter never leaves a ragged line; a break is kept before an
+/// empty line, a line that starts with a space (an indented list or example) or with "- ".
 std::string wrapHelp(const std::string& text, size_t indent, size_t width);
 
 /// The sample encoding from --format, defaulting by the output's extension: float for .wav

@@ -11,7 +11,7 @@
 #include "strike/error_estimate.hpp"
 #include "strike/fem.hpp"
 #include "strike/materials.hpp"
-#include "strike/synth.hpp"
+#include "strike/radiation_strength.hpp"
 
 namespace strike {
 namespace {

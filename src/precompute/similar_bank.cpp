@@ -6,7 +6,7 @@
 #include <string>
 
 #include "strike/precompute.hpp"
-#include "strike/synth.hpp"
+#include "strike/radiation_strength.hpp"
 
 namespace strike {
 

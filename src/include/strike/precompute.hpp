@@ -10,7 +10,7 @@
 #include "strike/material.hpp"
 #include "strike/mesh.hpp"
 #include "strike/modal.hpp"
-#include "strike/synth.hpp"
+#include "strike/band.hpp"
 #include "strike/transfer_solver.hpp"
 
 namespace strike {
@@ -48,7 +48,7 @@ struct PrecomputeSettings {
   /// The modes above are kept without one (for other uses, at no cost), and a render that plays
   /// more solves theirs then (extendTransfer). Not part of the cache key: the bank records which
   /// modes have a transfer (a prefix, AcousticTransfer::modeCount()).
-  double transfer_max_freq_hz = synthesizedTopHz(SynthSettings{}.max_freq_hz, SynthSettings{}.sample_rate_hz);
+  double transfer_max_freq_hz = synthesizedTopHz(kDefaultMaxFreqHz, kDefaultSampleRateHz);
   /// Memory budget of each solve, bytes; 0: none (`--max-memory`, default the memory available).
   /// The eigen-solve (ModalSettings::max_bytes) and the acoustic transfer
   /// (transferMemoryForecastBytes) forecast what they will hold before they take it, and one

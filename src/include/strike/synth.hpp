@@ -17,24 +17,15 @@
 #include <memory>
 #include <vector>
 
+#include "strike/band.hpp"
 #include "strike/bank.hpp"
+#include "strike/radiation_strength.hpp"
 
 namespace strike {
 
 /// Which oscillator kernel render() uses. Auto picks the widest the CPU supports at run time; a
 /// level the CPU lacks falls back to the next narrower one (see OscillatorBank::simdName()).
 enum class SimdLevel { Auto, Scalar, Avx2, Avx512 };
-
-/// The top of the band a render synthesizes, as a fraction of its sample rate (a margin below
-/// Nyquist, 0.5). The one definition of it: the oscillator bank's band, the modes a render
-/// computes, and the modes that get an acoustic transfer all follow it.
-constexpr double kBandTopOfSampleRate = 0.45;
-
-/// The highest frequency a render at `sample_rate_hz` synthesizes with `max_freq_hz` asked for:
-/// min(max_freq_hz, 0.45 fs). A mode at or below it is played (OscillatorBank), above it never.
-inline double synthesizedTopHz(double max_freq_hz, double sample_rate_hz) {
-  return std::min(max_freq_hz, kBandTopOfSampleRate * sample_rate_hz);
-}
 
 /// What an oscillator bank does when a pulse, a force step or a damping change needs more than
 /// it reserved (OscillatorBank::reserveImpacts): set once, for the bank's life.
@@ -44,9 +35,9 @@ enum class Allocation {
 };
 
 struct SynthSettings {
-  double sample_rate_hz = 48000.0;
+  double sample_rate_hz = kDefaultSampleRateHz;
   double min_freq_hz = 20.0;     ///< modes below are not synthesized
-  double max_freq_hz = 20000.0;  ///< modes above synthesizedTopHz(this, sample rate) are not synthesized
+  double max_freq_hz = kDefaultMaxFreqHz;  ///< modes above synthesizedTopHz(this, sample rate) are not synthesized
   /// Output amplitude (same units as the output) below which a mode is not started and at which
   /// a ringing mode goes to sleep. Default ~ -120 dB re full scale 1.0.
   double audibility_threshold = 1e-6;
@@ -346,9 +337,6 @@ inline double outputPerPascal(double gain, double full_scale_pa = kFullScalePasc
 /// radiated pressure at reference_distance_m per unit modal acceleration, radiationWeights, in
 /// output units. The one place the render, `strike hit` and libstrike turn pressure into output.
 std::vector<double> pressureWeights(const ModeBank& bank, double reference_distance_m, double output_per_pa);
-/// The distance-free part of radiationWeights: R_i per mode (m^2 / sqrt(kg)), computed from the
-/// surface and shapes. radiationWeights uses bank.radiation_m2 instead when the bank has it.
-std::vector<double> radiationStrengths(const ModeBank& bank);
 /// Per mode, the radiation efficiency of its acoustic transfer: radiated power over
 /// rho c <|v_n|^2> S / 2, the power of the same surface velocity as a plane wave [Fahy &
 /// Gardonio, Sound and Structural Vibration, 2007, sec. 3.4]. Zero for a mode without one.

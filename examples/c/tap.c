@@ -5,8 +5,10 @@
  *
  * BANK.modes comes from `strike modes`; VERTEX is a surface vertex of it (`strike info BANK.modes
  * --vertices` lists them with their normals). The tap is the library's default striker (a 5 mm
- * steel ball) giving 0.01 N s into the surface along its normal: the tap of
- * `strike hit BANK.modes -o OUT.wav --vertex VERTEX --duration 1`, which sounds the same.
+ * steel ball) giving 0.01 N s into the surface along its normal, heard 1 m away along the mesh
+ * frame's -y: the tap of `strike hit BANK.modes -o OUT.wav --vertex VERTEX --listener 0,-1,0
+ * --duration 1`, which sounds the same. (Plain `strike hit` puts the listener on the side struck
+ * instead; a bank with an acoustic transfer sounds different in every direction.)
  * OUT.wav is mono 32-bit float at 48 kHz, 1.0 = 20 Pa (the tools' level).
  *
  * Build against an installed libstrike:  cc tap.c $(pkg-config --cflags --libs strike) -o tap */
@@ -52,7 +54,8 @@ int main(int argc, char** argv) {
     strike_context_destroy(context);
     return 1;
   }
-  /* The object 1 m in front of the listener (the listener is at the origin by default). */
+  /* The object 1 m in front of the listener (the listener is at the origin by default), so the
+   * listener is at (0, -1, 0) in the object's mesh frame. */
   strike_object_config object = strike_object_config_default();
   object.bank = bank;
   object.position[1] = 1.0;

@@ -211,14 +211,15 @@ TEST_F(OutputLevel, DefaultTapSoundsTheSameThroughStrikeHitAndTheCApi) {
 }
 
 // examples/c/tap.c, the docs' minimal C program, taps the bank as `strike hit` does: the same
-// level and brightness (the default striker, 0.01 N s along the inward normal, 1 m away).
+// level and brightness (the default striker, 0.01 N s along the inward normal, the listener 1 m
+// away along the mesh frame's -y, where tap.c puts the object).
 TEST_F(OutputLevel, TheMinimalCExampleSoundsLikeStrikeHit) {
   const std::string wav = testing::TempDir() + "/capi_example_tap.wav", cli_wav = testing::TempDir() + "/capi_hit.wav";
   const std::string command =
       std::string("'") + STRIKE_EXAMPLE_TAP + "' '" + bank_ + "' " + std::to_string(kVertex) + " '" + wav + "'";
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   const test::CliResult r = test::runCli("hit '" + bank_ + "' -o '" + cli_wav + "' --vertex " +
-                                         std::to_string(kVertex) + " --distance 1 --duration 1 --rate 48000 --quiet");
+                                         std::to_string(kVertex) + " --listener 0,-1,0 --duration 1 --rate 48000 --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   Result<AudioBuffer> example = readAudio(wav), cli = readAudio(cli_wav);
   ASSERT_TRUE(example) << example.error().message;

@@ -42,6 +42,15 @@ std::string cachePath(const std::string& cache_dir, uint64_t key, const char* ex
   return cache_dir + "/" + hex + extension;
 }
 
+std::optional<BankFile> openCachedBank(const std::string& cache_dir, uint64_t key, uint64_t mesh_hash) {
+  const std::string path = cachePath(cache_dir, key, ".modes");
+  if (!std::filesystem::is_regular_file(path)) return std::nullopt;
+  Result<BankFile> cached = BankFile::open(path);
+  if (!cached || cached->bank().mesh_hash != mesh_hash) return std::nullopt;
+  touchCacheEntry(path);
+  return std::move(*cached);
+}
+
 double solveSeconds(const ModeBank& bank) {
   return std::max(bank.total_seconds, bank.factorize_seconds + bank.lanczos_seconds + bank.transfer_seconds);
 }

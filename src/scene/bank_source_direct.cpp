@@ -110,12 +110,8 @@ class DirectBanks final : public BankStrategy {
 
   /// The body's bank from the cache, if there and of the same mesh; counted in the report.
   bool openCached(Body& body) {
-    const std::string path = cachePath(c_.settings.cache_dir, body.cache_key, ".modes");
-    if (!std::filesystem::is_regular_file(path)) return false;
-    Result<BankFile> cached = BankFile::open(path);
-    // A damaged cache entry is recomputed, not trusted (damaged shapes are found in phase 3).
-    if (!cached || cached->bank().mesh_hash != body.mesh_hash) return false;
-    touchCacheEntry(path);  // read by this render: the size cap removes it last (least recently used)
+    std::optional<BankFile> cached = openCachedBank(c_.settings.cache_dir, body.cache_key, body.mesh_hash);
+    if (!cached) return false;
     body.bank = cached->sharedBank();
     body.file = std::move(*cached);
     body.has_modes = true;

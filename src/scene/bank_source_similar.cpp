@@ -70,12 +70,8 @@ class SimilarBanks final : public BankStrategy {
   /// The body's normalized solve from the cache (header now, shapes in phase 3), if there and of
   /// the same mesh; counted in the report.
   bool openCachedSolve(Body& body) {
-    const std::string path = cachePath(c_.settings.cache_dir, body.cache_key, ".modes");
-    if (!std::filesystem::is_regular_file(path)) return false;
-    Result<BankFile> cached = BankFile::open(path);
-    // A damaged cache entry is recomputed, not trusted (damaged shapes are found in phase 3).
-    if (!cached || cached->bank().mesh_hash != body.normal_mesh_hash) return false;
-    touchCacheEntry(path);  // read by this render: the size cap removes it last (least recently used)
+    std::optional<BankFile> cached = openCachedBank(c_.settings.cache_dir, body.cache_key, body.normal_mesh_hash);
+    if (!cached) return false;
     body.normal_bank = cached->bank();
     body.file = std::move(*cached);
     body.has_modes = true;

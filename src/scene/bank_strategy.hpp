@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "bank_source.hpp"
@@ -35,6 +36,12 @@ std::unique_ptr<BankStrategy> makeSimilarBanks(BankContext& context);
 
 /// The cache's file for `key`: "<cache_dir>/<16 hex digits><extension>".
 std::string cachePath(const std::string& cache_dir, uint64_t key, const char* extension);
+
+/// The cache's bank file for `key` if it is there, opens and was solved from the mesh
+/// `mesh_hash`, marked as read by this render (the size cap removes it last, least recently
+/// used); nothing otherwise: a damaged or foreign entry is solved again, not trusted (damaged
+/// shapes are found in phase 3).
+std::optional<BankFile> openCachedBank(const std::string& cache_dir, uint64_t key, uint64_t mesh_hash);
 
 /// What a bank cost to solve, as it records it: the whole precompute (meshing, assembly, the
 /// eigen-solve and the acoustic transfer), what a cache read saves; older banks that recorded no

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 // libstrike's context: the sound engine (strike/engine.hpp) that `strike render` also runs, owned
 // by the audio thread, and the lock-free queues that carry the main thread's commands and any
-// thread's impacts and physics steps to it. Shared by strike.cpp (context, banks, objects) and
-// strike_audio.cpp (impacts, steps, render).
+// thread's impacts and physics steps to it. Shared by the main thread's files
+// (strike.cpp, strike_context.cpp, strike_bank.cpp, strike_objects.cpp) and strike_audio.cpp
+// (impacts, steps, render).
 #pragma once
 
 #include <atomic>

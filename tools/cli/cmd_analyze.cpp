@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// `strike analyze AUDIO.wav [--json]`: peaks, levels and decay of a sound.
+// `strike analyze AUDIO.wav [--json]`: peaks, levels and decay of a sound, and its pictures.
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -26,11 +26,18 @@ CommandSpec analyzeSpec() {
       {"--json", "", "print one JSON object on stdout (the contract in docs/cli.md)"},
       {"--peaks", "N", "report the N strongest peaks; default 20"},
       {"--floor", "DB", "ignore peaks more than DB below the strongest; default -60"},
-      {"--spectrogram", "PNG", "also draw a spectrogram (log frequency, 100 dB range) to this PNG file"},
+      {"--spectrogram", "PNG",
+       "also draw a spectrogram (log frequency, 100 dB range) to this PNG file: one panel per channel, "
+       "labelled L and R for two channels, by ACN index and letter (W Y Z X ...) for Ambisonics"},
+      {"--directions", "PNG",
+       "also draw, for an Ambisonics file (AmbiX: ACN, SN3D; 4, 9 or 16 channels), the direction its sound "
+       "arrives from over time: azimuth and elevation per 10 ms frame from the first-order intensity, "
+       "coloured by level (docs/cli.md)"},
   };
   spec.examples =
       "  strike analyze hit.wav\n  strike analyze hit.wav --json --peaks 5\n"
-      "  strike analyze render.wav --spectrogram render.png\n";
+      "  strike analyze render.wav --spectrogram render.png\n"
+      "  strike analyze ambix.wav --directions directions.png\n";
   spec.min_positional = 1;
   spec.max_positional = 1;
   return spec;
@@ -61,12 +68,23 @@ int runAnalyze(const std::vector<std::string>& raw_args) {
   if (args->has("--spectrogram"))
     if (Status ok = checkOutputFile("--spectrogram", args->text("--spectrogram"), {".png"}); !ok)
       return reportError("analyze", ok.error());
+  if (args->has("--directions"))
+    if (Status ok = checkOutputFile("--directions", args->text("--directions"), {".png"}); !ok)
+      return reportError("analyze", ok.error());
   const std::string path = args->positional[0];
   Result<AudioBuffer> audio = readAudio(path);
   if (!audio) return reportError("analyze", audio.error());
+  if (args->has("--directions") && audio->channels < 4)
+    return reportError("analyze", badInput(path + ": " + std::to_string(audio->channels) +
+                                           " channel(s): --directions needs Ambisonics (AmbiX: ACN order, SN3D) of "
+                                           "4, 9 or 16 channels, e.g. from strike render --output ambix1"));
   const AudioAnalysis analysis = analyzeAudio(*audio, options);
   if (args->has("--spectrogram")) {
     Status drawn = writeSpectrogramPng(args->text("--spectrogram"), *audio, SpectrogramOptions{});
+    if (!drawn) return reportError("analyze", drawn.error());
+  }
+  if (args->has("--directions")) {
+    Status drawn = writeDirectionsPng(args->text("--directions"), *audio, DirectionOptions{});
     if (!drawn) return reportError("analyze", drawn.error());
   }
 

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -159,8 +160,8 @@ AudioAnalysis analyzeAudio(const AudioBuffer& audio, const AnalyzeOptions& optio
 // ---- spectrogram picture: target strike_fftw -------------------------------------------------
 
 struct SpectrogramOptions {
-  int width_px = 1024;  ///< whole image, including the axis margins
-  int height_px = 512;
+  int width_px = 1024;        ///< whole image, including the axis margins
+  int height_px = 512;        ///< of each channel's panel, margins included (see spectrogramPanelHeight)
   int fft_size = 4096;        ///< samples per Hann-windowed frame (a power of two is fastest)
   bool log_frequency = true;  ///< log axis from min_freq_hz; else linear from 0 Hz
   double min_freq_hz = 20.0;  ///< bottom of a log axis
@@ -169,9 +170,60 @@ struct SpectrogramOptions {
   bool axis_labels = true;    ///< tick marks and labels (Hz, s) in margins, when the image is >= 160x100
 };
 
-/// Renders the mixdown's spectrogram (time on x, frequency on y, dB in the magma colour map)
-/// and writes it as an RGB PNG atomically (temporary file beside `path`, then rename).
+/// Renders each channel's spectrogram (time on x, frequency on y, dB in the magma colour map) as
+/// a panel, the channels stacked top to bottom, and writes them as one RGB PNG atomically
+/// (temporary file beside `path`, then rename). The colours span range_db below the loudest cell
+/// of all the channels, so the panels' levels compare. With more than one channel each panel is
+/// labelled (spectrogramChannelLabel). A mono file gives one unlabelled panel.
 Status writeSpectrogramPng(const std::string& path, const AudioBuffer& audio, const SpectrogramOptions& options);
+
+/// The height of each channel's panel: height_px for one or two channels; for more (Ambisonics:
+/// 4, 9, 16) a quarter of it, but no less than min(128, height_px), so 16 channels of the default
+/// 512 make a 1024 x 2048 picture.
+int spectrogramPanelHeight(int channels, int height_px);
+
+/// A panel's label: "L" and "R" for two channels; "ACN n" and the channel's B-format letter
+/// (W Y Z X, then V T R S U and Q O M K L N P of Furse-Malham's naming) for 4, 9 or 16 channels,
+/// AmbiX's orders 1-3; else "CH n" counted from 1.
+std::string spectrogramChannelLabel(int channel, int channels);
+
+// ---- directions of arrival: target strike_fftw -----------------------------------------------
+
+/// One short-time frame of an Ambisonics (AmbiX: ACN, SN3D) signal, and the direction its
+/// sound comes from.
+struct DirectionFrame {
+  double time_s = 0.0;  ///< the frame's centre
+  double level_dbfs =
+      -std::numeric_limits<double>::infinity();  ///< the omni channel W's rms in the frame, dB re full scale
+  bool has_direction = false;                    ///< false when the frame is silent or its intensity is zero
+  double azimuth_deg = 0.0;    ///< counter-clockwise from the front (+x) toward the left (+y), -180..180
+  double elevation_deg = 0.0;  ///< up from the horizontal plane (+z), -90..90
+  /// 1 - |<W [X Y Z]>| / (<W^2 + (X^2 + Y^2 + Z^2)> / 2): 0 for one plane wave, near 1 for a
+  /// diffuse field (Pulkki 2007's diffuseness, with SN3D's first-order channels).
+  double diffuseness = 1.0;
+};
+
+struct DirectionOptions {
+  double frame_s = 0.01;    ///< frame length; frames do not overlap
+  int width_px = 1024;      ///< whole image, including the axis margins
+  int height_px = 512;      ///< both panels (azimuth above, elevation below)
+  double range_db = 60.0;   ///< frames down to this far below the loudest are drawn, coloured by level
+  bool axis_labels = true;  ///< ticks and labels in margins, when the image is >= 160x200
+};
+
+/// Per frame of frame_s seconds, the direction of arrival from the first-order channels
+/// (ACN 0-3: W, Y, Z, X; higher-order channels are ignored) by the active intensity method
+/// (Merimaa & Pulkki, "Spatial impulse response rendering I", JAES 53(12), 2005; Pulkki,
+/// "Spatial sound reproduction with directional audio coding", JAES 55(6), 2007): the frame's
+/// mean of W times (X, Y, Z), the negative of the active intensity, points to the source. With
+/// SN3D a plane wave from (azimuth a, elevation e) has X = W cos a cos e, Y = W sin a cos e,
+/// Z = W sin e, so the direction is exact for one source. Fewer than 4 channels is BadInput.
+Result<std::vector<DirectionFrame>> directionsOfArrival(const AudioBuffer& audio, double frame_s);
+
+/// Draws directionsOfArrival as two panels over time, azimuth (-180..180 degrees) above and
+/// elevation (-90..90) below, one dot per frame coloured by its level (magma), louder frames on
+/// top; writes an RGB PNG atomically.
+Status writeDirectionsPng(const std::string& path, const AudioBuffer& audio, const DirectionOptions& options);
 
 /// Encodes 8-bit RGB pixels (row-major, top row first, width * height * 3 bytes) as a PNG:
 /// signature, IHDR, one IDAT holding a zlib stream of stored (uncompressed) deflate blocks with

@@ -127,8 +127,8 @@ TEST(Spectrogram, WritesAValidPngOfTheRequestedSize) {
     const std::string png = test::readBytes(path);
     const Decoded d = decode(png);
     EXPECT_EQ(d.width, 640u);
-    EXPECT_EQ(d.height, 360u);
-    ASSERT_EQ(d.rgb.size(), 640u * 360u * 3u);
+    EXPECT_EQ(d.height, 2u * 360u) << "two channels: two panels of the requested size";
+    ASSERT_EQ(d.rgb.size(), 640u * 720u * 3u);
     // The 440 Hz line at the start is the loudest: the brightest colour of the map is present.
     int bright = 0;
     for (size_t i = 0; i + 2 < d.rgb.size(); i += 3)
@@ -156,6 +156,67 @@ TEST(Spectrogram, BadOptionsAndUnwritablePathsAreErrors) {
   const Status s = writeSpectrogramPng(path, audio, options);
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.error().message.find(path), std::string::npos);
+}
+
+}  // namespace
+}  // namespace strike
+
+namespace strike {
+namespace {
+
+/// How many pixels of rows [y0, y1) are bright (the top of the colour map: yellow-white).
+int brightPixels(const Decoded& d, uint32_t y0, uint32_t y1) {
+  int bright = 0;
+  for (uint32_t y = y0; y < y1; ++y)
+    for (uint32_t x = 0; x < d.width; ++x) {
+      const size_t i = (static_cast<size_t>(y) * d.width + x) * 3;
+      if (d.rgb[i] > 240 && d.rgb[i + 1] > 200) ++bright;
+    }
+  return bright;
+}
+
+TEST(Spectrogram, EachChannelIsAPanelOfItsOwn) {
+  test::ScratchDir dir;
+  // Left rings, right is silent: the top panel shows the line, the bottom one nothing, and the
+  // panels' colours share one reference (the loudest cell of both).
+  AudioBuffer stereo = test::partials({{1000.0, 0.5, 2.0}}, 48000.0, 0.5, 2);
+  for (size_t f = 0; f < stereo.frames(); ++f) stereo.samples[2 * f + 1] = 0.0f;
+  SpectrogramOptions options;
+  options.width_px = 400;
+  options.height_px = 200;
+  ASSERT_TRUE(writeSpectrogramPng(dir.file("stereo.png"), stereo, options).ok());
+  const Decoded d = decode(test::readBytes(dir.file("stereo.png")));
+  ASSERT_EQ(d.width, 400u);
+  ASSERT_EQ(d.height, 400u);
+  EXPECT_GT(brightPixels(d, 0, 200), 0) << "the left channel's line";
+  EXPECT_EQ(brightPixels(d, 200, 400), 0) << "the right channel is silent";
+  EXPECT_EQ(spectrogramChannelLabel(0, 2), "L");
+  EXPECT_EQ(spectrogramChannelLabel(1, 2), "R");
+
+  // Ambisonics: (N + 1)^2 panels, each a quarter of height_px (at least 128), labelled by ACN.
+  for (const int channels : {4, 9, 16}) {
+    const AudioBuffer ambix = test::partials({{500.0, 0.3, 5.0}}, 48000.0, 0.2, channels);
+    options = SpectrogramOptions{};
+    options.width_px = 200;  // narrow: 16 channels of STFTs, one a column
+    const int panel = spectrogramPanelHeight(channels, options.height_px);
+    EXPECT_EQ(panel, 128);
+    const std::string path = dir.file("ambix" + std::to_string(channels) + ".png");
+    ASSERT_TRUE(writeSpectrogramPng(path, ambix, options).ok());
+    const Decoded a = decode(test::readBytes(path));
+    EXPECT_EQ(a.width, 200u);
+    EXPECT_EQ(a.height, static_cast<uint32_t>(channels * panel));
+    for (int c = 0; c < channels; ++c)  // every channel carries the line: every panel shows it
+      EXPECT_GT(brightPixels(a, static_cast<uint32_t>(c * panel), static_cast<uint32_t>((c + 1) * panel)), 0)
+          << "panel " << c;
+  }
+  EXPECT_EQ(spectrogramChannelLabel(0, 4), "ACN 0 W");
+  EXPECT_EQ(spectrogramChannelLabel(3, 4), "ACN 3 X");
+  EXPECT_EQ(spectrogramChannelLabel(8, 9), "ACN 8 U");
+  EXPECT_EQ(spectrogramChannelLabel(15, 16), "ACN 15 P");
+  EXPECT_EQ(spectrogramChannelLabel(2, 3), "CH 3");
+  EXPECT_EQ(spectrogramPanelHeight(1, 512), 512);
+  EXPECT_EQ(spectrogramPanelHeight(2, 512), 512);
+  EXPECT_EQ(dir.list().size(), 4u) << "temporary files were left behind";
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -592,6 +593,43 @@ TEST(CliRender, MalformedScenesFailNamingTheKeyAndWriteNothing) {
     EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.json << "\n" << r.err;
     EXPECT_FALSE(std::filesystem::exists(wav));
   }
+}
+
+TEST(CliAnalyze, DirectionsNeedAmbisonicsAndSpectrogramsDrawEveryChannel) {
+  // A 1 kHz tone written as stereo, and as first-order AmbiX from the left (W = s, Y = s).
+  auto tone = [](int channels) {
+    AudioBuffer audio;
+    audio.channels = channels;
+    audio.samples.assign(static_cast<size_t>(4800 * channels), 0.0f);
+    for (size_t n = 0; n < 4800; ++n) {
+      const float s = static_cast<float>(0.3 * std::sin(2.0 * M_PI * 1000.0 * static_cast<double>(n) / 48000.0));
+      audio.samples[n * static_cast<size_t>(channels)] = s;
+      audio.samples[n * static_cast<size_t>(channels) + 1] = s;
+    }
+    return audio;
+  };
+  const std::string stereo = temp("analyze-stereo.wav"), ambix = temp("analyze-ambix1.wav");
+  ASSERT_TRUE(writeAudio(stereo, tone(2), SampleEncoding::Float32).ok());
+  ASSERT_TRUE(writeAudio(ambix, tone(4), SampleEncoding::Float32).ok());
+  const std::string doa = temp("analyze-doa.png"), spectrogram = temp("analyze-spectrogram.png");
+  std::filesystem::remove(doa);
+  std::filesystem::remove(spectrogram);
+  CliResult r = runCli("analyze '" + stereo + "' --directions '" + doa + "' --spectrogram '" + spectrogram + "'");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("2 channel(s): --directions needs Ambisonics"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(doa));
+  EXPECT_FALSE(std::filesystem::exists(spectrogram)) << "refused before anything is written";
+  r = runCli("analyze '" + ambix + "' --directions '" + doa + "' --spectrogram '" + spectrogram + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(doa));
+  // Four panels of a quarter of the default 512 rows: the PNG's IHDR height.
+  std::ifstream in(spectrogram, std::ios::binary);
+  std::string png((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(png.size(), 24u);
+  const uint32_t height = (uint32_t{static_cast<uint8_t>(png[20])} << 24) |
+                          (uint32_t{static_cast<uint8_t>(png[21])} << 16) |
+                          (uint32_t{static_cast<uint8_t>(png[22])} << 8) | uint32_t{static_cast<uint8_t>(png[23])};
+  EXPECT_EQ(height, 4u * 128u);
 }
 
 }  // namespace

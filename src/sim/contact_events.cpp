@@ -14,6 +14,9 @@ namespace strike::detail {
 
 namespace {
 
+/// Substeps a contact is remembered for, to tell a new contact from a continuing one.
+constexpr uint64_t kLookbackSteps = 3;
+
 /// Where a CCD predictive point strikes. Bullet puts that point at A's centre of mass, and B's
 /// point at the swept sphere's centre at its time of impact; the sphere's surface there lies on
 /// B, and A's leading vertex (along -normal) lands on B's tangent plane through it.
@@ -65,94 +68,108 @@ void Simulation::postTick() {
     for (int p = 0; p < manifold->getNumContacts(); ++p) {
       const btManifoldPoint& pt = manifold->getContactPoint(p);
       if (!(pt.m_appliedImpulse > settings_.min_impulse_n_s)) continue;
-      // Per point: the canonical order below swaps it (a copy per manifold swapped the first
-      // point's pair and left the next points of a swapped manifold labelled the wrong way).
-      int index[2] = {manifold_index[0], manifold_index[1]};
-      btVector3 normal = pt.m_normalWorldOnB;  // from B to A; the impulse on A is along +normal
-      btVector3 friction = pt.m_lateralFrictionDir1 * pt.m_appliedImpulseLateral1 +
-                           pt.m_lateralFrictionDir2 * pt.m_appliedImpulseLateral2;
-      btVector3 impulse_on_a = normal * pt.m_appliedImpulse + friction;
-      // Points in each body's Bullet frame, at the start of the substep (when the narrow phase
-      // found them). A predictive (CCD) point sits at A's centre of mass: use instead the point
-      // of A's shape that leads along -normal, which is where A strikes.
-      const btTransform identity = btTransform::getIdentity();
-      const btTransform& pre_a = index[0] >= 0 ? bodies_[size_t(index[0])]->pre_transform : identity;
-      const btTransform& pre_b = index[1] >= 0 ? bodies_[size_t(index[1])]->pre_transform : identity;
-      btVector3 local_a = pt.m_localPointA;
-      btVector3 local_b = pt.m_localPointB;
-      btVector3 point_world = 0.5 * (pre_a(local_a) + pre_b(local_b));
-      double predictive_gap_m = NAN;  // a CCD point's leading point above B's surface
-      if (predictive && objects[0]->getCollisionShape()->isConvex()) {
-        const LeadingPoint leading = ccdLeadingPoint(*objects[0], *objects[1], pt, pre_a);
-        local_a = leading.local_a;
-        point_world = leading.on_b_plane;
-        predictive_gap_m = leading.gap_m;
-        local_b = pre_b.invXform(point_world);
-      }
-      // Canonical order: the ground is always b; otherwise a is the lower index.
-      bool swap = index[0] < 0 || (index[1] >= 0 && index[0] > index[1]);
-      if (swap) {
-        std::swap(index[0], index[1]);
-        std::swap(local_a, local_b);
-        normal = -normal;
-        impulse_on_a = -impulse_on_a;
-      }
-      ContactEvent ev;
-      ev.time_s = time_s;
-      ev.step_time_s = time_s;
-      ev.body_a = uint32_t(index[0]);
-      ev.body_b = index[1] < 0 ? kGroundBody : uint32_t(index[1]);
-      ev.point_world = fromBt(point_world);
-      ev.normal_world = fromBt(normal);
-      ev.normal_impulse_n_s = pt.m_appliedImpulse;
-      ev.friction_impulse_n_s = friction.length();
-      btVector3 point_velocity[2] = {btVector3(0, 0, 0), btVector3(0, 0, 0)};
-      const btVector3 locals[2] = {local_a, local_b};
-      btVector3 meshes[2];
-      std::array<double, 3>* mesh_points[2] = {&ev.point_a_mesh, &ev.point_b_mesh};
-      std::array<double, 3>* mesh_impulses[2] = {&ev.impulse_on_a_mesh, &ev.impulse_on_b_mesh};
-      for (int k = 0; k < 2; ++k) {
-        const btVector3 impulse = k == 0 ? impulse_on_a : -impulse_on_a;
-        if (index[k] < 0) {  // ground: mesh frame = world
-          meshes[k] = locals[k];
-          *mesh_impulses[k] = fromBt(impulse);
-        } else {
-          const BodyState& b = *bodies_[size_t(index[k])];
-          meshes[k] = b.mesh_from_body(locals[k]);
-          *mesh_impulses[k] = fromBt(b.mesh_from_body.getBasis() * (b.pre_transform.getBasis().transpose() * impulse));
-          point_velocity[k] = b.pre_linear + b.pre_angular.cross(point_world - b.pre_transform.getOrigin());
-        }
-        *mesh_points[k] = fromBt(meshes[k]);
-      }
-      ev.normal_speed_m_s = std::max(0.0, -(point_velocity[0] - point_velocity[1]).dot(normal));
-      contactState(ev, index, point_world, normal);
-      if (ev.normal_speed_m_s > settings_.impact_speed_m_s) {
-        // An impact is stamped with the moment its surfaces met (timeImpacts; for a CCD point,
-        // from its leading point's height above B's surface at the start of the substep).
-        double offset = NAN;
-        for (const ImpactPoint& impact : step_impacts_)
-          if (impact.point == &pt) offset = impact.offset_s;
-        if (std::isnan(offset) && std::isfinite(predictive_gap_m)) {
-          const double closing_accel =
-              -(freeAcceleration(objects[0]) - freeAcceleration(objects[1])).dot(pt.m_normalWorldOnB);
-          offset = meetingOffset(predictive_gap_m, ev.normal_speed_m_s, closing_accel, settings_.substep_s);
-        }
-        if (std::isfinite(offset)) {
-          offset = std::clamp(offset, -settings_.substep_s, settings_.substep_s);
-          ev.time_s = time_s + offset;
-          // And placed where they met: both points moved along their paths (see meetingOffset).
-          const btVector3 path_velocity_sum =
-              point_velocity[0] + point_velocity[1] +
-              0.5 * settings_.substep_s * (freeAcceleration(objects[0]) + freeAcceleration(objects[1]));
-          ev.point_world = fromBt(point_world + 0.5 * offset * path_velocity_sum);
-        }
-      }
-      step_events_.push_back(ev);
-      step_recent_.push_back(RecentContact{step_, point_world, meshes[0], meshes[1]});
-      step_lifetimes_.push_back(pt.m_lifeTime);
+      recordPoint(objects, manifold_index, pt, predictive, time_s);
     }
   }
+  appendStepEvents();
+  rememberStepContacts();
+}
 
+void Simulation::recordPoint(const btCollisionObject* const objects[2], const int manifold_index[2],
+                             const btManifoldPoint& pt, bool predictive, double time_s) {
+  // Per point: the canonical order below swaps it (a copy per manifold swapped the first
+  // point's pair and left the next points of a swapped manifold labelled the wrong way).
+  int index[2] = {manifold_index[0], manifold_index[1]};
+  btVector3 normal = pt.m_normalWorldOnB;  // from B to A; the impulse on A is along +normal
+  btVector3 friction =
+      pt.m_lateralFrictionDir1 * pt.m_appliedImpulseLateral1 + pt.m_lateralFrictionDir2 * pt.m_appliedImpulseLateral2;
+  btVector3 impulse_on_a = normal * pt.m_appliedImpulse + friction;
+  // Points in each body's Bullet frame, at the start of the substep (when the narrow phase
+  // found them). A predictive (CCD) point sits at A's centre of mass: use instead the point
+  // of A's shape that leads along -normal, which is where A strikes.
+  const btTransform identity = btTransform::getIdentity();
+  const btTransform& pre_a = index[0] >= 0 ? bodies_[size_t(index[0])]->pre_transform : identity;
+  const btTransform& pre_b = index[1] >= 0 ? bodies_[size_t(index[1])]->pre_transform : identity;
+  btVector3 local_a = pt.m_localPointA;
+  btVector3 local_b = pt.m_localPointB;
+  btVector3 point_world = 0.5 * (pre_a(local_a) + pre_b(local_b));
+  double predictive_gap_m = NAN;  // a CCD point's leading point above B's surface
+  if (predictive && objects[0]->getCollisionShape()->isConvex()) {
+    const LeadingPoint leading = ccdLeadingPoint(*objects[0], *objects[1], pt, pre_a);
+    local_a = leading.local_a;
+    point_world = leading.on_b_plane;
+    predictive_gap_m = leading.gap_m;
+    local_b = pre_b.invXform(point_world);
+  }
+  // Canonical order: the ground is always b; otherwise a is the lower index.
+  bool swap = index[0] < 0 || (index[1] >= 0 && index[0] > index[1]);
+  if (swap) {
+    std::swap(index[0], index[1]);
+    std::swap(local_a, local_b);
+    normal = -normal;
+    impulse_on_a = -impulse_on_a;
+  }
+  ContactEvent ev;
+  ev.time_s = time_s;
+  ev.step_time_s = time_s;
+  ev.body_a = uint32_t(index[0]);
+  ev.body_b = index[1] < 0 ? kGroundBody : uint32_t(index[1]);
+  ev.point_world = fromBt(point_world);
+  ev.normal_world = fromBt(normal);
+  ev.normal_impulse_n_s = pt.m_appliedImpulse;
+  ev.friction_impulse_n_s = friction.length();
+  btVector3 point_velocity[2] = {btVector3(0, 0, 0), btVector3(0, 0, 0)};
+  const btVector3 locals[2] = {local_a, local_b};
+  btVector3 meshes[2];
+  std::array<double, 3>* mesh_points[2] = {&ev.point_a_mesh, &ev.point_b_mesh};
+  std::array<double, 3>* mesh_impulses[2] = {&ev.impulse_on_a_mesh, &ev.impulse_on_b_mesh};
+  for (int k = 0; k < 2; ++k) {
+    const btVector3 impulse = k == 0 ? impulse_on_a : -impulse_on_a;
+    if (index[k] < 0) {  // ground: mesh frame = world
+      meshes[k] = locals[k];
+      *mesh_impulses[k] = fromBt(impulse);
+    } else {
+      const BodyState& b = *bodies_[size_t(index[k])];
+      meshes[k] = b.mesh_from_body(locals[k]);
+      *mesh_impulses[k] = fromBt(b.mesh_from_body.getBasis() * (b.pre_transform.getBasis().transpose() * impulse));
+      point_velocity[k] = b.pre_linear + b.pre_angular.cross(point_world - b.pre_transform.getOrigin());
+    }
+    *mesh_points[k] = fromBt(meshes[k]);
+  }
+  ev.normal_speed_m_s = std::max(0.0, -(point_velocity[0] - point_velocity[1]).dot(normal));
+  contactState(ev, index, point_world, normal);
+  if (ev.normal_speed_m_s > settings_.impact_speed_m_s)
+    stampImpact(ev, objects, pt, predictive_gap_m, point_velocity, point_world, time_s);
+  step_events_.push_back(ev);
+  step_recent_.push_back(RecentContact{step_, point_world, meshes[0], meshes[1]});
+  step_lifetimes_.push_back(pt.m_lifeTime);
+}
+
+void Simulation::stampImpact(ContactEvent& ev, const btCollisionObject* const objects[2], const btManifoldPoint& pt,
+                             double predictive_gap_m, const btVector3 point_velocity[2], const btVector3& point_world,
+                             double time_s) const {
+  // An impact is stamped with the moment its surfaces met (timeImpacts; for a CCD point,
+  // from its leading point's height above B's surface at the start of the substep).
+  double offset = NAN;
+  for (const ImpactPoint& impact : step_impacts_)
+    if (impact.point == &pt) offset = impact.offset_s;
+  if (std::isnan(offset) && std::isfinite(predictive_gap_m)) {
+    const double closing_accel =
+        -(freeAcceleration(objects[0]) - freeAcceleration(objects[1])).dot(pt.m_normalWorldOnB);
+    offset = meetingOffset(predictive_gap_m, ev.normal_speed_m_s, closing_accel, settings_.substep_s);
+  }
+  if (std::isfinite(offset)) {
+    offset = std::clamp(offset, -settings_.substep_s, settings_.substep_s);
+    ev.time_s = time_s + offset;
+    // And placed where they met: both points moved along their paths (see meetingOffset).
+    const btVector3 path_velocity_sum =
+        point_velocity[0] + point_velocity[1] +
+        0.5 * settings_.substep_s * (freeAcceleration(objects[0]) + freeAcceleration(objects[1]));
+    ev.point_world = fromBt(point_world + 0.5 * offset * path_velocity_sum);
+  }
+}
+
+void Simulation::appendStepEvents() {
   // Deterministic order within the substep, independent of Bullet's manifold order.
   std::vector<size_t>& order = step_order_;
   order.resize(step_events_.size());
@@ -172,7 +189,6 @@ void Simulation::postTick() {
   // every substep) and rolling. The age test covers a resting face whose load the solver shifts
   // between corners: a corner can carry nothing for a while and then take load again, and that is
   // not an impact (its point stayed within the contact threshold all along).
-  constexpr uint64_t kLookbackSteps = 3;
   const size_t first_new = events_.size();
   for (size_t k : order) {
     ContactEvent& ev = step_events_[k];
@@ -208,6 +224,9 @@ void Simulation::postTick() {
       std::inplace_merge(std::upper_bound(events_.begin(), new_begin, *new_begin, earlier), new_begin, events_.end(),
                          earlier);
   }
+}
+
+void Simulation::rememberStepContacts() {
   for (auto it = recent_.begin(); it != recent_.end();) {
     auto& list = it->second;
     list.erase(std::remove_if(list.begin(), list.end(),

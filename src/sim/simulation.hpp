@@ -18,14 +18,14 @@
 #include "strike/result.hpp"
 #include "strike/sim.hpp"
 
-#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
-#include <BulletCollision/Gimpact/btGImpactShape.h>
-#include <LinearMath/btConvexHullComputer.h>
 #include <BulletCollision/CollisionDispatch/btConvexConvexAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btConvexPlaneCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btSimulationIslandManager.h>
 #include <BulletCollision/CollisionDispatch/btSphereBoxCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
+#include <LinearMath/btConvexHullComputer.h>
 #include <btBulletDynamicsCommon.h>
 
 namespace strike::detail {
@@ -249,6 +249,18 @@ class Simulation {
   void timeImpacts();
   void moveImpactsToTheirTime();
   void postTick();
+  /// One loaded contact point of a manifold as a ContactEvent in step_events_ (postTick).
+  void recordPoint(const btCollisionObject* const objects[2], const int manifold_index[2], const btManifoldPoint& pt,
+                   bool predictive, double time_s);
+  /// An impact's time and place: when and where its surfaces met (recordPoint).
+  void stampImpact(ContactEvent& ev, const btCollisionObject* const objects[2], const btManifoldPoint& pt,
+                   double predictive_gap_m, const btVector3 point_velocity[2], const btVector3& point_world,
+                   double time_s) const;
+  /// The substep's events in their deterministic order, flagged new_contact, into events_ in
+  /// time order (postTick).
+  void appendStepEvents();
+  /// Forgets the contacts older than the lookback and remembers the substep's (postTick).
+  void rememberStepContacts();
   double energy(std::vector<double>* kinetic) const;
   void hastenSleep();
   /// True when every moving body is asleep (Bullet's ISLAND_SLEEPING).

@@ -158,7 +158,8 @@ Result<ModalResult> solveDense(const SpMat& K, const SpMat& M, ModalResult out, 
   return out;
 }
 
-Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSettings& settings) {
+/// Why K, M or the settings cannot be solved; nothing when they can.
+Status checkProblem(const SpMat& K, const SpMat& M, const ModalSettings& settings) {
   const Eigen::Index n = K.rows();
   if (n == 0 || K.cols() != n || M.rows() != n || M.cols() != n) {
     std::ostringstream s;
@@ -183,14 +184,278 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
       return internalError(s.str());
     }
   }
-  const double lambda_cut = std::pow(kTwoPi * settings.max_freq_hz, 2);
+  return {};
+}
+
+/// Which eigenvalues are rigid (|lambda| <= lambda_zero), which are in the band, and when the
+/// Lanczos rounds have found enough.
+struct Bands {
+  double lambda_zero = 0.0, lambda_cut = 0.0;
+  int max_modes = 0;
+  /// True when what was found and `extra` reach past the cut-off or the cap; the elastic
+  /// eigenvalues in the band and the largest of all.
+  bool enough(const Found& found, const std::vector<double>& extra, int& elastic_below, double& top) const {
+    elastic_below = 0;
+    top = -INFINITY;
+    for (const std::vector<double>* list : {static_cast<const std::vector<double>*>(&found.lambdas), &extra}) {
+      for (double l : *list) {
+        top = std::max(top, l);
+        if (std::abs(l) > lambda_zero && l <= lambda_cut) ++elastic_below;
+      }
+    }
+    return top > lambda_cut || elastic_below > max_modes;
+  }
+};
+
+/// Where the Lanczos rounds stand: done, and how many rounds found modes.
+struct Rounds {
+  bool done = false;
+  int with_modes = 0;
+  /// All modes from one block Lanczos run: M-orthonormal and ascending by construction.
+  bool single_block = false;
+};
+
+/// Checks the memory forecast of the factorization and the first Lanczos basis, before either is
+/// taken. A cut-off above the elements' own frequency leaves every mode the mesh has in the
+/// band: then the request is all the cap asks for, and its whole basis is forecast at once.
+Status checkFactorAndFirstBasis(Context& ctx, Eigen::Index n, double element_scale, double lambda_cut) {
+  const ModalSettings& settings = ctx.settings;
+  const double wanted = settings.max_modes + 7.0;
+  const double full_basis = std::min<double>(n - 1, kBasisFactor * wanted + 2 * kBlockSize);
+  const bool band_holds_the_mesh = lambda_cut >= element_scale;
+  const double first_basis =
+      band_holds_the_mesh ? full_basis : std::min<double>(full_basis, kFirstBasisVectors + kBlockSize);
+  return checkMemoryForecast(
+      ctx, first_basis, band_holds_the_mesh ? std::min<double>(wanted, n) : std::min(wanted, first_basis / 3.0),
+      band_holds_the_mesh ? "for the factorization and the Lanczos basis of every mode up to " +
+                                memoryFrequencyText(settings.max_freq_hz) +
+                                " (above the mesh's own element frequency: the band holds all its modes)"
+                          : std::string("for the factorization and its first Lanczos basis"));
+}
+
+/// A small request (at most kArpackModes pairs): ARPACK alone, to full accuracy, in one round.
+/// ModalMethod::ArpackOnly grows ARPACK requests instead, round after round.
+Status arpackRounds(Context& ctx, Found& found, const Bands& bands, Eigen::Index n, Rounds& rounds) {
+  const ModalSettings& settings = ctx.settings;
+  const bool arpack_only = settings.method == ModalMethod::ArpackOnly;
+  const int wanted_total = settings.max_modes + 7;
+  int chunk = arpack_only ? std::min(wanted_total, 400) : std::min(wanted_total, kArpackModes);
+  const bool block_only = !arpack_only && wanted_total > kArpackModes;
+  for (int round = 0; round < 64 && !rounds.done && !block_only; ++round) {
+    auto got = lanczosChunk(ctx, found, chunk, 1e-10, 0x5eed0000ULL + static_cast<uint64_t>(round), 0.0, 1.0);
+    if (!got) return got.error();
+    if (*got > 0) ++rounds.with_modes;
+    int elastic_below = 0;
+    double top = 0.0;
+    rounds.done = bands.enough(found, {}, elastic_below, top);
+    const bool exhausted = static_cast<Eigen::Index>(found.lambdas.size()) + 2 >= n;
+    if (*got == 0 || exhausted) rounds.done = true;
+    if (!arpack_only) break;
+    chunk = std::min(std::max(chunk, 16), settings.max_modes + 7 - elastic_below);
+  }
+  return {};
+}
+
+/// A larger request: block Lanczos from scratch (rigid modes included), then, only if it fell
+/// short, further block rounds on the operator deflated against what was found.
+Status blockRounds(Context& ctx, Found& found, const Bands& bands, Eigen::Index n, Rounds& rounds) {
+  const ModalSettings& settings = ctx.settings;
+  const bool arpack_only = settings.method == ModalMethod::ArpackOnly;
+  for (int round = 0; !rounds.done && !arpack_only && round < 16; ++round) {
+    int elastic_below = 0;
+    double top = 0.0;
+    bands.enough(found, {}, elastic_below, top);
+    // A free body has 6 rigid modes: when the block stage starts from scratch it finds them too.
+    const int rigid_found = static_cast<int>(std::count_if(found.lambdas.begin(), found.lambdas.end(),
+                                                           [&](double l) { return std::abs(l) <= bands.lambda_zero; }));
+    const int needed = settings.max_modes + 1 - elastic_below + std::max(0, 6 - rigid_found);
+    const Eigen::Index room = n - static_cast<Eigen::Index>(found.lambdas.size()) - 1;
+    const int block_pref = settings.block_size > 0 ? settings.block_size : kBlockSize;
+    const int block = static_cast<int>(std::min<Eigen::Index>(room / 3, block_pref));
+    if (block < 1) break;
+    const int max_basis =
+        static_cast<int>(std::min<Eigen::Index>(room, std::max(kBasisFactor * needed, 4 * block) + 2 * block));
+    auto got = blockLanczos(ctx, found, block, needed, needed + block, max_basis, kBlockTol,
+                            0xb10c0000ULL + static_cast<uint64_t>(round), [&](const std::vector<double>& extra) {
+                              int e = 0;
+                              double t = 0.0;
+                              return bands.enough(found, extra, e, t);
+                            });
+    if (!got) return got.error();
+    if (*got > 0) {
+      ++rounds.with_modes;
+      rounds.single_block = rounds.with_modes == 1;
+    }
+    rounds.done = bands.enough(found, {}, elastic_below, top) || *got == 0;
+  }
+  return {};
+}
+
+/// The Lanczos path (n > 600): one factorization of K - sigma M after its memory forecast, then
+/// ARPACK or block Lanczos rounds until the band or the cap is passed. Fills `found`, the
+/// stages' timings and tallies in `out`, and whether all came from one block round.
+Status lanczosStages(const SpMat& K, const SpMat& M, const SpMat& M_pruned, const ModalSettings& settings,
+                     double element_scale, const Bands& bands, TwoParts& parts, ModalResult& out, Found& found,
+                     bool& single_block_round) {
+  const Eigen::Index n = K.rows();
+  auto solver = std::make_unique<CholmodSolver>();
+  const auto t_factor = Clock::now();
+  if (settings.progress) settings.progress("factorize", 0.0);
+  SpMat A = K - out.sigma * M;
+  // Forecast before the factor and the basis are taken: the factor's size is exact once the
+  // symbolic analysis has ordered A (a small fraction of the factorization's time).
+  Result<double> factor_bytes = solver->analyze(A);
+  if (!factor_bytes) return factor_bytes.error();
+  Context ctx{K, M_pruned, *solver, out.sigma, settings};
+  ctx.matrices_bytes = sparseBytes(K) + sparseBytes(M) + sparseBytes(M_pruned) + sparseBytes(A);
+  ctx.factor_bytes = *factor_bytes;
+  if (Status fits = checkFactorAndFirstBasis(ctx, n, element_scale, bands.lambda_cut); !fits) return fits.error();
+  Status st = solver->factorize(A);
+  if (!st) return st.error();
+  ctx.matrices_bytes -= sparseBytes(A);
+  A = SpMat();
+  out.factorize_seconds = secondsSince(t_factor);
+  if (settings.progress) settings.progress("factorize", 1.0);
+
+  const auto t_lanczos = Clock::now();
+  ctx.parts = &parts;
+  Rounds rounds;
+  if (Status ok = arpackRounds(ctx, found, bands, n, rounds); !ok) return ok.error();
+  if (Status ok = blockRounds(ctx, found, bands, n, rounds); !ok) return ok.error();
+  single_block_round = rounds.single_block;
+  out.lanczos_seconds = secondsSince(t_lanczos);
+  out.operator_applications = ctx.applications;
+  out.solve_seconds = ctx.solve_seconds;
+  out.orthogonalize_seconds = ctx.orthogonalize_seconds;
+  out.ritz_seconds = ctx.ritz_seconds;
+  out.block_size = ctx.block_size;
+  out.lanczos_basis = ctx.basis;
+  out.reorthogonalizations = ctx.reorthogonalizations;
+  out.forecast_bytes = ctx.forecast_bytes;
+  return {};
+}
+
+/// The eigenvalues kept (indices into all_lambdas, ascending, at most max_modes); counts the
+/// rigid ones, those above the cut-off and whether the cap cut the band.
+std::vector<int> keptModes(const Eigen::VectorXd& all_lambdas, const Bands& bands, ModalResult& out) {
+  std::vector<int> order(static_cast<size_t>(all_lambdas.size()));
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return all_lambdas[a] < all_lambdas[b]; });
+  std::vector<int> kept;
+  for (int i : order) {
+    const double l = all_lambdas[i];
+    if (std::abs(l) <= bands.lambda_zero) {
+      ++out.rigid_modes_dropped;
+    } else if (l > bands.lambda_cut) {
+      ++out.above_cutoff_dropped;
+    } else if (static_cast<int>(kept.size()) < bands.max_modes) {
+      kept.push_back(i);
+    } else {
+      out.capped_by_max_modes = true;
+    }
+  }
+  return kept;
+}
+
+/// The Ritz vectors Q S of one block Lanczos run are M-orthonormal to round-off and ordered:
+/// the eigenvalues are their Rayleigh quotients (as accurate as a Rayleigh-Ritz step, both
+/// second order in the residual), with no p x p products or rotations of the n x p blocks
+/// (measured 0.6 s of 1.0 s at 86k DOF). Sorted when round-off reordered two.
+void rayleighQuotients(Eigen::MatrixXd& X, Eigen::MatrixXd& KX, Eigen::MatrixXd& MX, ModalResult& out) {
+  const Eigen::Index n = X.rows(), p = X.cols();
+  out.eigenvalues =
+      X.cwiseProduct(KX).colwise().sum().transpose().cwiseQuotient(X.cwiseProduct(MX).colwise().sum().transpose());
+  std::vector<Eigen::Index> rank(static_cast<size_t>(p));
+  for (Eigen::Index k = 0; k < p; ++k) rank[static_cast<size_t>(k)] = k;
+  std::stable_sort(rank.begin(), rank.end(),
+                   [&](Eigen::Index a, Eigen::Index c) { return out.eigenvalues[a] < out.eigenvalues[c]; });
+  bool sorted = true;
+  for (Eigen::Index k = 0; k < p; ++k) sorted = sorted && rank[static_cast<size_t>(k)] == k;
+  if (sorted) {
+    out.shapes = std::move(X);
+  } else {
+    const Eigen::VectorXd values = out.eigenvalues;
+    out.shapes.resize(n, p);
+    Eigen::MatrixXd KX2(n, p), MX2(n, p);
+    for (Eigen::Index k = 0; k < p; ++k) {
+      const Eigen::Index from = rank[static_cast<size_t>(k)];
+      out.eigenvalues[k] = values[from];
+      out.shapes.col(k) = X.col(from);
+      KX2.col(k) = KX.col(from);
+      MX2.col(k) = MX.col(from);
+    }
+    KX = std::move(KX2);
+    MX = std::move(MX2);
+  }
+}
+
+/// Rayleigh-Ritz on the kept vectors: exact M-orthonormality and ascending order.
+Status rayleighRitz(const Eigen::MatrixXd& X, Eigen::MatrixXd& KX, Eigen::MatrixXd& MX, ModalResult& out) {
+  Eigen::MatrixXd Kr = X.transpose() * KX;
+  Eigen::MatrixXd Mr = X.transpose() * MX;
+  Kr = 0.5 * (Kr + Kr.transpose()).eval();
+  Mr = 0.5 * (Mr + Mr.transpose()).eval();
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> rr(Kr, Mr);
+  if (rr.info() != Eigen::Success)
+    return internalError("eigensolver: Rayleigh-Ritz failed: the computed modes are not independent");
+  const Eigen::MatrixXd& Q = rr.eigenvectors();
+  out.eigenvalues = rr.eigenvalues();
+  out.shapes.noalias() = X * Q;
+  KX = KX * Q;
+  MX = MX * Q;
+  return {};
+}
+
+/// The kept modes' eigenvalues and M-orthonormal shapes in ascending order, and the largest
+/// relative residual ||K x - lambda M x|| / (|lambda| ||M x||). Frees the candidates' vectors.
+Status refine(const SpMat& K, const SpMat& M_pruned, const std::vector<int>& kept, const Eigen::VectorXd& all_lambdas,
+              Eigen::MatrixXd& all_vectors, Eigen::MatrixXd& all_m_vectors, bool single_block_round, TwoParts& parts,
+              ModalResult& out) {
+  const Eigen::Index n = K.rows();
+  const Eigen::Index p = static_cast<Eigen::Index>(kept.size());
+  Eigen::MatrixXd X(n, p);
+  for (Eigen::Index k = 0; k < p; ++k) X.col(k) = all_vectors.col(kept[static_cast<size_t>(k)]);
+  all_vectors = Eigen::MatrixXd();
+  if (p == 0) {
+    out.eigenvalues.resize(0);
+    out.shapes.resize(n, 0);
+    return {};
+  }
+  Eigen::MatrixXd KX, MX;
+  symmetricTimesBlock(K, X, KX, &parts);
+  if (all_m_vectors.cols() == all_lambdas.size()) {
+    MX.resize(n, p);
+    for (Eigen::Index k = 0; k < p; ++k) MX.col(k) = all_m_vectors.col(kept[static_cast<size_t>(k)]);
+  } else {
+    symmetricTimesBlock(M_pruned, X, MX, &parts);
+  }
+  all_m_vectors = Eigen::MatrixXd();
+  if (single_block_round) {
+    rayleighQuotients(X, KX, MX, out);
+  } else if (Status ok = rayleighRitz(X, KX, MX, out); !ok) {
+    return ok.error();
+  }
+  for (Eigen::Index k = 0; k < p; ++k) {
+    const double l = out.eigenvalues[k];
+    const double r = (KX.col(k) - l * MX.col(k)).norm() / (std::abs(l) * MX.col(k).norm());
+    out.max_relative_residual = std::max(out.max_relative_residual, r);
+  }
+  return {};
+}
+
+Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSettings& settings) {
+  if (Status ok = checkProblem(K, M, settings); !ok) return ok.error();
+  const Eigen::Index n = K.rows();
+  Bands bands;
+  bands.lambda_cut = std::pow(kTwoPi * settings.max_freq_hz, 2);
+  bands.max_modes = settings.max_modes;
   const double lambda_rigid = std::pow(kTwoPi * settings.rigid_freq_hz, 2);
   ModalResult out;
   const double element_scale = medianDiagonalRatio(K, M);
-  out.sigma = chooseShift(element_scale, lambda_cut);
+  out.sigma = chooseShift(element_scale, bands.lambda_cut);
   // A rigid mode's computed eigenvalue is round-off, ~eps * |sigma| * cond: count anything
   // below a tiny fraction of the shift as rigid too, whatever rigid_freq_hz says.
-  const double lambda_zero = std::max(lambda_rigid, 1e-6 * std::abs(out.sigma));
+  bands.lambda_zero = std::max(lambda_rigid, 1e-6 * std::abs(out.sigma));
 
   // The assembled M stores the 3x3 pattern of K, but a consistent mass matrix couples only
   // equal directions: two thirds of its entries are exact zeros. Dropping them makes every
@@ -199,9 +464,7 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
   M_pruned.prune(0.0, 0.0);
   Eigen::VectorXd all_lambdas;
   Eigen::MatrixXd all_vectors, all_m_vectors;  // all_m_vectors = M all_vectors, if known
-  // All modes from one block Lanczos run: M-orthonormal and ascending by construction.
   bool single_block_round = false;
-  std::unique_ptr<CholmodSolver> solver;
   // OpenBLAS single-threaded for the whole solve, factorization included: with two threads
   // the same matrix's CHOLMOD factor has other bits than with one (so the core count and
   // OPENBLAS_NUM_THREADS would change the bank), and its idle threads spin (sched_yield): under
@@ -220,202 +483,21 @@ Result<ModalResult> solveModesImpl(const SpMat& K, const SpMat& M, const ModalSe
     auto dense = solveDense(K, M, out, all_lambdas, all_vectors);
     if (!dense) return dense.error();
   } else {
-    solver = std::make_unique<CholmodSolver>();
-    const auto t_factor = Clock::now();
-    if (settings.progress) settings.progress("factorize", 0.0);
-    SpMat A = K - out.sigma * M;
-    // Forecast before the factor and the basis are taken: the factor's size is exact once the
-    // symbolic analysis has ordered A (a small fraction of the factorization's time).
-    Result<double> factor_bytes = solver->analyze(A);
-    if (!factor_bytes) return factor_bytes.error();
-    Context ctx{K, M_pruned, *solver, out.sigma, settings};
-    ctx.matrices_bytes = sparseBytes(K) + sparseBytes(M) + sparseBytes(M_pruned) + sparseBytes(A);
-    ctx.factor_bytes = *factor_bytes;
-    // A cut-off above the elements' own frequency leaves every mode the mesh has in the band:
-    // then the request is all the cap asks for, and its whole basis is forecast at once.
-    const double wanted = settings.max_modes + 7.0;
-    const double full_basis = std::min<double>(n - 1, kBasisFactor * wanted + 2 * kBlockSize);
-    const bool band_holds_the_mesh = lambda_cut >= element_scale;
-    const double first_basis =
-        band_holds_the_mesh ? full_basis : std::min<double>(full_basis, kFirstBasisVectors + kBlockSize);
-    if (Status fits = checkMemoryForecast(
-            ctx, first_basis, band_holds_the_mesh ? std::min<double>(wanted, n) : std::min(wanted, first_basis / 3.0),
-            band_holds_the_mesh ? "for the factorization and the Lanczos basis of every mode up to " +
-                                      memoryFrequencyText(settings.max_freq_hz) +
-                                      " (above the mesh's own element frequency: the band holds all its modes)"
-                                : std::string("for the factorization and its first Lanczos basis"));
-        !fits)
-      return fits.error();
-    Status st = solver->factorize(A);
-    if (!st) return st.error();
-    ctx.matrices_bytes -= sparseBytes(A);
-    A = SpMat();
-    out.factorize_seconds = secondsSince(t_factor);
-    if (settings.progress) settings.progress("factorize", 1.0);
-
-    const auto t_lanczos = Clock::now();
-    ctx.parts = &parts;
     Found found;
-    // A small request (at most kArpackModes pairs): ARPACK alone, to full accuracy. A larger
-    // one: block Lanczos from scratch (rigid modes included), then, only if it fell short,
-    // further block rounds on the operator deflated against what was found.
-    // ModalMethod::ArpackOnly grows ARPACK requests instead.
-    auto status = [&](const std::vector<double>& extra, int& elastic_below, double& top) {
-      elastic_below = 0;
-      top = -INFINITY;
-      for (const std::vector<double>* list : {static_cast<const std::vector<double>*>(&found.lambdas), &extra}) {
-        for (double l : *list) {
-          top = std::max(top, l);
-          if (std::abs(l) > lambda_zero && l <= lambda_cut) ++elastic_below;
-        }
-      }
-      return top > lambda_cut || elastic_below > settings.max_modes;
-    };
-    const bool arpack_only = settings.method == ModalMethod::ArpackOnly;
-    int rounds_with_modes = 0;
-    const int wanted_total = settings.max_modes + 7;
-    int chunk = arpack_only ? std::min(wanted_total, 400) : std::min(wanted_total, kArpackModes);
-    bool done = false;
-    const bool block_only = !arpack_only && wanted_total > kArpackModes;
-    for (int round = 0; round < 64 && !done && !block_only; ++round) {
-      auto got = lanczosChunk(ctx, found, chunk, 1e-10, 0x5eed0000ULL + static_cast<uint64_t>(round), 0.0, 1.0);
-      if (!got) return got.error();
-      if (*got > 0) ++rounds_with_modes;
-      int elastic_below = 0;
-      double top = 0.0;
-      done = status({}, elastic_below, top);
-      const bool exhausted = static_cast<Eigen::Index>(found.lambdas.size()) + 2 >= n;
-      if (*got == 0 || exhausted) done = true;
-      if (!arpack_only) break;
-      chunk = std::min(std::max(chunk, 16), settings.max_modes + 7 - elastic_below);
-    }
-    for (int round = 0; !done && !arpack_only && round < 16; ++round) {
-      int elastic_below = 0;
-      double top = 0.0;
-      status({}, elastic_below, top);
-      // A free body has 6 rigid modes: when the block stage starts from scratch it finds them too.
-      const int rigid_found = static_cast<int>(std::count_if(found.lambdas.begin(), found.lambdas.end(),
-                                                             [&](double l) { return std::abs(l) <= lambda_zero; }));
-      const int needed = settings.max_modes + 1 - elastic_below + std::max(0, 6 - rigid_found);
-      const Eigen::Index room = n - static_cast<Eigen::Index>(found.lambdas.size()) - 1;
-      const int block_pref = settings.block_size > 0 ? settings.block_size : kBlockSize;
-      const int block = static_cast<int>(std::min<Eigen::Index>(room / 3, block_pref));
-      if (block < 1) break;
-      const int max_basis =
-          static_cast<int>(std::min<Eigen::Index>(room, std::max(kBasisFactor * needed, 4 * block) + 2 * block));
-      auto got = blockLanczos(ctx, found, block, needed, needed + block, max_basis, kBlockTol,
-                              0xb10c0000ULL + static_cast<uint64_t>(round), [&](const std::vector<double>& extra) {
-                                int e = 0;
-                                double t = 0.0;
-                                return status(extra, e, t);
-                              });
-      if (!got) return got.error();
-      if (*got > 0) {
-        ++rounds_with_modes;
-        single_block_round = rounds_with_modes == 1;
-      }
-      done = status({}, elastic_below, top) || *got == 0;
-    }
-    out.lanczos_seconds = secondsSince(t_lanczos);
-    out.operator_applications = ctx.applications;
-    out.solve_seconds = ctx.solve_seconds;
-    out.orthogonalize_seconds = ctx.orthogonalize_seconds;
-    out.ritz_seconds = ctx.ritz_seconds;
-    out.block_size = ctx.block_size;
-    out.lanczos_basis = ctx.basis;
-    out.reorthogonalizations = ctx.reorthogonalizations;
-    out.forecast_bytes = ctx.forecast_bytes;
+    if (Status ok =
+            lanczosStages(K, M, M_pruned, settings, element_scale, bands, parts, out, found, single_block_round);
+        !ok)
+      return ok.error();
     all_lambdas = Eigen::Map<Eigen::VectorXd>(found.lambdas.data(), static_cast<Eigen::Index>(found.lambdas.size()));
     all_vectors = std::move(found.vectors);
     all_m_vectors = std::move(found.m_vectors);
   }
 
-  // Classify: rigid, kept elastic (ascending, capped), above the cut-off.
-  std::vector<int> order(static_cast<size_t>(all_lambdas.size()));
-  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return all_lambdas[a] < all_lambdas[b]; });
-  std::vector<int> kept;
-  for (int i : order) {
-    const double l = all_lambdas[i];
-    if (std::abs(l) <= lambda_zero) {
-      ++out.rigid_modes_dropped;
-    } else if (l > lambda_cut) {
-      ++out.above_cutoff_dropped;
-    } else if (static_cast<int>(kept.size()) < settings.max_modes) {
-      kept.push_back(i);
-    } else {
-      out.capped_by_max_modes = true;
-    }
-  }
-
+  const std::vector<int> kept = keptModes(all_lambdas, bands, out);
   const auto t_refine = Clock::now();
-  const Eigen::Index p = static_cast<Eigen::Index>(kept.size());
-  Eigen::MatrixXd X(n, p);
-  for (Eigen::Index k = 0; k < p; ++k) X.col(k) = all_vectors.col(kept[static_cast<size_t>(k)]);
-  all_vectors = Eigen::MatrixXd();
-  if (p > 0) {
-    Eigen::MatrixXd KX, MX;
-    symmetricTimesBlock(K, X, KX, &parts);
-    if (all_m_vectors.cols() == all_lambdas.size()) {
-      MX.resize(n, p);
-      for (Eigen::Index k = 0; k < p; ++k) MX.col(k) = all_m_vectors.col(kept[static_cast<size_t>(k)]);
-    } else {
-      symmetricTimesBlock(M_pruned, X, MX, &parts);
-    }
-    all_m_vectors = Eigen::MatrixXd();
-    if (single_block_round) {
-      // The Ritz vectors Q S of one block Lanczos run are M-orthonormal to round-off and
-      // ordered: the eigenvalues are their Rayleigh quotients (as accurate as a Rayleigh-Ritz
-      // step, both second order in the residual), with no p x p products or rotations of the
-      // n x p blocks (measured 0.6 s of 1.0 s at 86k DOF).
-      out.eigenvalues =
-          X.cwiseProduct(KX).colwise().sum().transpose().cwiseQuotient(X.cwiseProduct(MX).colwise().sum().transpose());
-      std::vector<Eigen::Index> rank(static_cast<size_t>(p));
-      for (Eigen::Index k = 0; k < p; ++k) rank[static_cast<size_t>(k)] = k;
-      std::stable_sort(rank.begin(), rank.end(),
-                       [&](Eigen::Index a, Eigen::Index c) { return out.eigenvalues[a] < out.eigenvalues[c]; });
-      bool sorted = true;
-      for (Eigen::Index k = 0; k < p; ++k) sorted = sorted && rank[static_cast<size_t>(k)] == k;
-      if (sorted) {
-        out.shapes = std::move(X);
-      } else {
-        const Eigen::VectorXd values = out.eigenvalues;
-        out.shapes.resize(n, p);
-        Eigen::MatrixXd KX2(n, p), MX2(n, p);
-        for (Eigen::Index k = 0; k < p; ++k) {
-          const Eigen::Index from = rank[static_cast<size_t>(k)];
-          out.eigenvalues[k] = values[from];
-          out.shapes.col(k) = X.col(from);
-          KX2.col(k) = KX.col(from);
-          MX2.col(k) = MX.col(from);
-        }
-        KX = std::move(KX2);
-        MX = std::move(MX2);
-      }
-    } else {
-      // Rayleigh-Ritz on the kept vectors: exact M-orthonormality and ascending order.
-      Eigen::MatrixXd Kr = X.transpose() * KX;
-      Eigen::MatrixXd Mr = X.transpose() * MX;
-      Kr = 0.5 * (Kr + Kr.transpose()).eval();
-      Mr = 0.5 * (Mr + Mr.transpose()).eval();
-      Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> rr(Kr, Mr);
-      if (rr.info() != Eigen::Success)
-        return internalError("eigensolver: Rayleigh-Ritz failed: the computed modes are not independent");
-      const Eigen::MatrixXd& Q = rr.eigenvectors();
-      out.eigenvalues = rr.eigenvalues();
-      out.shapes.noalias() = X * Q;
-      KX = KX * Q;
-      MX = MX * Q;
-    }
-    for (Eigen::Index k = 0; k < p; ++k) {
-      const double l = out.eigenvalues[k];
-      const double r = (KX.col(k) - l * MX.col(k)).norm() / (std::abs(l) * MX.col(k).norm());
-      out.max_relative_residual = std::max(out.max_relative_residual, r);
-    }
-  } else {
-    out.eigenvalues.resize(0);
-    out.shapes.resize(n, 0);
-  }
+  if (Status ok = refine(K, M_pruned, kept, all_lambdas, all_vectors, all_m_vectors, single_block_round, parts, out);
+      !ok)
+    return ok.error();
   out.refine_seconds = secondsSince(t_refine);
   if (settings.progress) settings.progress("lanczos", 1.0);
   return out;

@@ -266,6 +266,8 @@ void SoundEngine::reset() {
     v->resetLoad();
     resetContinuous(*v);
     for (BinauralPath& path : v->binaural_) path.clear();
+    v->moving_ = false;
+    v->key_count_ = 0;
     v->fresh_ = true;
   }
   step_ = Step{};

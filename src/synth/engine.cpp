@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "fractional_delay.hpp"
 #include "strike/contact_model.hpp"
 #include "strike/engine.hpp"
 #include "voice_state.hpp"
@@ -30,6 +31,7 @@ SoundEngine::SoundEngine(const EngineSettings& settings) : settings_(settings), 
   settings_.max_block_frames = std::max<uint32_t>(settings_.max_block_frames, 1);
   slots_.assign(settings_.max_voices, nullptr);
   histogram_.assign(kHistogramBins, 0);
+  if (settings_.moving_sources) fractional_delay_ = std::make_shared<const FractionalDelay>();
 }
 
 SoundEngine::~SoundEngine() = default;
@@ -53,6 +55,7 @@ bool SoundEngine::install(uint32_t slot, Voice* voice) {
       v.image_->click_synth.skip(nullptr, static_cast<size_t>(frames_ - at));
     }
   }
+  followPose(v);
   return true;
 }
 
@@ -61,12 +64,16 @@ VoiceState* SoundEngine::state(uint32_t slot) const {
   return v ? v->state_.get() : nullptr;
 }
 
+bool SoundEngine::imageApart(const VoiceState& v) const {
+  return v.image_ && (outputHasDirections(settings_.output) || v.moving_);
+}
+
 OscillatorBank& SoundEngine::pathSynth(VoiceState& v, int path) const {
-  return path > 0 && v.image_ ? v.image_->synth : v.synth_;
+  return path > 0 && imageApart(v) ? v.image_->synth : v.synth_;
 }
 
 OscillatorBank& SoundEngine::pathClicks(VoiceState& v, int path) const {
-  return path > 0 && v.image_ ? v.image_->click_synth : v.click_synth_;
+  return path > 0 && imageApart(v) ? v.image_->click_synth : v.click_synth_;
 }
 
 Voice* SoundEngine::uninstall(uint32_t slot) {
@@ -77,7 +84,11 @@ Voice* SoundEngine::uninstall(uint32_t slot) {
 }
 
 void SoundEngine::setPose(uint32_t slot, const Pose& pose, bool asleep) {
-  if (VoiceState* v = state(slot)) v->pose_ = pose, v->asleep_ = asleep;
+  VoiceState* v = state(slot);
+  if (!v) return;
+  v->pose_ = pose;
+  v->asleep_ = asleep;
+  followPose(*v);
 }
 
 void SoundEngine::setGain(uint32_t slot, float gain) {
@@ -167,6 +178,10 @@ void SoundEngine::render(float* const* out, size_t frames) {
   for (Voice* installed : slots_) {
     VoiceState* v = installed ? installed->state_.get() : nullptr;
     if (!v) continue;
+    if (v->moving_) {  // heard through its delay lines (moving_source.cpp)
+      if (frames > 0) renderMoving(*v, out, frames, active);
+      continue;
+    }
     updateGains(*v);
     if (frames == 0) continue;
     bool image_sounds = false;  // this call's image is in image->signal

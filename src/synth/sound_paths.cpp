@@ -48,8 +48,10 @@ int SoundEngine::arrivals(const VoiceState& v, const std::array<double, 3>& worl
     return v.pose_.toLocalDirection({to[0] - origin[0], to[1] - origin[1], to[2] - origin[2]});
   };
   const std::array<double, 3>& listener = listener_.position_m;
+  // A moving body's pulses leave when they happen: its delay lines add each path's delay as it
+  // changes (moving_source.cpp).
   out[0].distance_m = distance(from, listener);
-  out[0].delay_s = propagationDelay_s(out[0].distance_m);
+  out[0].delay_s = v.moving_ ? 0.0 : propagationDelay_s(out[0].distance_m);
   out[0].gain = 1.0;
   out[0].direction = direction(listener);
   const GroundReflection& g = settings_.ground;
@@ -64,9 +66,12 @@ int SoundEngine::arrivals(const VoiceState& v, const std::array<double, 3>& worl
                                        listener[2] - 2.0 * listener_height * n[2]};
   const double min_d = settings_.min_distance_m;
   out[1].distance_m = distance(from, image);
-  out[1].delay_s = propagationDelay_s(out[1].distance_m);
-  out[1].gain = g.reflection * std::max(distance(centre_of_mass, listener), min_d) /
-                std::max(distance(centre_of_mass, image), min_d);
+  out[1].delay_s = v.moving_ ? 0.0 : propagationDelay_s(out[1].distance_m);
+  // At rest the image's level is the direct sound's times the ratio of the distances; moving,
+  // each path's delay line has its own distance gain.
+  out[1].gain = v.moving_ ? g.reflection
+                          : g.reflection * std::max(distance(centre_of_mass, listener), min_d) /
+                                std::max(distance(centre_of_mass, image), min_d);
   out[1].direction = direction(image);
   return 2;
 }
@@ -154,7 +159,8 @@ void SoundEngine::scheduleImpact(VoiceState& v, const double* modal, double time
     impact.modal_transfer = transfer[k];
     OscillatorBank& synth = pathSynth(v, k);
     const ImpactResult r = synth.addImpact(impact);
-    if (k > 0 && v.image_) (void)v.synth_.addImpact(impact);  // synth_ carries both paths (voice_state.hpp)
+    // synth_ carries both paths (voice_state.hpp).
+    if (k > 0 && imageApart(v)) (void)v.synth_.addImpact(impact);
     if (k == 0) {  // one impact, however many paths it takes
       switch (r) {
         case ImpactResult::Scheduled: ++stats_.impacts; break;
@@ -181,7 +187,7 @@ void SoundEngine::scheduleForceStep(VoiceState& v, const double* modal_change, d
     step.modal_transfer = transfer[k];
     OscillatorBank& synth = pathSynth(v, k);
     const ImpactResult r = synth.addForceStep(step);
-    if (k > 0 && v.image_) (void)v.synth_.addForceStep(step);
+    if (k > 0 && imageApart(v)) (void)v.synth_.addForceStep(step);
     if (k > 0) continue;
     if (r == ImpactResult::NoCapacity)
       ++stats_.impacts_dropped;
@@ -212,7 +218,7 @@ void SoundEngine::scheduleClick(VoiceState& v, int path, const Arrival& a, doubl
   click.modal_transfer = v.click_transfer_.data();
   OscillatorBank& clicks = pathClicks(v, path);
   (void)clicks.addImpact(click);
-  if (path > 0 && v.image_) (void)v.click_synth_.addImpact(click);
+  if (path > 0 && imageApart(v)) (void)v.click_synth_.addImpact(click);
 }
 
 const std::complex<double>* SoundEngine::throughAir(VoiceState& v, int path, const std::complex<double>* factors,
@@ -228,7 +234,7 @@ const std::complex<double>* SoundEngine::throughAir(VoiceState& v, int path, con
 
 void SoundEngine::setExtraDamping(VoiceState& v, double time_s, const std::array<double, 3>& world_point,
                                   double per_s) {
-  const double at_s = time_s + delayTo(world_point);
+  const double at_s = time_s + (v.moving_ ? 0.0 : delayTo(world_point));
   (void)v.synth_.setExtraDamping(at_s, per_s);
   if (!v.image_) return;  // the image rings in synth_ too
   // The image's modes change with the direct sound's, as they do when both ring in synth_: the

@@ -194,7 +194,8 @@ VoiceState::VoiceState(const VoiceDesc& desc, const EngineSettings& settings)
   if (desc.locator.get() == &projector_.locator()) projector_.useLocated(desc.located);  // found by it
   // An output with directions hears the ground's image from below: a signal of its own.
   const bool pressure = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
-  if (outputHasDirections(settings.output) && settings.ground.enabled && pressure)
+  // A moving body's image is heard through a delay line of its own, in mono too.
+  if ((outputHasDirections(settings.output) || settings.moving_sources) && settings.ground.enabled && pressure)
     image_ = std::make_unique<ImagePath>(synthSettings(settings), modalObject(bank, desc.weights),
                                          std::max<uint32_t>(settings.max_block_frames, 1));
   if (settings.output == OutputFormat::Binaural && settings.hrtf) {
@@ -225,6 +226,7 @@ VoiceState::VoiceState(const VoiceDesc& desc, const EngineSettings& settings)
   for (Source& s : sources_) s.modal.assign(modes, 0.0);
   force_.assign(static_cast<size_t>(kForceChannels) * std::max<uint32_t>(settings.max_block_frames, 1), 0.0f);
   setUpRadiation(desc, settings);
+  if (settings.moving_sources) setUpMovingSource(settings);
   // Each contact may take two paths (the ground's image) and click on each.
   const size_t paths = settings.ground.enabled ? 2 : 1;
   if (settings.realtime) {

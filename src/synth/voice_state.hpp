@@ -5,7 +5,9 @@
 //  - ContinuousSources: its rolling and sliding generators (contact_sources.cpp);
 //  - PathTransfers: its far field toward the listener along each path and the air's share
 //    (sound_paths.cpp, radiation.cpp);
-//  - AccelerationClicks: the click of its rigid acceleration (sound_paths.cpp).
+//  - AccelerationClicks: the click of its rigid acceleration (sound_paths.cpp);
+//  - MovingSource: its trajectory and, while it moves, the delay lines its paths are heard
+//    through (moving_source.cpp).
 // Built off the audio thread with all the memory it will ever use (voice.cpp).
 #pragma once
 
@@ -105,12 +107,35 @@ struct AccelerationClicks {
   std::array<std::complex<double>, 3> click_transfer_{};  ///< scratch
 };
 
+// A body that moves is heard through a delay line per path, read at the emission time of each
+// output sample (moving_source.cpp); at rest its pulses carry their delay (moving_ false).
+struct MovingSource {
+  /// Its paths are heard through the delay lines: pulses are scheduled when they happen.
+  bool moving_ = false;
+  /// Where its sound leaves from (the transfer's centre, else the centre of mass), world, at a
+  /// time on the engine's clock: the poses it was given, one kept every kKeyframeSpacing_s.
+  struct Keyframe {
+    double time_s = 0.0;
+    std::array<double, 3> position_m{};
+  };
+  std::vector<Keyframe> keys_;  ///< ring of kKeyframes, oldest first from key_first_
+  size_t key_first_ = 0, key_count_ = 0;
+  /// Per path (direct, ground image): the emitted signal, sample j at j & line_mask_.
+  std::array<std::vector<float>, 2> line_;
+  uint64_t line_mask_ = 0;
+  uint64_t sound_end_frame_ = 0;  ///< just after the last non-zero sample written
+  double heard_to_frame_ = 0.0;   ///< emission position of the last sample read (either path)
+  /// Each path's source position at the emission time of this render call's last sample.
+  std::array<std::array<double, 3>, 2> heard_from_m_{};
+};
+
 /// One sounding body as the engine plays it: its parts, and what they share.
-struct VoiceState : LoadTracker, ContinuousSources, PathTransfers, AccelerationClicks {
+struct VoiceState : LoadTracker, ContinuousSources, PathTransfers, AccelerationClicks, MovingSource {
   VoiceState(const VoiceDesc& desc, const EngineSettings& settings);
   VoiceState(const VoiceState&) = delete;
   VoiceState& operator=(const VoiceState&) = delete;
   void setUpRadiation(const VoiceDesc& desc, const EngineSettings& settings);  // sound_paths.cpp's data
+  void setUpMovingSource(const EngineSettings& settings);                      // moving_source.cpp's data
 
   std::shared_ptr<const ModeBank> bank_;
   OscillatorBank synth_;
@@ -129,7 +154,8 @@ struct VoiceState : LoadTracker, ContinuousSources, PathTransfers, AccelerationC
   float gain_ = 1.0f;
   float cur_gain_[kMaxOutputChannels] = {}, target_gain_[kMaxOutputChannels] = {};
   /// The ground's image as a signal of its own (an output with directions and a ground: it
-  /// arrives from below), with its own oscillators, clicks and gains; null otherwise. The image
+  /// arrives from below; or a moving body's, heard through its own delay line), with its own
+  /// oscillators, clicks and gains; null otherwise (SoundEngine::imageApart: in use). The image
   /// rings in synth_ too, as in mono: synth_ carries both paths and the direct sound is synth_'s
   /// signal less the image's. Both paths' modes then sleep when their sum does, as in mono, and
   /// the sum of the paths (the omni channel) is the mono render to the rounding of a float.

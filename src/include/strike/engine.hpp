@@ -125,7 +125,15 @@ struct EngineSettings {
   /// Air absorption on every path of every mode (ISO 9613-1, air_absorption.hpp); off: none.
   bool air_absorption = false;
   AirConditions air;
+  /// A body that moves while it sounds is heard through a delay line per path that follows its
+  /// distance sample by sample: its Doppler shift, and its direction and level from where it
+  /// was when the sound left it (docs/listener.md, "Moving sources"). A body at rest sounds as
+  /// with this off, to the bit. Off: every contact's delay is fixed when it happens.
+  bool moving_sources = true;
 };
+
+/// The longest path a moving body's delay line holds: farther, it is heard this late.
+constexpr double kMaxMovingDelay_s = 1.0;
 
 /// What a voice is made of. The bank must outlive the voice (libstrike keeps it in a shared
 /// pointer, the renderer in its body list).
@@ -262,7 +270,8 @@ struct EngineStats {
   double continuous_last_force_s = -1.0;
 };
 
-struct VoiceState;  // src/synth/voice_state.hpp
+struct VoiceState;      // src/synth/voice_state.hpp
+class FractionalDelay;  // src/synth/fractional_delay.hpp
 
 /// One sounding body. Built off the audio thread (allocates everything it will need).
 class Voice {
@@ -378,6 +387,26 @@ class SoundEngine {
                size_t frames) const;
   /// Runs a silent path's binaural filters on zeros while its last input is still in them.
   void flushBinaural(VoiceState& v, int path, float* const* out, size_t frames) const;
+  /// The ground's image has oscillators and a signal of its own now (an output with directions,
+  /// or a moving body).
+  bool imageApart(const VoiceState& v) const;
+  // Moving sources (moving_source.cpp).
+  /// Keeps the voice's new position on its trajectory and starts or ends its delay lines.
+  void followPose(VoiceState& v);
+  /// No mode rings, no pulse is pending, nothing drives it: a mode change loses nothing.
+  bool silent(const VoiceState& v) const;
+  /// Where the voice's sound left from at engine time t_s (its trajectory, linear between the
+  /// poses kept, and beyond the newest at its last velocity).
+  std::array<double, 3> positionAt(const VoiceState& v, double t_s) const;
+  /// The emission time, as a frame on the engine's clock, of what path `path` brings to the
+  /// listener at frame `frame`: t - r(t_e) / c = t_e, solved by fixed-point iteration.
+  double emissionFrame(const VoiceState& v, int path, uint64_t frame) const;
+  /// A moving voice's render: its paths' signals as they leave it, through their delay lines.
+  void renderMoving(VoiceState& v, float* const* out, size_t frames, uint64_t& active);
+  /// Reads one path's delay line for this call's frames into `heard`.
+  void hearPath(VoiceState& v, int path, float* heard, size_t frames);
+  /// updateGains for a moving voice: level and direction of each path from where it was heard.
+  void updateMovingGains(VoiceState& v);
   /// Where the ground's mirror image of `point` is, when the image path exists for it.
   bool imageOf(const std::array<double, 3>& point, std::array<double, 3>& image) const;
   /// The synth a path's pulses go to: synth_ for the direct sound, and for the image when it has
@@ -396,6 +425,7 @@ class SoundEngine {
   uint64_t frames_ = 0;
   std::vector<uint32_t> histogram_;
   EngineStats stats_;
+  std::shared_ptr<const FractionalDelay> fractional_delay_;  ///< moving voices' interpolator
 };
 
 }  // namespace strike

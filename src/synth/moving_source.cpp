@@ -140,7 +140,7 @@ double SoundEngine::emissionFrame(const VoiceState& v, int path, uint64_t frame)
   return static_cast<double>(frame) - delay * fs;
 }
 
-void SoundEngine::hearPath(VoiceState& v, int path, float* heard, size_t frames) {
+double SoundEngine::hearPath(VoiceState& v, int path, float* heard, size_t frames) {
   const float* line = v.line_[static_cast<size_t>(path)].data();
   uint64_t base = frames_ - frames_ % kSegmentFrames;
   double from = emissionFrame(v, path, base), to = emissionFrame(v, path, base + kSegmentFrames);
@@ -155,8 +155,8 @@ void SoundEngine::hearPath(VoiceState& v, int path, float* heard, size_t frames)
     x = from + (to - from) * (static_cast<double>(frame - base) / static_cast<double>(kSegmentFrames));
     heard[n] = fractional_delay_->read(line, v.line_mask_, x);
   }
-  v.heard_to_frame_ = std::max(v.heard_to_frame_, x);
   v.heard_from_m_[static_cast<size_t>(path)] = positionAt(v, x / settings_.synth.sample_rate_hz);
+  return x;
 }
 
 void SoundEngine::updateMovingGains(VoiceState& v) {
@@ -222,8 +222,9 @@ void SoundEngine::renderMoving(VoiceState& v, float* const* out, size_t frames, 
     }
     if (sounds) v.sound_end_frame_ = frames_ + frames;
   }
-  hearPath(v, 0, direct, frames);
-  if (image) hearPath(v, 1, image->signal.data(), frames);
+  // The longer path (the image's) is heard last.
+  v.heard_to_frame_ = hearPath(v, 0, direct, frames);
+  if (image) v.heard_to_frame_ = std::min(v.heard_to_frame_, hearPath(v, 1, image->signal.data(), frames));
   updateMovingGains(v);
   mixPath(direct, v.cur_gain_, v.target_gain_, v.binaural_[0], out, frames);
   if (image) mixPath(image->signal.data(), image->cur_gain, image->target_gain, v.binaural_[1], out, frames);

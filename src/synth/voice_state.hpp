@@ -124,7 +124,7 @@ struct MovingSource {
   std::array<std::vector<float>, 2> line_;
   uint64_t line_mask_ = 0;
   uint64_t sound_end_frame_ = 0;  ///< just after the last non-zero sample written
-  double heard_to_frame_ = 0.0;   ///< emission position of the last sample read (either path)
+  double heard_to_frame_ = 0.0;   ///< emission position of the last sample read (both paths)
   /// Each path's source position at the emission time of this render call's last sample.
   std::array<std::array<double, 3>, 2> heard_from_m_{};
 };

@@ -403,8 +403,9 @@ class SoundEngine {
   double emissionFrame(const VoiceState& v, int path, uint64_t frame) const;
   /// A moving voice's render: its paths' signals as they leave it, through their delay lines.
   void renderMoving(VoiceState& v, float* const* out, size_t frames, uint64_t& active);
-  /// Reads one path's delay line for this call's frames into `heard`.
-  void hearPath(VoiceState& v, int path, float* heard, size_t frames);
+  /// Reads one path's delay line for this call's frames into `heard`; returns the emission
+  /// position (frame) of the last one.
+  double hearPath(VoiceState& v, int path, float* heard, size_t frames);
   /// updateGains for a moving voice: level and direction of each path from where it was heard.
   void updateMovingGains(VoiceState& v);
   /// Where the ground's mirror image of `point` is, when the image path exists for it.

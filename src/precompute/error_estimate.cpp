@@ -167,6 +167,159 @@ bool canRemesh(const std::string& mesh_spec) {
   return ext == "obj" || ext == "stl" || ext == "ply";
 }
 
+namespace {
+
+/// What the fine mesh's eigenvalues are compared with.
+struct Comparison {
+  std::vector<double> coarse;   ///< the other mesh's eigenvalues
+  double divisor = 1.0;         ///< (r^p - 1) / Fs for Richardson, 1 for the Tet4-corner bound
+  bool coarsened = false;       ///< a coarser mesh was solved (Richardson)
+  bool tet4_one_layer = false;  ///< the coarse Tet4 box has a single cell across some side
+};
+
+/// Richardson against a coarser mesh of the same shape, about twice the fine edge: fills
+/// `comparison` (its `coarsened` when the mesh did get coarser) and the report's ratio, method and note.
+Status compareWithCoarser(const TetMesh& fine, const PrecomputeSettings& settings, size_t modes, double fine_max_hz,
+                          ErrorEstimateReport& report, Comparison& comparison) {
+  MeshOptions options;
+  options.scale = settings.mesh_scale;  // a file in millimetres is coarsened in metres too
+  options.order = fine.order;
+  // Aim at twice the fine mesh's edge (for a box the primitive rounds to whole cells). TetGen's
+  // tets are smaller than its volume bound, so when the count ratio says h grew by less than
+  // 1.6x, ask again 1.6x coarser (at most twice more).
+  options.target_edge_m =
+      2.0 * (settings.target_edge_m > 0 ? settings.target_edge_m : meanEdge(fine) / std::cbrt(std::sqrt(2.0)));
+  Result<LoadedMesh> coarse_mesh = badInput("not meshed");
+  const bool is_box = settings.mesh_spec.rfind("box:", 0) == 0;
+  long coarse_min_cells = 2;
+  for (int attempt = 0; attempt < 3; ++attempt, options.target_edge_m *= 1.6) {
+    coarse_mesh = loadTetMesh(settings.mesh_spec, options);
+    if (!coarse_mesh) return coarse_mesh.error();
+    report.ratio =
+        std::cbrt(static_cast<double>(fine.tets.rows()) / static_cast<double>(coarse_mesh->mesh.tets.rows()));
+    // A box rounds each side to whole cells, so a plate or bar can coarsen in its length but
+    // keep its one or two layers through the thickness, and the difference then misses the
+    // error across it: the free thick plate 10 x 10 x 1 Tet10 (vs 5 x 5 x 1) estimated 0.45%
+    // for a true 1.07% (`strike bench accuracy --plate`). The axis that coarsened least is
+    // the ratio.
+    if (is_box) {
+      const std::array<long, 3> f = boxCells(fine), c = boxCells(coarse_mesh->mesh);
+      for (size_t a = 0; a < 3; ++a) report.ratio = std::min(report.ratio, double(f[a]) / double(c[a]));
+      coarse_min_cells = std::min({c[0], c[1], c[2]});
+    }
+    if (report.ratio >= 1.6) break;
+    // Coarser still would leave a Tet4 box one cell across a side, where it locks (below).
+    if (is_box && fine.order == 1 && report.ratio > 1.4 && coarse_min_cells >= 2) break;
+  }
+  // Thin walls set TetGen's tet size, not the target edge: then the mesh does not get coarser.
+  if (report.ratio > 1.4) {
+    Result<CoarseSolve> solved = solveCoarse(coarse_mesh->mesh, settings, modes, fine_max_hz);
+    if (!solved) return solved.error();
+    comparison.coarse = solved->eigenvalues;
+    report.coarse_dofs = solved->dofs;
+    // Tet10 converges as h^4 only where the geometry is exact. A sphere or cylinder primitive is
+    // re-faceted at each size with straight-edged elements, so its boundary error, and with it
+    // the frequency error, is O(h^2) whatever the order (Strang & Fix 1973, sec. 4.4,
+    // "variational crimes"): then p = 2. Measured on the Tet10 sphere: p = 4 under-estimated
+    // 8 of 27 modes by up to 2.7x; p = 2 covers them (tests/unit/extreme/accuracy_test.cpp).
+    const bool refaceted = settings.mesh_spec.rfind("sphere:", 0) == 0 || settings.mesh_spec.rfind("cylinder:", 0) == 0;
+    const double p = fine.order == 2 && !refaceted ? 4.0 : 2.0;
+    comparison.divisor = (std::pow(report.ratio, p) - 1.0) / kRichardsonSafety;
+    report.method = "richardson";
+    comparison.coarsened = true;
+    // Tet4 with one layer of cells across the thickness is locked in bending, and a locked
+    // coarse solve against a barely unlocked fine one differs by little: on the plate
+    // 20 x 20 x 2 (vs 10 x 10 x 1) the estimate was 10% for a true 34%. No estimate then.
+    if (fine.order == 1 && coarse_min_cells < 2) {
+      comparison.tet4_one_layer = true;
+      report.note = "the coarse mesh has one cell across a side, where Tet4 locks: no estimate (use --order 2)";
+    }
+  } else {
+    report.note =
+        "a coarser mesh is not coarser here (thin walls set the tet size; ratio " + std::to_string(report.ratio) + ")";
+  }
+  return {};
+}
+
+/// Thin walls: the automatic mesh is already as coarse as the surface allows, so compare with
+/// a finer one instead (Richardson the other way round: e_fine = Fs d r^p / (r^p - 1), with d
+/// the relative difference and r = cbrt of the tet-count ratio). p = 2 whatever the order: the
+/// thin-walled shapes this serves have re-entrant edges (rim, foot), where the solution is
+/// singular and Tet10 does not reach h^4; measured on assets/meshes/mug.obj Tet10, 7.9k ->
+/// 19.8k tets: observed order 1.3 against a 124k-tet reference. There the estimate is 1.09%
+/// for a true 0.50% (first mode, 2035.65 Hz vs 2025.6 Hz), where the Tet4-corner bound said
+/// 113%. The finer solve costs about 3x the bank; its mesh has 1.7 to 4 (aim 2.5) times the tets.
+/// True when it gave the estimate; false to fall back on the Tet4-corner bound.
+Result<bool> estimateWithFiner(const TetMesh& fine, const PrecomputeSettings& settings,
+                               const std::vector<double>& fine_eigenvalues, size_t modes, double fine_max_hz,
+                               ErrorEstimateReport& report, std::vector<double>& estimate) {
+  const double fine_edge = settings.target_edge_m > 0 ? settings.target_edge_m : meanEdge(fine);
+  Result<SizedMesh> finer = meshWithTetRatio(settings.mesh_spec, settings.mesh_scale, fine.order, settings.max_tets,
+                                             static_cast<double>(fine.tets.rows()), 1.2 * fine_edge, 1.7, 4.0, 2.5);
+  // A finer solve past kMaxFinerEstimateDofs would cost more memory than the bank is worth
+  // estimating (~10 KB per DOF: 500k DOF ~ 5 GB); then the pessimistic bound below.
+  const bool affordable =
+      finer && 3 * finer->loaded.mesh.nodes.rows() <= static_cast<Eigen::Index>(kMaxFinerEstimateDofs);
+  if (finer && !affordable)
+    report.note = "a finer mesh for the estimate would have " + std::to_string(3 * finer->loaded.mesh.nodes.rows()) +
+                  " DOF, more than " + std::to_string(kMaxFinerEstimateDofs);
+  Result<CoarseSolve> solved = internalError("not solved");
+  if (affordable) {
+    solved = solveCoarse(finer->loaded.mesh, settings, modes, fine_max_hz);
+    // A finer solve over the memory budget: the estimate falls back on the bound below.
+    if (!solved && solved.error().kind != ErrorKind::BadInput) return solved.error();
+    if (!solved)
+      report.note = "the finer mesh's solve (" + std::to_string(3 * finer->loaded.mesh.nodes.rows()) +
+                    " DOF) is over the memory budget";
+  }
+  if (affordable && solved) {
+    const double r =
+        std::cbrt(static_cast<double>(finer->loaded.mesh.tets.rows()) / static_cast<double>(fine.tets.rows()));
+    const double rp = r * r;
+    estimate.resize(modes);
+    for (size_t i = 0; i < modes; ++i) {
+      const double f = frequencyOf(fine_eigenvalues[i]);
+      const bool resolvable = fine.nodes.rows() * 3 >= static_cast<Eigen::Index>(kMinCoarseDofsPerMode * (i + 7));
+      if (i >= solved->eigenvalues.size() || !(f > 0) || !resolvable) {
+        estimate[i] = 1.0;
+        ++report.unmatched;
+        continue;
+      }
+      estimate[i] = kRichardsonSafety * std::abs(frequencyOf(solved->eigenvalues[i]) - f) * rp / ((rp - 1.0) * f);
+    }
+    report.method = "richardson-finer";
+    report.ratio = 1.0 / r;
+    report.coarse_dofs = solved->dofs;
+    report.note = "thin walls: the mesh cannot be coarser, so a finer one (" + std::to_string(solved->dofs) +
+                  " DOF) was solved; p = 2 (re-entrant edges)";
+    return true;
+  }
+  return false;
+}
+
+/// Each mode's estimate from the comparison: |f_other - f| / (divisor f), or 1.0 ("unknown")
+/// where the other mesh has no such mode or too few unknowns for it.
+void estimatesFromComparison(const std::vector<double>& fine_eigenvalues, const Comparison& c,
+                             ErrorEstimateReport& report, std::vector<double>& estimate) {
+  const size_t modes = fine_eigenvalues.size();
+  estimate.resize(modes);
+  for (size_t i = 0; i < modes; ++i) {
+    const double f = frequencyOf(fine_eigenvalues[i]);
+    // A coarse mesh with too few unknowns per mode is not in the asymptotic range, and its
+    // difference says nothing (sphere Tet4 at 3 cm: coarse T2 closer to Lamb than the fine one,
+    // estimate 1.2% for a true 9.9%; `strike bench accuracy`). Such modes get 1.0, "unknown".
+    const bool resolvable = report.coarse_dofs >= kMinCoarseDofsPerMode * (i + 7) && !c.tet4_one_layer;
+    if (i >= c.coarse.size() || !(f > 0) || !resolvable) {
+      estimate[i] = 1.0;
+      ++report.unmatched;
+      continue;
+    }
+    estimate[i] = std::abs(frequencyOf(c.coarse[i]) - f) / (c.divisor * f);
+  }
+}
+
+}  // namespace
+
 Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, const PrecomputeSettings& settings,
                                                     const std::vector<double>& fine_eigenvalues,
                                                     std::vector<double>& estimate) {
@@ -180,127 +333,22 @@ Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, co
   }
   const TetMesh& fine = loaded.mesh;
   const double fine_max_hz = frequencyOf(fine_eigenvalues.back());
-  std::vector<double> coarse;
-  double divisor = 1.0;  // (r^p - 1) / Fs for Richardson, 1 for the Tet4-corner bound
-  bool coarsened = false;
-  bool tet4_one_layer = false;  // the coarse Tet4 box has a single cell across some side
-  if (canRemesh(settings.mesh_spec)) {
-    MeshOptions options;
-    options.scale = settings.mesh_scale;  // a file in millimetres is coarsened in metres too
-    options.order = fine.order;
-    // Aim at twice the fine mesh's edge (for a box the primitive rounds to whole cells). TetGen's
-    // tets are smaller than its volume bound, so when the count ratio says h grew by less than
-    // 1.6x, ask again 1.6x coarser (at most twice more).
-    options.target_edge_m =
-        2.0 * (settings.target_edge_m > 0 ? settings.target_edge_m : meanEdge(fine) / std::cbrt(std::sqrt(2.0)));
-    Result<LoadedMesh> coarse_mesh = badInput("not meshed");
-    const bool is_box = settings.mesh_spec.rfind("box:", 0) == 0;
-    long coarse_min_cells = 2;
-    for (int attempt = 0; attempt < 3; ++attempt, options.target_edge_m *= 1.6) {
-      coarse_mesh = loadTetMesh(settings.mesh_spec, options);
-      if (!coarse_mesh) return coarse_mesh.error();
-      report.ratio =
-          std::cbrt(static_cast<double>(fine.tets.rows()) / static_cast<double>(coarse_mesh->mesh.tets.rows()));
-      // A box rounds each side to whole cells, so a plate or bar can coarsen in its length but
-      // keep its one or two layers through the thickness, and the difference then misses the
-      // error across it: the free thick plate 10 x 10 x 1 Tet10 (vs 5 x 5 x 1) estimated 0.45%
-      // for a true 1.07% (`strike bench accuracy --plate`). The axis that coarsened least is
-      // the ratio.
-      if (is_box) {
-        const std::array<long, 3> f = boxCells(fine), c = boxCells(coarse_mesh->mesh);
-        for (size_t a = 0; a < 3; ++a) report.ratio = std::min(report.ratio, double(f[a]) / double(c[a]));
-        coarse_min_cells = std::min({c[0], c[1], c[2]});
-      }
-      if (report.ratio >= 1.6) break;
-      // Coarser still would leave a Tet4 box one cell across a side, where it locks (below).
-      if (is_box && fine.order == 1 && report.ratio > 1.4 && coarse_min_cells >= 2) break;
-    }
-    // Thin walls set TetGen's tet size, not the target edge: then the mesh does not get coarser.
-    if (report.ratio > 1.4) {
-      Result<CoarseSolve> solved = solveCoarse(coarse_mesh->mesh, settings, modes, fine_max_hz);
-      if (!solved) return solved.error();
-      coarse = solved->eigenvalues;
-      report.coarse_dofs = solved->dofs;
-      // Tet10 converges as h^4 only where the geometry is exact. A sphere or cylinder primitive is
-      // re-faceted at each size with straight-edged elements, so its boundary error, and with it
-      // the frequency error, is O(h^2) whatever the order (Strang & Fix 1973, sec. 4.4,
-      // "variational crimes"): then p = 2. Measured on the Tet10 sphere: p = 4 under-estimated
-      // 8 of 27 modes by up to 2.7x; p = 2 covers them (tests/unit/extreme/accuracy_test.cpp).
-      const bool refaceted =
-          settings.mesh_spec.rfind("sphere:", 0) == 0 || settings.mesh_spec.rfind("cylinder:", 0) == 0;
-      const double p = fine.order == 2 && !refaceted ? 4.0 : 2.0;
-      divisor = (std::pow(report.ratio, p) - 1.0) / kRichardsonSafety;
-      report.method = "richardson";
-      coarsened = true;
-      // Tet4 with one layer of cells across the thickness is locked in bending, and a locked
-      // coarse solve against a barely unlocked fine one differs by little: on the plate
-      // 20 x 20 x 2 (vs 10 x 10 x 1) the estimate was 10% for a true 34%. No estimate then.
-      if (fine.order == 1 && coarse_min_cells < 2) {
-        tet4_one_layer = true;
-        report.note = "the coarse mesh has one cell across a side, where Tet4 locks: no estimate (use --order 2)";
-      }
-    } else {
-      report.note = "a coarser mesh is not coarser here (thin walls set the tet size; ratio " +
-                    std::to_string(report.ratio) + ")";
-    }
-  }
-  // Thin walls: the automatic mesh is already as coarse as the surface allows, so compare with
-  // a finer one instead (Richardson the other way round: e_fine = Fs d r^p / (r^p - 1), with d
-  // the relative difference and r = cbrt of the tet-count ratio). p = 2 whatever the order: the
-  // thin-walled shapes this serves have re-entrant edges (rim, foot), where the solution is
-  // singular and Tet10 does not reach h^4; measured on assets/meshes/mug.obj Tet10, 7.9k ->
-  // 19.8k tets: observed order 1.3 against a 124k-tet reference. There the estimate is 1.09%
-  // for a true 0.50% (first mode, 2035.65 Hz vs 2025.6 Hz), where the Tet4-corner bound said
-  // 113%. The finer solve costs about 3x the bank; its mesh has 1.7 to 4 (aim 2.5) times the tets.
-  if (!coarsened && fine.order == 2 && canRemesh(settings.mesh_spec)) {
-    const double fine_edge = settings.target_edge_m > 0 ? settings.target_edge_m : meanEdge(fine);
-    Result<SizedMesh> finer = meshWithTetRatio(settings.mesh_spec, settings.mesh_scale, fine.order, settings.max_tets,
-                                               static_cast<double>(fine.tets.rows()), 1.2 * fine_edge, 1.7, 4.0, 2.5);
-    // A finer solve past kMaxFinerEstimateDofs would cost more memory than the bank is worth
-    // estimating (~10 KB per DOF: 500k DOF ~ 5 GB); then the pessimistic bound below.
-    const bool affordable =
-        finer && 3 * finer->loaded.mesh.nodes.rows() <= static_cast<Eigen::Index>(kMaxFinerEstimateDofs);
-    if (finer && !affordable)
-      report.note = "a finer mesh for the estimate would have " + std::to_string(3 * finer->loaded.mesh.nodes.rows()) +
-                    " DOF, more than " + std::to_string(kMaxFinerEstimateDofs);
-    Result<CoarseSolve> solved = internalError("not solved");
-    if (affordable) {
-      solved = solveCoarse(finer->loaded.mesh, settings, modes, fine_max_hz);
-      // A finer solve over the memory budget: the estimate falls back on the bound below.
-      if (!solved && solved.error().kind != ErrorKind::BadInput) return solved.error();
-      if (!solved)
-        report.note = "the finer mesh's solve (" + std::to_string(3 * finer->loaded.mesh.nodes.rows()) +
-                      " DOF) is over the memory budget";
-    }
-    if (affordable && solved) {
-      const double r =
-          std::cbrt(static_cast<double>(finer->loaded.mesh.tets.rows()) / static_cast<double>(fine.tets.rows()));
-      const double rp = r * r;
-      estimate.resize(modes);
-      for (size_t i = 0; i < modes; ++i) {
-        const double f = frequencyOf(fine_eigenvalues[i]);
-        const bool resolvable = fine.nodes.rows() * 3 >= static_cast<Eigen::Index>(kMinCoarseDofsPerMode * (i + 7));
-        if (i >= solved->eigenvalues.size() || !(f > 0) || !resolvable) {
-          estimate[i] = 1.0;
-          ++report.unmatched;
-          continue;
-        }
-        estimate[i] = kRichardsonSafety * std::abs(frequencyOf(solved->eigenvalues[i]) - f) * rp / ((rp - 1.0) * f);
-      }
-      report.method = "richardson-finer";
-      report.ratio = 1.0 / r;
-      report.coarse_dofs = solved->dofs;
-      report.note = "thin walls: the mesh cannot be coarser, so a finer one (" + std::to_string(solved->dofs) +
-                    " DOF) was solved; p = 2 (re-entrant edges)";
+  Comparison c;
+  if (canRemesh(settings.mesh_spec))
+    if (Status ok = compareWithCoarser(fine, settings, modes, fine_max_hz, report, c); !ok) return ok.error();
+  if (!c.coarsened && fine.order == 2 && canRemesh(settings.mesh_spec)) {
+    Result<bool> finer = estimateWithFiner(fine, settings, fine_eigenvalues, modes, fine_max_hz, report, estimate);
+    if (!finer) return finer.error();
+    if (*finer) {
       report.seconds = secondsSince(start);
       return report;
     }
   }
-  if (!coarsened) {
+  if (!c.coarsened) {
     if (fine.order == 2) {
       Result<CoarseSolve> solved = solveCoarse(cornerMesh(fine), settings, modes, fine_max_hz);
       if (!solved) return solved.error();
-      coarse = solved->eigenvalues;
+      c.coarse = solved->eigenvalues;
       report.coarse_dofs = solved->dofs;
       report.method = "tet4-corner";
       report.note =
@@ -314,20 +362,7 @@ Result<ErrorEstimateReport> estimateFrequencyErrors(const LoadedMesh& loaded, co
       return report;
     }
   }
-  estimate.resize(modes);
-  for (size_t i = 0; i < modes; ++i) {
-    const double f = frequencyOf(fine_eigenvalues[i]);
-    // A coarse mesh with too few unknowns per mode is not in the asymptotic range, and its
-    // difference says nothing (sphere Tet4 at 3 cm: coarse T2 closer to Lamb than the fine one,
-    // estimate 1.2% for a true 9.9%; `strike bench accuracy`). Such modes get 1.0, "unknown".
-    const bool resolvable = report.coarse_dofs >= kMinCoarseDofsPerMode * (i + 7) && !tet4_one_layer;
-    if (i >= coarse.size() || !(f > 0) || !resolvable) {
-      estimate[i] = 1.0;
-      ++report.unmatched;
-      continue;
-    }
-    estimate[i] = std::abs(frequencyOf(coarse[i]) - f) / (divisor * f);
-  }
+  estimatesFromComparison(fine_eigenvalues, c, report, estimate);
   report.seconds = secondsSince(start);
   return report;
 }
@@ -359,6 +394,96 @@ std::string gigabytes(double bytes) {
   char text[32];
   std::snprintf(text, sizeof text, "%.2f GB", bytes / 1e9);
   return text;
+}
+
+}  // namespace
+
+namespace {
+
+/// A step's forecast: the last step's time and peak memory scaled by the DOF ratio.
+struct StepForecast {
+  double seconds = 0.0;  ///< 0: unknown (the first step)
+  double bytes = 0.0;
+};
+
+/// Forecast: the last step's time and peak memory scaled by the DOF ratio, as t ~ n^1.5 and
+/// memory ~ n^1.2 (measured on the mug, Tet10: 47k -> 118k DOF took 2.9x the time and 2.4x
+/// the memory). Before any step: 30 KB per DOF (the mug's first step with its finer-mesh
+/// estimate peaked at 1.42 GB for 47k DOF; without it 11.6 KB per DOF), time unknown.
+StepForecast forecastStep(const std::vector<ToleranceTrial>& trials, size_t dofs) {
+  double forecast_s = 0.0, forecast_bytes = 30e3 * static_cast<double>(dofs);
+  if (!trials.empty()) {
+    const ToleranceTrial& last = trials.back();
+    const double growth = static_cast<double>(dofs) / static_cast<double>(last.dofs);
+    forecast_s = last.seconds * std::pow(growth, 1.5);
+    forecast_bytes = last.peak_bytes * std::pow(growth, 1.2);
+  }
+  return {forecast_s, forecast_bytes};
+}
+
+/// "step N: Tet10, D DOF (T tets), forecast ...": what a step is about to cost.
+std::string announceStep(int step, size_t dofs, long long tets, const StepForecast& forecast) {
+  const double forecast_s = forecast.seconds, forecast_bytes = forecast.bytes;
+  char line[256];
+  std::snprintf(line, sizeof line, "step %d: Tet10, %zu DOF (%lld tets), forecast %s%s", step + 1, dofs, tets,
+                forecast_s > 0 ? "" : "time unknown, ", gigabytes(forecast_bytes).c_str());
+  std::string announce = line;
+  if (forecast_s > 0) {
+    std::snprintf(line, sizeof line, "step %d: Tet10, %zu DOF (%lld tets), forecast %.0f s, %s", step + 1, dofs, tets,
+                  forecast_s, gigabytes(forecast_bytes).c_str());
+    announce = line;
+  }
+  return announce;
+}
+
+/// Why a step's forecast does not fit --max-memory or --max-seconds; empty when it fits.
+std::string overBudget(const ToleranceOptions& options, const StepForecast& forecast, double elapsed) {
+  const double forecast_s = forecast.seconds, forecast_bytes = forecast.bytes;
+  char line[256];
+  std::string over;
+  if (options.max_bytes > 0 && forecast_bytes > options.max_bytes)
+    over = "its forecast memory " + gigabytes(forecast_bytes) + " exceeds --max-memory " + gigabytes(options.max_bytes);
+  else if (options.max_seconds > 0 && forecast_s > 0 && elapsed + forecast_s > options.max_seconds) {
+    std::snprintf(line, sizeof line, "%.1f s spent + %.1f s forecast exceeds --max-seconds %g", elapsed, forecast_s,
+                  options.max_seconds);
+    over = line;
+  }
+  return over;
+}
+
+/// What a step cost and estimated, and whether it met the tolerance.
+ToleranceTrial trialOf(const PrecomputeResult& trial, const LoadedMesh& loaded, double edge,
+                       const StepForecast& forecast, double tolerance) {
+  const double forecast_s = forecast.seconds, forecast_bytes = forecast.bytes;
+  ToleranceTrial t;
+  t.order = 2;
+  t.target_edge_m = edge > 0 ? edge : meanEdge(loaded.mesh);
+  t.dofs = trial.report.dofs;
+  t.seconds = trial.bank.total_seconds + trial.report.error_estimate_seconds;
+  t.peak_bytes = peakResidentBytes();
+  t.forecast_seconds = forecast_s;
+  t.forecast_bytes = forecast_bytes;
+  t.method = trial.report.error_estimate_method;
+  const std::vector<double>& e = trial.bank.frequency_error_estimate;
+  t.max_estimate = e.empty() ? INFINITY : *std::max_element(e.begin(), e.end());
+  t.met = !e.empty() && t.max_estimate <= tolerance;
+  if (trial.bank.modeCount() == 0) {  // nothing in the band to be wrong: refining cannot help
+    t.met = true;
+    t.max_estimate = 0.0;
+  }
+  return t;
+}
+
+/// The next step's mesh: the DOF growth for the error to fall to tolerance / 1.3.
+Result<SizedMesh> nextMesh(const PrecomputeSettings& settings, const ToleranceTrial& t, const LoadedMesh& loaded,
+                           double tolerance, bool exact_geometry) {
+  const double p = t.method == "richardson" && exact_geometry ? 4.0 : 2.0;
+  const double wanted = std::isfinite(t.max_estimate) ? std::pow(1.3 * t.max_estimate / tolerance, 3.0 / p) : 3.0;
+  const double want = std::clamp(wanted, 1.5, kMaxDofGrowthPerStep);
+  const double edge_now = t.target_edge_m;
+  return meshWithTetRatio(settings.mesh_spec, settings.mesh_scale, 2, settings.max_tets,
+                          static_cast<double>(loaded.mesh.tets.rows()), edge_now / std::cbrt(want), 1.3,
+                          kMaxDofGrowthPerStep, want);
 }
 
 }  // namespace
@@ -403,37 +528,10 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
     }
     trial_settings.target_edge_m = edge;
     const size_t dofs = 3 * static_cast<size_t>(loaded.mesh.nodes.rows());
-    // Forecast: the last step's time and peak memory scaled by the DOF ratio, as t ~ n^1.5 and
-    // memory ~ n^1.2 (measured on the mug, Tet10: 47k -> 118k DOF took 2.9x the time and 2.4x
-    // the memory). Before any step: 30 KB per DOF (the mug's first step with its finer-mesh
-    // estimate peaked at 1.42 GB for 47k DOF; without it 11.6 KB per DOF), time unknown.
-    double forecast_s = 0.0, forecast_bytes = 30e3 * static_cast<double>(dofs);
-    if (!out.trials.empty()) {
-      const ToleranceTrial& last = out.trials.back();
-      const double growth = static_cast<double>(dofs) / static_cast<double>(last.dofs);
-      forecast_s = last.seconds * std::pow(growth, 1.5);
-      forecast_bytes = last.peak_bytes * std::pow(growth, 1.2);
-    }
+    const StepForecast forecast = forecastStep(out.trials, dofs);
     const double elapsed = secondsSince(start);
-    char line[256];
-    std::snprintf(line, sizeof line, "step %d: Tet10, %zu DOF (%lld tets), forecast %s%s", step + 1, dofs,
-                  static_cast<long long>(loaded.mesh.tets.rows()), forecast_s > 0 ? "" : "time unknown, ",
-                  gigabytes(forecast_bytes).c_str());
-    std::string announce = line;
-    if (forecast_s > 0) {
-      std::snprintf(line, sizeof line, "step %d: Tet10, %zu DOF (%lld tets), forecast %.0f s, %s", step + 1, dofs,
-                    static_cast<long long>(loaded.mesh.tets.rows()), forecast_s, gigabytes(forecast_bytes).c_str());
-      announce = line;
-    }
-    std::string over;
-    if (options.max_bytes > 0 && forecast_bytes > options.max_bytes)
-      over =
-          "its forecast memory " + gigabytes(forecast_bytes) + " exceeds --max-memory " + gigabytes(options.max_bytes);
-    else if (options.max_seconds > 0 && forecast_s > 0 && elapsed + forecast_s > options.max_seconds) {
-      std::snprintf(line, sizeof line, "%.1f s spent + %.1f s forecast exceeds --max-seconds %g", elapsed, forecast_s,
-                    options.max_seconds);
-      over = line;
-    }
+    const std::string announce = announceStep(step, dofs, static_cast<long long>(loaded.mesh.tets.rows()), forecast);
+    const std::string over = overBudget(options, forecast, elapsed);
     if (!over.empty()) {
       if (out.trials.empty())
         return badInput("--tolerance: the first step (" + std::to_string(dofs) +
@@ -455,23 +553,10 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
       break;
     }
     if (!trial) return trial.error();
-    ToleranceTrial t;
-    t.order = 2;
-    t.target_edge_m = edge > 0 ? edge : meanEdge(loaded.mesh);
-    t.dofs = trial->report.dofs;
-    t.seconds = trial->bank.total_seconds + trial->report.error_estimate_seconds;
-    t.peak_bytes = peakResidentBytes();
-    t.forecast_seconds = forecast_s;
-    t.forecast_bytes = forecast_bytes;
-    t.method = trial->report.error_estimate_method;
-    const std::vector<double>& e = trial->bank.frequency_error_estimate;
-    t.max_estimate = e.empty() ? INFINITY : *std::max_element(e.begin(), e.end());
-    t.met = !e.empty() && t.max_estimate <= tolerance;
-    if (trial->bank.modeCount() == 0) {  // nothing in the band to be wrong: refining cannot help
-      t.met = true;
-      t.max_estimate = 0.0;
+    ToleranceTrial t = trialOf(*trial, loaded, edge, forecast, tolerance);
+    if (trial->bank.modeCount() == 0)
       say("step " + std::to_string(step + 1) + ": no modes in the band, nothing to refine");
-    }
+    char line[256];
     std::snprintf(line, sizeof line, "step %d: %.1f s, peak %s, max est. error %.3g%% (%s)%s", step + 1, t.seconds,
                   gigabytes(t.peak_bytes).c_str(), 100.0 * t.max_estimate, t.method.c_str(), t.met ? ": met" : "");
     say(line);
@@ -482,14 +567,7 @@ Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& set
       break;
     }
     if (step + 1 == kMaxToleranceSteps) break;
-    // The next mesh: DOF growth for the error to fall to tolerance / 1.3.
-    const double p = t.method == "richardson" && exact_geometry ? 4.0 : 2.0;
-    const double wanted = std::isfinite(t.max_estimate) ? std::pow(1.3 * t.max_estimate / tolerance, 3.0 / p) : 3.0;
-    const double want = std::clamp(wanted, 1.5, kMaxDofGrowthPerStep);
-    const double edge_now = t.target_edge_m;
-    Result<SizedMesh> finer = meshWithTetRatio(settings.mesh_spec, settings.mesh_scale, 2, settings.max_tets,
-                                               static_cast<double>(loaded.mesh.tets.rows()), edge_now / std::cbrt(want),
-                                               1.3, kMaxDofGrowthPerStep, want);
+    Result<SizedMesh> finer = nextMesh(settings, t, loaded, tolerance, exact_geometry);
     if (!finer) {
       out.stop_reason = "stopped after step " + std::to_string(step + 1) + ": " + finer.error().message;
       say(out.stop_reason);

@@ -299,9 +299,9 @@ TEST(FirstHourMessages, ATet10FileWithNoOrderGivenKeepsItsOrderWithoutAWarning) 
 }
 
 // Every `strike ...` command line in README.md's and docs/'s shell blocks names a command that
-// exists and only options its --help lists (a renamed or removed option fails here). Running
-// them all is left to the examples' and golden tests (the eigen-solves take minutes); the whole
-// scenes of the docs are run by Docs.EveryWholeSceneInTheDocsRunsAsWrittenWithoutWarnings.
+// exists and only options its --help lists (a renamed or removed option fails here), also the
+// ones DocsCommands.EveryCommandInTheReadmeAndDocsRuns does not run; that test runs them, and the
+// whole scenes of the docs are run by Docs.EveryWholeSceneInTheDocsRunsAsWrittenWithoutWarnings.
 TEST(FirstHourDocs, EveryCommandLineInTheDocsUsesOptionsTheCommandHas) {
   const fs::path root = STRIKE_SOURCE_DIR;
   std::vector<fs::path> files = {root / "README.md"};

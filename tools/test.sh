@@ -74,6 +74,9 @@ fi
 #            and BarDrop.
 #          RollingSound.TheMarblesInTheBowlAudiblyRoll: the bowl's solve; rolling runs under
 #            ASan in RollingSound's sphere-on-plate and spoon tests.
+#          DocsCommands.EveryCommandInTheReadmeAndDocsRuns: the docs' commands, mostly the
+#            bowl's eigen-solve (twice) and the bar's; each command's code runs under ASan in
+#            the Cli*, Newcomer* and FirstHour* tests.
 #  tsan: the C API's threading tests only (producers, render thread, stress).
 if [ "${STRIKE_SANITIZERS:-1}" = 1 ]; then
   stage "asan + ubsan build" asan_build

@@ -68,9 +68,9 @@ class StdoutToStderr {
   int saved_ = -1;
 };
 
-}  // namespace
-
-Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& options, const std::string& source) {
+/// The largest tet volume TetGen may make: a regular tet of the target edge, or the enclosed
+/// volume over kDefaultRegularTets; or why the options or the surface are refused.
+Result<double> maxTetVolume(const SurfaceMesh& surface, const MeshOptions& options, const std::string& source) {
   if (options.order != 1 && options.order != 2) {
     return badInput(source + ": error: element order " + std::to_string(options.order) + ", expected 1 or 2");
   }
@@ -110,8 +110,11 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
                     " m would give more than " + formatNumber(max_tets, 6) + " tets (the --max-tets cap) for volume " +
                     formatNumber(volume, 6) + " m^3; use a larger --size, or raise the cap with --max-tets N");
   }
+  return max_volume;
+}
 
-  tetgenio in, out;
+/// The closed surface as TetGen's piecewise linear complex: its points, one triangle a facet.
+void fillTetgenInput(const SurfaceMesh& surface, tetgenio& in) {
   in.firstnumber = 0;
   in.numberofpoints = static_cast<int>(surface.V.rows());
   in.pointlist = new REAL[static_cast<size_t>(3 * surface.V.rows())];
@@ -130,6 +133,63 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
     facet.polygonlist[0].vertexlist = new int[3];
     for (int c = 0; c < 3; ++c) facet.polygonlist[0].vertexlist[c] = surface.F(f, c);
   }
+}
+
+/// TetGen meshing a self-intersecting surface can crash (it segfaults on two overlapping
+/// cubes), so its own intersection test (-d) runs first; it lists the offending faces.
+Status checkSelfIntersections(tetgenio& in, const std::string& source) {
+  tetgenio diagnosis;
+  tetgenbehavior detect;
+  char detect_switches[] = "pdQ";
+  if (!detect.parse_commandline(detect_switches)) return internalError("TetGen rejected the switches pdQ");
+  try {
+    StdoutToStderr redirect;
+    ::tetrahedralize(&detect, &in, &diagnosis);
+  } catch (int code) {
+    return badInput(source + ": error: TetGen could not check the surface (-pdQ): " + tetgenErrorText(code));
+  } catch (...) {
+    return internalError(source + ": error: TetGen failed while checking the surface for self-intersections");
+  }
+  if (diagnosis.numberoftrifaces > 0 && diagnosis.trifacelist) {
+    std::string where;
+    for (int c = 0; c < 3; ++c) {
+      const int v = diagnosis.trifacelist[c] - diagnosis.firstnumber;
+      if (v < 0 || v >= in.numberofpoints) continue;
+      where += (c ? ", " : "") + std::to_string(v) + " (" + formatNumber(in.pointlist[3 * v], 6) + ", " +
+               formatNumber(in.pointlist[3 * v + 1], 6) + ", " + formatNumber(in.pointlist[3 * v + 2], 6) + ")";
+    }
+    return badInput(source + ": error: the surface intersects itself: TetGen found " +
+                    std::to_string(diagnosis.numberoftrifaces) + " intersecting triangles, the first with vertices " +
+                    where + "; expected a closed surface without self-intersections");
+  }
+  return {};
+}
+
+/// TetGen's output as a linear tet mesh.
+TetMesh meshFromTetgen(const tetgenio& out) {
+  TetMesh mesh;
+  mesh.order = 1;
+  mesh.nodes.resize(out.numberofpoints, 3);
+  for (int i = 0; i < out.numberofpoints; ++i) {
+    for (int c = 0; c < 3; ++c) mesh.nodes(i, c) = out.pointlist[3 * i + c];
+  }
+  mesh.tets.resize(out.numberoftetrahedra, 4);
+  const int base = out.firstnumber;
+  for (int t = 0; t < out.numberoftetrahedra; ++t) {
+    for (int c = 0; c < 4; ++c) mesh.tets(t, c) = out.tetrahedronlist[4 * t + c] - base;
+  }
+  return mesh;
+}
+
+}  // namespace
+
+Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& options, const std::string& source) {
+  Result<double> max_volume_or = maxTetVolume(surface, options, source);
+  if (!max_volume_or) return max_volume_or.error();
+  const double max_volume = *max_volume_or;
+
+  tetgenio in, out;
+  fillTetgenInput(surface, in);
 
   // Switches: p (piecewise linear complex), q (quality, radius-edge ratio), a (max volume),
   // Q (quiet). The numbers are set as fields rather than printed into the switch string, so
@@ -144,34 +204,7 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
   behavior.maxvolume = max_volume;
 
   if (options.progress) options.progress("tetrahedralize", 0.0);
-  // TetGen meshing a self-intersecting surface can crash (it segfaults on two overlapping
-  // cubes), so its own intersection test (-d) runs first; it lists the offending faces.
-  {
-    tetgenio diagnosis;
-    tetgenbehavior detect;
-    char detect_switches[] = "pdQ";
-    if (!detect.parse_commandline(detect_switches)) return internalError("TetGen rejected the switches pdQ");
-    try {
-      StdoutToStderr redirect;
-      ::tetrahedralize(&detect, &in, &diagnosis);
-    } catch (int code) {
-      return badInput(source + ": error: TetGen could not check the surface (-pdQ): " + tetgenErrorText(code));
-    } catch (...) {
-      return internalError(source + ": error: TetGen failed while checking the surface for self-intersections");
-    }
-    if (diagnosis.numberoftrifaces > 0 && diagnosis.trifacelist) {
-      std::string where;
-      for (int c = 0; c < 3; ++c) {
-        const int v = diagnosis.trifacelist[c] - diagnosis.firstnumber;
-        if (v < 0 || v >= in.numberofpoints) continue;
-        where += (c ? ", " : "") + std::to_string(v) + " (" + formatNumber(in.pointlist[3 * v], 6) + ", " +
-                 formatNumber(in.pointlist[3 * v + 1], 6) + ", " + formatNumber(in.pointlist[3 * v + 2], 6) + ")";
-      }
-      return badInput(source + ": error: the surface intersects itself: TetGen found " +
-                      std::to_string(diagnosis.numberoftrifaces) + " intersecting triangles, the first with vertices " +
-                      where + "; expected a closed surface without self-intersections");
-    }
-  }
+  if (Status clean = checkSelfIntersections(in, source); !clean) return clean.error();
   try {
     StdoutToStderr redirect;
     ::tetrahedralize(&behavior, &in, &out);
@@ -191,17 +224,7 @@ Result<TetMesh> tetrahedralize(const SurfaceMesh& surface, const MeshOptions& op
                     " tetrahedra from a closed surface of " + std::to_string(surface.F.rows()) + " triangles (-" +
                     shown + ")");
   }
-  TetMesh mesh;
-  mesh.order = 1;
-  mesh.nodes.resize(out.numberofpoints, 3);
-  for (int i = 0; i < out.numberofpoints; ++i) {
-    for (int c = 0; c < 3; ++c) mesh.nodes(i, c) = out.pointlist[3 * i + c];
-  }
-  mesh.tets.resize(out.numberoftetrahedra, 4);
-  const int base = out.firstnumber;
-  for (int t = 0; t < out.numberoftetrahedra; ++t) {
-    for (int c = 0; c < 4; ++c) mesh.tets(t, c) = out.tetrahedronlist[4 * t + c] - base;
-  }
+  TetMesh mesh = meshFromTetgen(out);
   std::vector<MeshWarning> ignored;
   if (Status s = validateAndRepair(mesh, source, &ignored); !s) return s.error();
   if (options.order == 2) mesh = promoteToTet10(mesh);

@@ -105,73 +105,10 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   const SimBodyDesc& desc = descs_[index];
   auto state = std::make_unique<BodyState>();
   state->is_static = desc.is_static;
-  const size_t vertex_count = desc.surface_positions.size() / 3;
-
-  // Principal frame. Bullet's btRigidBody takes a diagonal inertia about the body origin, so the
-  // body frame is the centre of mass with the principal axes (Jacobi diagonalization:
-  // I_mesh = R diag(I) R^T, the columns of R are the principal axes in the mesh frame).
-  btMatrix3x3 principal_axes = btMatrix3x3::getIdentity();
-  btVector3 centre(0, 0, 0);
-  if (!desc.is_static) {
-    const auto& in = desc.inertia_kg_m2;
-    btMatrix3x3 inertia(in[0], 0.5 * (in[1] + in[3]), 0.5 * (in[2] + in[6]),  //
-                        0.5 * (in[1] + in[3]), in[4], 0.5 * (in[5] + in[7]),  //
-                        0.5 * (in[2] + in[6]), 0.5 * (in[5] + in[7]), in[8]);
-    inertia.diagonalize(principal_axes, 1e-15, 100);
-    state->principal_inertia = btVector3(inertia[0][0], inertia[1][1], inertia[2][2]);
-    const double i_max = std::max({inertia[0][0], inertia[1][1], inertia[2][2]});
-    for (int k = 0; k < 3; ++k) {
-      // A real body satisfies the triangle inequality I_a <= I_b + I_c; only a positive
-      // definite tensor is required here, with a little slack for thin rods and plates.
-      if (!(state->principal_inertia[k] > 1e-12 * i_max)) {
-        return badInput(bodyLabel(desc, index) + ": inertia_kg_m2 has principal moment " +
-                        fmt(state->principal_inertia[k]) + " (must be positive definite)");
-      }
-    }
-    if (principal_axes.determinant() < 0)
-      principal_axes.setValue(  // keep a proper rotation
-          -principal_axes[0][0], principal_axes[0][1], principal_axes[0][2], -principal_axes[1][0],
-          principal_axes[1][1], principal_axes[1][2], -principal_axes[2][0], principal_axes[2][1],
-          principal_axes[2][2]);
-    centre = toBt(desc.centre_m);
-    state->mass_kg = desc.mass_kg;
-  }
-  state->mesh_from_body = btTransform(principal_axes, centre);
-  state->body_from_mesh = state->mesh_from_body.inverse();
-
-  // Surface in the body frame, and its bounding box for the size-dependent tolerances.
-  state->body_xyz.resize(3 * vertex_count);
-  btVector3 lo(SIMD_INFINITY, SIMD_INFINITY, SIMD_INFINITY), hi = -lo;
-  for (size_t v = 0; v < vertex_count; ++v) {
-    const btVector3 p = state->body_from_mesh(
-        btVector3(desc.surface_positions[3 * v], desc.surface_positions[3 * v + 1], desc.surface_positions[3 * v + 2]));
-    for (int k = 0; k < 3; ++k) state->body_xyz[3 * v + size_t(k)] = p[k];
-    lo.setMin(p);
-    hi.setMax(p);
-  }
-  const btVector3 extent = hi - lo;
-  state->size_m = std::max({extent.x(), extent.y(), extent.z()});
-  state->min_extent_m = std::min({extent.x(), extent.y(), extent.z()});
-  state->compliance_per_pa = desc.compliance_per_pa;
-  // The Hertz patch takes each body as the sphere of its volume (as the render's contact time
-  // does); a static body is flat.
-  state->contact_radius_m =
-      desc.is_static ? 0.0
-      : desc.contact_radius_m > 0.0
-          ? desc.contact_radius_m
-          : std::cbrt(3.0 * std::abs(meshVolume(state->body_xyz, desc.surface_triangles)) / (4.0 * M_PI));
-  if (!(state->size_m > 0.0)) {
-    return badInput(bodyLabel(desc, index) + ": all " + std::to_string(vertex_count) +
-                    " surface vertices coincide (zero size)");
-  }
-  // Collision margin: Bullet's default 4 cm would swallow a 2 cm object. Default 2% of the
-  // thinnest extent, refined per shape kind below.
-  state->margin_m = std::clamp(0.02 * state->min_extent_m, 1e-5, 0.01);
-  if (state->min_extent_m <= 0.0) state->margin_m = std::clamp(0.002 * state->size_m, 1e-5, 0.01);
+  if (Status framed = bodyFrame(index, *state); !framed) return framed.error();
 
   // Shape choice.
   const std::shared_ptr<const SimHull> hull = bodyHull(state->body_xyz, 0.0, 0.0);
-  const size_t hull_vertices = hull->vertices_xyz.size() / 3;
   const double hull_volume = hull->volume_m3;
   SimBodyDesc::Shape shape = desc.shape;
   if (shape == SimBodyDesc::Shape::Auto) {
@@ -185,142 +122,235 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   }
   state->shape_used = shape;
 
-  if (shape == SimBodyDesc::Shape::ConvexHull) {
-    if (hull_vertices == 0) {
-      return badInput(bodyLabel(desc, index) + ": cannot build a convex hull of " + std::to_string(vertex_count) +
-                      " vertices");
-    }
-    // A hull whose points all lie on one sphere about the centre of mass is a sphere: Bullet's
-    // sphere shape is exact and costs O(1) per support query instead of O(points), which is what
-    // makes marbles rolling in a GImpact bowl affordable.
-    double radius_sum = 0.0, radius_min = INFINITY, radius_max = 0.0;
-    for (size_t v = 0; v < hull_vertices; ++v) {
-      const double r = hullVertex(*hull, v).length();
-      radius_sum += r;
-      radius_min = std::min(radius_min, r);
-      radius_max = std::max(radius_max, r);
-    }
-    const double radius_mean = hull_vertices > 0 ? radius_sum / double(hull_vertices) : 0.0;
-    // All points on one sphere is not enough (a box's corners are too): the hull must also fill
-    // the sphere.
-    const double sphere_volume = 4.0 / 3.0 * M_PI * radius_mean * radius_mean * radius_mean;
-    if (hull_vertices >= 12 && radius_max - radius_min <= 0.02 * radius_mean &&
-        hull_volume >= 0.9 * sphere_volume) {
-      // Volume-equivalent radius, so the sphere neither floats above nor sinks into the ground.
-      const double radius =
-          std::cbrt(3.0 * std::abs(meshVolume(state->body_xyz, desc.surface_triangles)) / (4.0 * M_PI));
-      state->shape = std::make_unique<btSphereShape>(radius > 0 ? radius : radius_mean);
-      state->sphere_radius_m = radius > 0 ? radius : radius_mean;
-      state->margin_m = state->shape->getMargin();
-    } else {
-      auto convex = std::make_unique<btConvexHullShape>();
-      if (hull_vertices <= kMaxPolyhedralVertices) {
-        // Polyhedral features make hull-hull contacts use face clipping, which yields the whole
-        // contact patch (up to 4 points) in the first substep; plain GJK/EPA adds one point per
-        // substep, so a box landing flat on another first touches at one corner, tips and slides
-        // [Bullet btPolyhedralContactClipping]. The clipping works on the bare points (no margin)
-        // while GJK paths (ground, triangles) add the margin, so the points are the hull itself
-        // and the margin is tiny: 0.1% of the thinnest extent, the most a body can float.
-        // Edge-edge clipping costs O(edges^2) per pair, hence only for modest hulls.
-        state->margin_m = std::clamp(0.001 * state->min_extent_m, 1e-6, 1e-3);
-        for (size_t v = 0; v < hull_vertices; ++v) convex->addPoint(hullVertex(*hull, v), false);
-        convex->recalcLocalAabb();
-        convex->setMargin(state->margin_m);
-        convex->initializePolyhedralFeatures();
-        // A hull that is a box about the centre of mass along the body axes (a box primitive,
-        // whose principal axes are its edges) gets a box twin for spheres: the same solid as GJK
-        // sees the hull (the points' box grown by the margin, edges rounded by it), on which a
-        // sphere takes the exact closest-point test instead of GJK (SphereAwareConvexConvex).
-        if (btVector3 half_m; boxHalfExtents(*hull, 1e-9 * state->size_m, half_m)) {
-          state->box_twin = std::make_unique<btBoxShape>(half_m + btVector3(1, 1, 1) * state->margin_m);
-          state->box_twin->setMargin(state->margin_m);
-          sphere_hull_->box_twins[convex.get()] = state->box_twin.get();
-        }
-      } else {
-        // Large hull, GJK/EPA only: those need a real margin for robust penetration depths, and
-        // btConvexHullShape puts it outside the points. Shrink the hull by the margin first
-        // (btConvexHullComputer moves each face inwards) so the collision surface is the mesh's
-        // hull with edges rounded by the margin; the shrink is clamped to a quarter of the inner
-        // radius for thin bodies.
-        const std::shared_ptr<const SimHull> shrunk =
-            bodyHull(state->body_xyz, state->margin_m, 0.25);
-        const double shrink = shrunk->shrink_m;
-        const SimHull& used = shrink > 0.0 && !shrunk->vertices_xyz.empty() ? *shrunk : *hull;
-        for (size_t v = 0; v < used.vertices_xyz.size() / 3; ++v) convex->addPoint(hullVertex(used, v), false);
-        convex->recalcLocalAabb();
-        if (shrink > 0.0) state->margin_m = shrink;  // the clamp may have made it smaller
-        convex->setMargin(state->margin_m);
+  Status built;
+  if (shape == SimBodyDesc::Shape::ConvexHull)
+    built = buildHullShape(index, *state, hull);
+  else if (shape == SimBodyDesc::Shape::ConvexPieces)
+    built = buildPiecesShape(index, *state);
+  else
+    buildMeshShape(index, *state);
+  if (!built) return built.error();
+  addRigidBody(index, orientation, std::move(state));
+  return {};
+}
+
+Status Simulation::bodyFrame(size_t index, BodyState& state) {
+  const SimBodyDesc& desc = descs_[index];
+  const size_t vertex_count = desc.surface_positions.size() / 3;
+
+  // Principal frame. Bullet's btRigidBody takes a diagonal inertia about the body origin, so the
+  // body frame is the centre of mass with the principal axes (Jacobi diagonalization:
+  // I_mesh = R diag(I) R^T, the columns of R are the principal axes in the mesh frame).
+  btMatrix3x3 principal_axes = btMatrix3x3::getIdentity();
+  btVector3 centre(0, 0, 0);
+  if (!desc.is_static) {
+    const auto& in = desc.inertia_kg_m2;
+    btMatrix3x3 inertia(in[0], 0.5 * (in[1] + in[3]), 0.5 * (in[2] + in[6]),  //
+                        0.5 * (in[1] + in[3]), in[4], 0.5 * (in[5] + in[7]),  //
+                        0.5 * (in[2] + in[6]), 0.5 * (in[5] + in[7]), in[8]);
+    inertia.diagonalize(principal_axes, 1e-15, 100);
+    state.principal_inertia = btVector3(inertia[0][0], inertia[1][1], inertia[2][2]);
+    const double i_max = std::max({inertia[0][0], inertia[1][1], inertia[2][2]});
+    for (int k = 0; k < 3; ++k) {
+      // A real body satisfies the triangle inequality I_a <= I_b + I_c; only a positive
+      // definite tensor is required here, with a little slack for thin rods and plates.
+      if (!(state.principal_inertia[k] > 1e-12 * i_max)) {
+        return badInput(bodyLabel(desc, index) + ": inertia_kg_m2 has principal moment " +
+                        fmt(state.principal_inertia[k]) + " (must be positive definite)");
       }
-      state->shape = std::move(convex);
     }
-  } else if (shape == SimBodyDesc::Shape::ConvexPieces) {
-    // Convex pieces of the surface, each a polyhedral hull as above (SAT + clipping contacts,
-    // persistent manifolds per piece), within 1% of the body's size of its hollows.
-    if (!desc.convex_pieces_m.empty()) {
-      state->pieces_mesh = desc.convex_pieces_m;
-    } else {
-      // Computed once per surface in a run (identical objects share it), in the mesh frame,
-      // whose axes are usually the shape's (a turned glass's floor lies in an axis plane there,
-      // and the cuts are axis-aligned); then moved to the body frame.
-      uint64_t key = fnv1a(desc.surface_positions.data(), desc.surface_positions.size() * sizeof(double));
-      key = fnv1a(desc.surface_triangles.data(), desc.surface_triangles.size() * sizeof(uint32_t), key);
-      auto known = pieces_by_surface_.find(key);
-      if (known == pieces_by_surface_.end()) {
-        const auto start = std::chrono::steady_clock::now();
-        ConvexPiecesSettings piece_settings;
-        piece_settings.max_concavity_m = ConvexPiecesRecipe::concavity_of_size * state->size_m;
-        piece_settings.max_edge_m = ConvexPiecesRecipe::max_edge_of_size * state->size_m;
-        piece_settings.max_pieces = ConvexPiecesRecipe::max_pieces;
-        ConvexPieces pieces = convexPieces(desc.surface_positions, desc.surface_triangles, piece_settings);
-        state->pieces_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        known = pieces_by_surface_.emplace(key, std::move(pieces.hull_points)).first;
-      }
-      state->pieces_mesh = known->second;
-      state->pieces_computed = true;
-    }
-    if (state->pieces_mesh.empty()) {
-      return badInput(bodyLabel(desc, index) + ": cannot split " + std::to_string(vertex_count) +
-                      " vertices into convex pieces");
-    }
-    state->margin_m = std::clamp(0.001 * state->min_extent_m, 1e-6, 1e-3);
-    auto compound = std::make_unique<btCompoundShape>(true, int(state->pieces_mesh.size()));
-    for (const std::vector<double>& points : state->pieces_mesh) {
-      auto piece = std::make_unique<btConvexHullShape>();
-      for (size_t k = 0; k + 2 < points.size(); k += 3)
-        piece->addPoint(state->body_from_mesh(btVector3(points[k], points[k + 1], points[k + 2])), false);
-      piece->recalcLocalAabb();
-      piece->setMargin(state->margin_m);
-      if (piece->getNumPoints() <= kMaxPolyhedralVertices) piece->initializePolyhedralFeatures();
-      compound->addChildShape(btTransform::getIdentity(), piece.get());
-      state->pieces.push_back(std::move(piece));
-    }
-    state->shape = std::move(compound);
+    if (principal_axes.determinant() < 0)
+      principal_axes.setValue(  // keep a proper rotation
+          -principal_axes[0][0], principal_axes[0][1], principal_axes[0][2], -principal_axes[1][0],
+          principal_axes[1][1], principal_axes[1][2], -principal_axes[2][0], principal_axes[2][1],
+          principal_axes[2][2]);
+    centre = toBt(desc.centre_m);
+    state.mass_kg = desc.mass_kg;
+  }
+  state.mesh_from_body = btTransform(principal_axes, centre);
+  state.body_from_mesh = state.mesh_from_body.inverse();
+
+  // Surface in the body frame, and its bounding box for the size-dependent tolerances.
+  state.body_xyz.resize(3 * vertex_count);
+  btVector3 lo(SIMD_INFINITY, SIMD_INFINITY, SIMD_INFINITY), hi = -lo;
+  for (size_t v = 0; v < vertex_count; ++v) {
+    const btVector3 p = state.body_from_mesh(
+        btVector3(desc.surface_positions[3 * v], desc.surface_positions[3 * v + 1], desc.surface_positions[3 * v + 2]));
+    for (int k = 0; k < 3; ++k) state.body_xyz[3 * v + size_t(k)] = p[k];
+    lo.setMin(p);
+    hi.setMax(p);
+  }
+  const btVector3 extent = hi - lo;
+  state.size_m = std::max({extent.x(), extent.y(), extent.z()});
+  state.min_extent_m = std::min({extent.x(), extent.y(), extent.z()});
+  state.compliance_per_pa = desc.compliance_per_pa;
+  // The Hertz patch takes each body as the sphere of its volume (as the render's contact time
+  // does); a static body is flat.
+  state.contact_radius_m =
+      desc.is_static ? 0.0
+      : desc.contact_radius_m > 0.0
+          ? desc.contact_radius_m
+          : std::cbrt(3.0 * std::abs(meshVolume(state.body_xyz, desc.surface_triangles)) / (4.0 * M_PI));
+  if (!(state.size_m > 0.0)) {
+    return badInput(bodyLabel(desc, index) + ": all " + std::to_string(vertex_count) +
+                    " surface vertices coincide (zero size)");
+  }
+  // Collision margin: Bullet's default 4 cm would swallow a 2 cm object. Default 2% of the
+  // thinnest extent, refined per shape kind below.
+  state.margin_m = std::clamp(0.02 * state.min_extent_m, 1e-5, 0.01);
+  if (state.min_extent_m <= 0.0) state.margin_m = std::clamp(0.002 * state.size_m, 1e-5, 0.01);
+  return {};
+}
+
+Status Simulation::buildHullShape(size_t index, BodyState& state, const std::shared_ptr<const SimHull>& hull) {
+  const SimBodyDesc& desc = descs_[index];
+  const size_t vertex_count = desc.surface_positions.size() / 3;
+  const size_t hull_vertices = hull->vertices_xyz.size() / 3;
+  const double hull_volume = hull->volume_m3;
+  if (hull_vertices == 0) {
+    return badInput(bodyLabel(desc, index) + ": cannot build a convex hull of " + std::to_string(vertex_count) +
+                    " vertices");
+  }
+  // A hull whose points all lie on one sphere about the centre of mass is a sphere: Bullet's
+  // sphere shape is exact and costs O(1) per support query instead of O(points), which is what
+  // makes marbles rolling in a GImpact bowl affordable.
+  double radius_sum = 0.0, radius_min = INFINITY, radius_max = 0.0;
+  for (size_t v = 0; v < hull_vertices; ++v) {
+    const double r = hullVertex(*hull, v).length();
+    radius_sum += r;
+    radius_min = std::min(radius_min, r);
+    radius_max = std::max(radius_max, r);
+  }
+  const double radius_mean = hull_vertices > 0 ? radius_sum / double(hull_vertices) : 0.0;
+  // All points on one sphere is not enough (a box's corners are too): the hull must also fill
+  // the sphere.
+  const double sphere_volume = 4.0 / 3.0 * M_PI * radius_mean * radius_mean * radius_mean;
+  if (hull_vertices >= 12 && radius_max - radius_min <= 0.02 * radius_mean && hull_volume >= 0.9 * sphere_volume) {
+    // Volume-equivalent radius, so the sphere neither floats above nor sinks into the ground.
+    const double radius = std::cbrt(3.0 * std::abs(meshVolume(state.body_xyz, desc.surface_triangles)) / (4.0 * M_PI));
+    state.shape = std::make_unique<btSphereShape>(radius > 0 ? radius : radius_mean);
+    state.sphere_radius_m = radius > 0 ? radius : radius_mean;
+    state.margin_m = state.shape->getMargin();
   } else {
-    state->indices.assign(desc.surface_triangles.begin(), desc.surface_triangles.end());
-    state->mesh_interface = std::make_unique<btTriangleIndexVertexArray>(
-        int(state->indices.size() / 3), state->indices.data(), int(3 * sizeof(int)), int(vertex_count),
-        state->body_xyz.data(), int(3 * sizeof(btScalar)));
-    // Triangles carry their margin on both sides: keep it thinner than for hulls.
-    // (They also add to the surface, unlike the shrunk hull: a tray placed on the ground starts
-    // that far inside it, so keep the margin small: 0.2% of the thinnest extent, at most 1 mm.)
-    state->margin_m = std::clamp(0.002 * state->min_extent_m, 1e-5, 1e-3);
-    if (desc.is_static) {
-      auto bvh = std::make_unique<btBvhTriangleMeshShape>(state->mesh_interface.get(), true);
-      bvh->setMargin(state->margin_m);
-      state->shape = std::move(bvh);
-    } else {
-      // A moving concave body needs GImpact (btBvhTriangleMeshShape is static only).
-      auto gimpact = std::make_unique<btGImpactMeshShape>(state->mesh_interface.get());
-      gimpact->setMargin(state->margin_m);
-      gimpact->updateBound();
-      state->shape = std::move(gimpact);
-      if (!gimpact_registered_) {
-        btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher_.get());
-        gimpact_registered_ = true;
+    auto convex = std::make_unique<btConvexHullShape>();
+    if (hull_vertices <= kMaxPolyhedralVertices) {
+      // Polyhedral features make hull-hull contacts use face clipping, which yields the whole
+      // contact patch (up to 4 points) in the first substep; plain GJK/EPA adds one point per
+      // substep, so a box landing flat on another first touches at one corner, tips and slides
+      // [Bullet btPolyhedralContactClipping]. The clipping works on the bare points (no margin)
+      // while GJK paths (ground, triangles) add the margin, so the points are the hull itself
+      // and the margin is tiny: 0.1% of the thinnest extent, the most a body can float.
+      // Edge-edge clipping costs O(edges^2) per pair, hence only for modest hulls.
+      state.margin_m = std::clamp(0.001 * state.min_extent_m, 1e-6, 1e-3);
+      for (size_t v = 0; v < hull_vertices; ++v) convex->addPoint(hullVertex(*hull, v), false);
+      convex->recalcLocalAabb();
+      convex->setMargin(state.margin_m);
+      convex->initializePolyhedralFeatures();
+      // A hull that is a box about the centre of mass along the body axes (a box primitive,
+      // whose principal axes are its edges) gets a box twin for spheres: the same solid as GJK
+      // sees the hull (the points' box grown by the margin, edges rounded by it), on which a
+      // sphere takes the exact closest-point test instead of GJK (SphereAwareConvexConvex).
+      if (btVector3 half_m; boxHalfExtents(*hull, 1e-9 * state.size_m, half_m)) {
+        state.box_twin = std::make_unique<btBoxShape>(half_m + btVector3(1, 1, 1) * state.margin_m);
+        state.box_twin->setMargin(state.margin_m);
+        sphere_hull_->box_twins[convex.get()] = state.box_twin.get();
       }
+    } else {
+      // Large hull, GJK/EPA only: those need a real margin for robust penetration depths, and
+      // btConvexHullShape puts it outside the points. Shrink the hull by the margin first
+      // (btConvexHullComputer moves each face inwards) so the collision surface is the mesh's
+      // hull with edges rounded by the margin; the shrink is clamped to a quarter of the inner
+      // radius for thin bodies.
+      const std::shared_ptr<const SimHull> shrunk = bodyHull(state.body_xyz, state.margin_m, 0.25);
+      const double shrink = shrunk->shrink_m;
+      const SimHull& used = shrink > 0.0 && !shrunk->vertices_xyz.empty() ? *shrunk : *hull;
+      for (size_t v = 0; v < used.vertices_xyz.size() / 3; ++v) convex->addPoint(hullVertex(used, v), false);
+      convex->recalcLocalAabb();
+      if (shrink > 0.0) state.margin_m = shrink;  // the clamp may have made it smaller
+      convex->setMargin(state.margin_m);
+    }
+    state.shape = std::move(convex);
+  }
+  return {};
+}
+
+Status Simulation::buildPiecesShape(size_t index, BodyState& state) {
+  const SimBodyDesc& desc = descs_[index];
+  const size_t vertex_count = desc.surface_positions.size() / 3;
+  // Convex pieces of the surface, each a polyhedral hull as above (SAT + clipping contacts,
+  // persistent manifolds per piece), within 1% of the body's size of its hollows.
+  if (!desc.convex_pieces_m.empty()) {
+    state.pieces_mesh = desc.convex_pieces_m;
+  } else {
+    // Computed once per surface in a run (identical objects share it), in the mesh frame,
+    // whose axes are usually the shape's (a turned glass's floor lies in an axis plane there,
+    // and the cuts are axis-aligned); then moved to the body frame.
+    uint64_t key = fnv1a(desc.surface_positions.data(), desc.surface_positions.size() * sizeof(double));
+    key = fnv1a(desc.surface_triangles.data(), desc.surface_triangles.size() * sizeof(uint32_t), key);
+    auto known = pieces_by_surface_.find(key);
+    if (known == pieces_by_surface_.end()) {
+      const auto start = std::chrono::steady_clock::now();
+      ConvexPiecesSettings piece_settings;
+      piece_settings.max_concavity_m = ConvexPiecesRecipe::concavity_of_size * state.size_m;
+      piece_settings.max_edge_m = ConvexPiecesRecipe::max_edge_of_size * state.size_m;
+      piece_settings.max_pieces = ConvexPiecesRecipe::max_pieces;
+      ConvexPieces pieces = convexPieces(desc.surface_positions, desc.surface_triangles, piece_settings);
+      state.pieces_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      known = pieces_by_surface_.emplace(key, std::move(pieces.hull_points)).first;
+    }
+    state.pieces_mesh = known->second;
+    state.pieces_computed = true;
+  }
+  if (state.pieces_mesh.empty()) {
+    return badInput(bodyLabel(desc, index) + ": cannot split " + std::to_string(vertex_count) +
+                    " vertices into convex pieces");
+  }
+  state.margin_m = std::clamp(0.001 * state.min_extent_m, 1e-6, 1e-3);
+  auto compound = std::make_unique<btCompoundShape>(true, int(state.pieces_mesh.size()));
+  for (const std::vector<double>& points : state.pieces_mesh) {
+    auto piece = std::make_unique<btConvexHullShape>();
+    for (size_t k = 0; k + 2 < points.size(); k += 3)
+      piece->addPoint(state.body_from_mesh(btVector3(points[k], points[k + 1], points[k + 2])), false);
+    piece->recalcLocalAabb();
+    piece->setMargin(state.margin_m);
+    if (piece->getNumPoints() <= kMaxPolyhedralVertices) piece->initializePolyhedralFeatures();
+    compound->addChildShape(btTransform::getIdentity(), piece.get());
+    state.pieces.push_back(std::move(piece));
+  }
+  state.shape = std::move(compound);
+  return {};
+}
+
+void Simulation::buildMeshShape(size_t index, BodyState& state) {
+  const SimBodyDesc& desc = descs_[index];
+  const size_t vertex_count = desc.surface_positions.size() / 3;
+  state.indices.assign(desc.surface_triangles.begin(), desc.surface_triangles.end());
+  state.mesh_interface = std::make_unique<btTriangleIndexVertexArray>(
+      int(state.indices.size() / 3), state.indices.data(), int(3 * sizeof(int)), int(vertex_count),
+      state.body_xyz.data(), int(3 * sizeof(btScalar)));
+  // Triangles carry their margin on both sides: keep it thinner than for hulls.
+  // (They also add to the surface, unlike the shrunk hull: a tray placed on the ground starts
+  // that far inside it, so keep the margin small: 0.2% of the thinnest extent, at most 1 mm.)
+  state.margin_m = std::clamp(0.002 * state.min_extent_m, 1e-5, 1e-3);
+  if (desc.is_static) {
+    auto bvh = std::make_unique<btBvhTriangleMeshShape>(state.mesh_interface.get(), true);
+    bvh->setMargin(state.margin_m);
+    state.shape = std::move(bvh);
+  } else {
+    // A moving concave body needs GImpact (btBvhTriangleMeshShape is static only).
+    auto gimpact = std::make_unique<btGImpactMeshShape>(state.mesh_interface.get());
+    gimpact->setMargin(state.margin_m);
+    gimpact->updateBound();
+    state.shape = std::move(gimpact);
+    if (!gimpact_registered_) {
+      btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher_.get());
+      gimpact_registered_ = true;
     }
   }
+}
 
+void Simulation::addRigidBody(size_t index, const btQuaternion& orientation, std::unique_ptr<BodyState> state) {
+  const SimBodyDesc& desc = descs_[index];
   // A driven body starts where its path is at t = 0 (drive() moves it on from there).
   const PathPose start = pathPose(desc.path, 0.0);
   const btTransform world_from_mesh =
@@ -379,7 +409,6 @@ Status Simulation::buildBody(size_t index, const btQuaternion& orientation) {
   // triangle tests for 1.3 s of sleep). Moving bodies still collide with it.
   if (desc.is_static) state->rigid->forceActivationState(ISLAND_SLEEPING);
   bodies_.push_back(std::move(state));
-  return {};
 }
 
 }  // namespace strike::detail

@@ -241,6 +241,17 @@ class Simulation {
 
  private:
   Status buildBody(size_t index, const btQuaternion& orientation);
+  /// The body's principal frame (centre of mass, principal axes and moments), its surface in
+  /// that frame, its size, contact radius and default margin (buildBody).
+  Status bodyFrame(size_t index, BodyState& state);
+  /// A convex hull, or a sphere when the hull is one, or a box's polyhedral hull with its box twin.
+  Status buildHullShape(size_t index, BodyState& state, const std::shared_ptr<const SimHull>& hull);
+  /// Convex pieces of a concave moving body, each a polyhedral hull.
+  Status buildPiecesShape(size_t index, BodyState& state);
+  /// The exact triangle mesh: a BVH when static, GImpact when it moves.
+  void buildMeshShape(size_t index, BodyState& state);
+  /// The rigid body at its start pose and velocity, with its CCD, sleep and drive settings, in the world.
+  void addRigidBody(size_t index, const btQuaternion& orientation, std::unique_ptr<BodyState> state);
   /// The convex hull of body-frame points shrunk by shrink_m, through SimSettings::hull_memo or
   /// else computed once per distinct point set in the run (shapes.cpp).
   std::shared_ptr<const SimHull> bodyHull(const std::vector<double>& xyz, double shrink_m, double shrink_clamp);

@@ -30,9 +30,8 @@ std::string point(const Eigen::MatrixXd& V, Eigen::Index i) {
 
 std::string prefix(const std::string& source) { return source + ": error: "; }
 
-}  // namespace
-
-Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<MeshWarning>* warnings) {
+/// The order, the arrays' shapes, finite coordinates and node indices in range.
+Status checkArrays(const TetMesh& mesh, const std::string& source) {
   const int nodes_per_tet = mesh.order == 2 ? 10 : 4;
   if (mesh.order != 1 && mesh.order != 2) {
     return internalError(prefix(source) + "element order " + std::to_string(mesh.order) + ", expected 1 or 2");
@@ -66,8 +65,14 @@ Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<M
       }
     }
   }
+  return {};
+}
 
-  // Orientation and degeneracy.
+/// Refuses a degenerate tet (flat or collapsed) and turns an inverted one (negative volume)
+/// the right way round, with a warning that counts them.
+Status orientTets(TetMesh& mesh, const std::string& source, std::vector<MeshWarning>* warnings) {
+  const int nodes_per_tet = mesh.order == 2 ? 10 : 4;
+  const Eigen::Index num_tets = mesh.tets.rows();
   constexpr int kEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}};
   int64_t inverted = 0;
   for (Eigen::Index t = 0; t < num_tets; ++t) {
@@ -104,32 +109,41 @@ Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<M
     warnings->push_back({source + ": warning: " + std::to_string(inverted) + " of " + std::to_string(num_tets) +
                          " tets were inverted (negative volume) and have been reoriented"});
   }
+  return {};
+}
 
-  // A face shared by three or more tets means overlapping elements: the FEM would double the
-  // stiffness there. Checked here because extractSurface silently ignores such faces.
-  {
-    constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-    std::vector<std::array<int, 4>> faces;  // sorted corners + tet
-    faces.reserve(static_cast<size_t>(4 * num_tets));
-    for (Eigen::Index t = 0; t < num_tets; ++t) {
-      for (const auto& f : kFaces) {
-        std::array<int, 4> key = {mesh.tets(t, f[0]), mesh.tets(t, f[1]), mesh.tets(t, f[2]), static_cast<int>(t)};
-        std::sort(key.begin(), key.begin() + 3);
-        faces.push_back(key);
-      }
-    }
-    std::sort(faces.begin(), faces.end());
-    for (size_t i = 0; i + 2 < faces.size(); ++i) {
-      if (std::equal(faces[i].begin(), faces[i].begin() + 3, faces[i + 2].begin())) {
-        return badInput(prefix(source) + "face (" + std::to_string(faces[i][0]) + ", " + std::to_string(faces[i][1]) +
-                        ", " + std::to_string(faces[i][2]) + ") is shared by tets " + std::to_string(faces[i][3]) +
-                        ", " + std::to_string(faces[i + 1][3]) + " and " + std::to_string(faces[i + 2][3]) +
-                        ", expected at most 2 (overlapping or duplicated tets)");
-      }
+/// A face shared by three or more tets means overlapping elements: the FEM would double the
+/// stiffness there. Checked here because extractSurface silently ignores such faces.
+Status checkSharedFaces(const TetMesh& mesh, const std::string& source) {
+  const Eigen::Index num_tets = mesh.tets.rows();
+  constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  std::vector<std::array<int, 4>> faces;  // sorted corners + tet
+  faces.reserve(static_cast<size_t>(4 * num_tets));
+  for (Eigen::Index t = 0; t < num_tets; ++t) {
+    for (const auto& f : kFaces) {
+      std::array<int, 4> key = {mesh.tets(t, f[0]), mesh.tets(t, f[1]), mesh.tets(t, f[2]), static_cast<int>(t)};
+      std::sort(key.begin(), key.begin() + 3);
+      faces.push_back(key);
     }
   }
+  std::sort(faces.begin(), faces.end());
+  for (size_t i = 0; i + 2 < faces.size(); ++i) {
+    if (std::equal(faces[i].begin(), faces[i].begin() + 3, faces[i + 2].begin())) {
+      return badInput(prefix(source) + "face (" + std::to_string(faces[i][0]) + ", " + std::to_string(faces[i][1]) +
+                      ", " + std::to_string(faces[i][2]) + ") is shared by tets " + std::to_string(faces[i][3]) + ", " +
+                      std::to_string(faces[i + 1][3]) + " and " + std::to_string(faces[i + 2][3]) +
+                      ", expected at most 2 (overlapping or duplicated tets)");
+    }
+  }
+  return {};
+}
 
-  // Unreferenced nodes: a free node would add a zero row to K and M (a spurious zero mode).
+/// Unreferenced nodes: a free node would add a zero row to K and M (a spurious zero mode).
+/// They are removed, with a warning.
+void removeUnusedNodes(TetMesh& mesh, const std::string& source, std::vector<MeshWarning>* warnings) {
+  const int nodes_per_tet = mesh.order == 2 ? 10 : 4;
+  const Eigen::Index num_nodes = mesh.nodes.rows();
+  const Eigen::Index num_tets = mesh.tets.rows();
   std::vector<int> new_index(static_cast<size_t>(num_nodes), -1);
   for (Eigen::Index t = 0; t < num_tets; ++t) {
     for (int k = 0; k < nodes_per_tet; ++k) new_index[static_cast<size_t>(mesh.tets(t, k))] = 0;
@@ -152,6 +166,16 @@ Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<M
                            std::to_string(num_nodes) + " nodes that no tet uses"});
     }
   }
+}
+
+}  // namespace
+
+Status validateAndRepair(TetMesh& mesh, const std::string& source, std::vector<MeshWarning>* warnings) {
+  if (Status ok = checkArrays(mesh, source); !ok) return ok;
+  if (Status ok = orientTets(mesh, source, warnings); !ok) return ok;
+  if (Status ok = checkSharedFaces(mesh, source); !ok) return ok;
+  removeUnusedNodes(mesh, source, warnings);
+  const Eigen::Index num_tets = mesh.tets.rows();
   mesh.surface = extractSurface(mesh.tets.leftCols(4));
   if (mesh.surface.rows() == 0) {
     return internalError(prefix(source) + "the mesh has " + std::to_string(num_tets) + " tets but no boundary faces");

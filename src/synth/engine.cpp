@@ -165,7 +165,11 @@ void SoundEngine::mixPath(float* m, float* cur, const float* target, BinauralPat
 // A silent path's filters still hold its last samples: they ring out through zeros.
 void SoundEngine::flushBinaural(VoiceState& v, int path, float* const* out, size_t frames) const {
   BinauralPath& binaural = v.binaural_[path];
-  if (!binaural.ringing()) return;
+  if (!binaural.ready()) return;
+  if (!binaural.ringing()) {
+    binaural.skip(frames);
+    return;
+  }
   std::fill(v.mono_.begin(), v.mono_.begin() + static_cast<std::ptrdiff_t>(frames), 0.0f);
   binaural.process(v.mono_.data(), frames, out[0], out[1]);
 }

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "small_fft.hpp"
+
 namespace strike {
 namespace {
 
@@ -132,88 +134,236 @@ void hrtfResponses(const HrtfSet& set, const HrtfBlend& blend, float* left, floa
   blendEar(set, blend, set.right, set.onset_right, right);
 }
 
-void BinauralPath::init(std::shared_ptr<const HrtfSet> set, size_t max_block_frames) {
+BinauralPath::BinauralPath() = default;
+BinauralPath::~BinauralPath() = default;
+BinauralPath::BinauralPath(BinauralPath&&) noexcept = default;
+BinauralPath& BinauralPath::operator=(BinauralPath&&) noexcept = default;
+
+void BinauralPath::init(std::shared_ptr<const HrtfSet> set) {
   set_ = std::move(set);
   const size_t taps = set_->taps;
-  for (int ear = 0; ear < 2; ++ear) {
-    h_[ear].assign(taps, 0.0f);
-    next_h_[ear].assign(taps, 0.0f);
-    scratch_[ear].assign(max_block_frames, 0.0f);
+  partitions_ = taps > kPartition ? (taps - 1) / kPartition : 0;
+  fft_ = std::make_unique<detail::SmallFft>(kSpectrum);
+  for (Filter& f : filter_) {
+    for (std::vector<float>& head : f.head) head.assign(kPartition, 0.0f);
+    f.re.assign(partitions_ * kSpectrum, 0.0f);
+    f.im.assign(partitions_ * kSpectrum, 0.0f);
   }
-  history_.assign(taps - 1 + max_block_frames, 0.0f);
-  quiet_run_ = taps;
-  changed_ = false;
+  for (std::vector<float>& r : responses_) r.assign(taps, 0.0f);
+  history_.assign(2 * kPartition - 1, 0.0f);
+  block_.assign(kSpectrum, 0.0f);
+  spectra_re_.assign(partitions_ * kSpectrum, 0.0f);
+  spectra_im_.assign(partitions_ * kSpectrum, 0.0f);
+  work_re_.assign(kSpectrum, 0.0f);
+  work_im_.assign(kSpectrum, 0.0f);
+  for (auto& filter : tail_)
+    for (std::vector<float>& ear : filter) ear.assign(kPartition, 0.0f);
+  for (auto& filter : out_)
+    for (std::vector<float>& ear : filter) ear.assign(kPartition, 0.0f);
+  newest_ = phase_ = 0;
+  fading_ = block_started_ = false;
+  quiet_run_ = silentAfter();
 }
+
+size_t BinauralPath::silentAfter() const { return (partitions_ + 3) * kPartition; }
 
 void BinauralPath::clear() {
   if (!set_) return;
   std::fill(history_.begin(), history_.end(), 0.0f);
-  quiet_run_ = set_->taps;
-  changed_ = false;
+  std::fill(block_.begin(), block_.end(), 0.0f);
+  std::fill(spectra_re_.begin(), spectra_re_.end(), 0.0f);
+  std::fill(spectra_im_.begin(), spectra_im_.end(), 0.0f);
+  for (auto& filter : tail_)
+    for (std::vector<float>& ear : filter) std::fill(ear.begin(), ear.end(), 0.0f);
+  if (fading_) {
+    std::swap(filter_[0], filter_[1]);
+    blend_ = next_blend_;
+  }
+  newest_ = phase_ = 0;
+  fading_ = block_started_ = false;
+  quiet_run_ = silentAfter();
 }
 
 void BinauralPath::aim(const std::array<double, 3>& local, bool at_once) {
   const double length = std::sqrt(local[0] * local[0] + local[1] * local[1] + local[2] * local[2]);
   std::array<double, 3> u = {1.0, 0.0, 0.0};  // the listener's frame to SOFA's (x forward, y left)
   if (length > 1e-9) u = {local[1] / length, -local[0] / length, local[2] / length};
-  const HrtfBlend blend = hrtfBlend(*set_, u);
-  if (at_once) {
-    blend_ = next_blend_ = blend;
-    hrtfResponses(*set_, blend, h_[0].data(), h_[1].data());
-    changed_ = false;
-  } else if (blend == blend_) {
-    changed_ = false;
-  } else if (!changed_ || !(blend == next_blend_)) {
-    next_blend_ = blend;
-    hrtfResponses(*set_, blend, next_h_[0].data(), next_h_[1].data());
-    changed_ = true;
+  wanted_ = hrtfBlend(*set_, u);
+  if (!at_once) return;  // taken at the next block's start
+  blend_ = wanted_;
+  makeFilter(blend_, filter_[0]);
+  fading_ = false;
+  if (block_started_) tailOf(filter_[0], tail_[0][0].data(), tail_[0][1].data());
+}
+
+void BinauralPath::makeFilter(const HrtfBlend& blend, Filter& filter) {
+  const size_t taps = set_->taps;
+  hrtfResponses(*set_, blend, responses_[0].data(), responses_[1].data());
+  for (int ear = 0; ear < 2; ++ear)
+    for (size_t k = 0; k < kPartition; ++k) filter.head[ear][k] = k < taps ? responses_[ear][k] : 0.0f;
+  const float scale = 1.0f / static_cast<float>(kSpectrum);  // the inverse transform's 1 / N
+  for (size_t p = 0; p < partitions_; ++p) {
+    for (size_t k = 0; k < kPartition; ++k) {
+      const size_t tap = (p + 1) * kPartition + k;
+      work_re_[k] = tap < taps ? responses_[0][tap] : 0.0f;
+      work_im_[k] = tap < taps ? responses_[1][tap] : 0.0f;
+    }
+    std::fill(work_re_.begin() + kPartition, work_re_.end(), 0.0f);
+    std::fill(work_im_.begin() + kPartition, work_im_.end(), 0.0f);
+    fft_->forward(work_re_.data(), work_im_.data());
+    for (size_t k = 0; k < kSpectrum; ++k) {
+      filter.re[p * kSpectrum + k] = work_re_[k] * scale;
+      filter.im[p * kSpectrum + k] = work_im_[k] * scale;
+    }
   }
 }
 
-// y[n] = sum_k h[k] x[n - k], the sum over k in increasing order for every n (the loop over n
-// inside vectorizes without reordering any sum: the same bits with or without SIMD).
-void BinauralPath::convolve(const float* h, size_t frames, float* out) const {
-  const size_t taps = set_->taps;
-  std::fill(out, out + frames, 0.0f);
-  const float* x = history_.data() + (taps - 1);
-  for (size_t k = 0; k < taps; ++k) {
-    const float hk = h[k];
-    const float* xk = x - k;
-    for (size_t n = 0; n < frames; ++n) out[n] += hk * xk[n];
+// Overlap-save [Oppenheim & Schafer, Discrete-Time Signal Processing, sec. 8.7.3]: with X_j the
+// spectrum of input blocks j - 1 and j, and H_p that of partition p (taps p B .. p B + B - 1,
+// zero-padded), the last B samples of the inverse of H_p X_j are partition p's output over block
+// j + p. Block k's output from partitions 1..P is then the inverse of sum_p H_p X_{k-p}: blocks
+// that are complete when block k begins. Both ears in one transform: the responses are packed as
+// left + i right, the input is real, so the real part of the result is the left ear's output and
+// the imaginary part the right's.
+void BinauralPath::tailOf(const Filter& filter, float* left, float* right) {
+  if (partitions_ == 0) {
+    std::fill(left, left + kPartition, 0.0f);
+    std::fill(right, right + kPartition, 0.0f);
+    return;
   }
+  std::fill(work_re_.begin(), work_re_.end(), 0.0f);
+  std::fill(work_im_.begin(), work_im_.end(), 0.0f);
+  float* yr = work_re_.data();
+  float* yi = work_im_.data();
+  for (size_t p = 0; p < partitions_; ++p) {
+    const size_t slot = (newest_ + partitions_ - p) % partitions_;  // X_{k-1-p}
+    const float* xr = spectra_re_.data() + slot * kSpectrum;
+    const float* xi = spectra_im_.data() + slot * kSpectrum;
+    const float* hr = filter.re.data() + p * kSpectrum;
+    const float* hi = filter.im.data() + p * kSpectrum;
+    for (size_t k = 0; k < kSpectrum; ++k) {
+      yr[k] += xr[k] * hr[k] - xi[k] * hi[k];
+      yi[k] += xr[k] * hi[k] + xi[k] * hr[k];
+    }
+  }
+  fft_->inverse(yr, yi);
+  std::copy(yr + kPartition, yr + kSpectrum, left);
+  std::copy(yi + kPartition, yi + kSpectrum, right);
+}
+
+void BinauralPath::startBlock() {
+  if (!(wanted_ == blend_)) {
+    next_blend_ = wanted_;
+    makeFilter(next_blend_, filter_[1]);
+    fading_ = true;
+  }
+  tailOf(filter_[0], tail_[0][0].data(), tail_[0][1].data());
+  if (fading_) tailOf(filter_[1], tail_[1][0].data(), tail_[1][1].data());
+  block_started_ = true;
+}
+
+void BinauralPath::endBlock() {
+  if (partitions_ > 0) {
+    newest_ = (newest_ + 1) % partitions_;
+    float* xr = spectra_re_.data() + newest_ * kSpectrum;
+    float* xi = spectra_im_.data() + newest_ * kSpectrum;
+    const bool silent = std::all_of(block_.begin(), block_.end(), [](float x) { return x == 0.0f; });
+    if (silent) {
+      std::fill(xr, xr + kSpectrum, 0.0f);
+      std::fill(xi, xi + kSpectrum, 0.0f);
+    } else {
+      std::copy(block_.begin(), block_.end(), xr);
+      std::fill(xi, xi + kSpectrum, 0.0f);
+      fft_->forward(xr, xi);
+    }
+  }
+  std::copy(block_.begin() + kPartition, block_.end(), block_.begin());
+  if (fading_) {
+    std::swap(filter_[0], filter_[1]);
+    blend_ = next_blend_;
+    fading_ = false;
+  }
+  block_started_ = false;
+  phase_ = 0;
 }
 
 void BinauralPath::process(const float* in, size_t frames, float* left, float* right) {
-  const size_t taps = set_->taps;
-  std::copy(in, in + frames, history_.begin() + static_cast<std::ptrdiff_t>(taps - 1));
-  size_t trailing = 0;
-  while (trailing < frames && in[frames - 1 - trailing] == 0.0f) ++trailing;
-  quiet_run_ = trailing == frames ? quiet_run_ + frames : trailing;
   float* out[2] = {left, right};
-  for (int ear = 0; ear < 2; ++ear) {
-    convolve(h_[ear].data(), frames, scratch_[ear].data());
-    const float* y = scratch_[ear].data();
-    if (!changed_) {
-      for (size_t n = 0; n < frames; ++n) out[ear][n] += y[n];
-      continue;
+  size_t done = 0;
+  while (done < frames) {
+    if (!block_started_) startBlock();
+    const size_t run = std::min(kPartition - phase_, frames - done);
+    const float* x = in + done;
+    std::copy(x, x + run, history_.begin() + (kPartition - 1));
+    std::copy(x, x + run, block_.begin() + static_cast<std::ptrdiff_t>(kPartition + phase_));
+    size_t trailing = 0;
+    while (trailing < run && x[run - 1 - trailing] == 0.0f) ++trailing;
+    quiet_run_ = trailing == run ? quiet_run_ + run : trailing;
+    // y[n] = tail[n] + sum_k h[k] x[n - k], the sum over k in increasing order for every n (the
+    // loop over n inside vectorizes without reordering any sum: the same bits with or without SIMD).
+    const float* now = history_.data() + (kPartition - 1);
+    const int filters = fading_ ? 2 : 1;
+    for (int f = 0; f < filters; ++f)
+      for (int ear = 0; ear < 2; ++ear) {
+        float* y = out_[f][ear].data();
+        std::copy(tail_[f][ear].begin() + static_cast<std::ptrdiff_t>(phase_),
+                  tail_[f][ear].begin() + static_cast<std::ptrdiff_t>(phase_ + run), y);
+        const float* h = filter_[f].head[ear].data();
+        for (size_t k = 0; k < kPartition; ++k) {
+          const float hk = h[k];
+          const float* xk = now - k;
+          for (size_t n = 0; n < run; ++n) y[n] += hk * xk[n];
+        }
+      }
+    for (int ear = 0; ear < 2; ++ear) {
+      float* o = out[ear] + done;
+      const float* y = out_[0][ear].data();
+      if (!fading_) {
+        for (size_t n = 0; n < run; ++n) o[n] += y[n];
+        continue;
+      }
+      // The old filter's output fades out as the new one's fades in, over the block.
+      const float* fresh = out_[1][ear].data();
+      const float inv = 1.0f / static_cast<float>(kPartition);
+      for (size_t n = 0; n < run; ++n) {
+        const float t = static_cast<float>(phase_ + n + 1) * inv;
+        o[n] += (1.0f - t) * y[n] + t * fresh[n];
+      }
     }
-    // The old filter's output fades out as the new one's fades in.
-    float* fresh = scratch_[1 - ear].data();  // free: the other ear's is done or not begun
-    convolve(next_h_[ear].data(), frames, fresh);
-    const float inv = 1.0f / static_cast<float>(frames);
-    for (size_t n = 0; n < frames; ++n) {
-      const float t = static_cast<float>(n + 1) * inv;
-      out[ear][n] += (1.0f - t) * y[n] + t * fresh[n];
+    // Keep the last kPartition - 1 samples for the next run.
+    std::copy(history_.begin() + static_cast<std::ptrdiff_t>(run),
+              history_.begin() + static_cast<std::ptrdiff_t>(run + kPartition - 1), history_.begin());
+    phase_ += run;
+    done += run;
+    if (phase_ == kPartition) endBlock();
+  }
+}
+
+// Silence through a filter with nothing in it: only the block count and a change of direction
+// (which a block of silence would have faded to) move.
+void BinauralPath::skip(size_t frames) {
+  quiet_run_ += frames;
+  while (frames > 0) {
+    if (!block_started_) {
+      if (!(wanted_ == blend_)) {
+        blend_ = wanted_;
+        makeFilter(blend_, filter_[0]);
+      }
+      block_started_ = true;
+    }
+    const size_t run = std::min(kPartition - phase_, frames);
+    phase_ += run;
+    frames -= run;
+    if (phase_ == kPartition) {
+      if (fading_) {
+        std::swap(filter_[0], filter_[1]);
+        blend_ = next_blend_;
+        fading_ = false;
+      }
+      block_started_ = false;
+      phase_ = 0;
     }
   }
-  if (changed_) {
-    h_[0].swap(next_h_[0]);
-    h_[1].swap(next_h_[1]);
-    blend_ = next_blend_;
-    changed_ = false;
-  }
-  // Keep the last taps - 1 samples for the next block.
-  std::memmove(history_.data(), history_.data() + frames, (taps - 1) * sizeof(float));
 }
 
 }  // namespace strike

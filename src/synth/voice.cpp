@@ -199,8 +199,8 @@ VoiceState::VoiceState(const VoiceDesc& desc, const EngineSettings& settings)
     image_ = std::make_unique<ImagePath>(synthSettings(settings), modalObject(bank, desc.weights),
                                          std::max<uint32_t>(settings.max_block_frames, 1));
   if (settings.output == OutputFormat::Binaural && settings.hrtf) {
-    binaural_[0].init(settings.hrtf, std::max<uint32_t>(settings.max_block_frames, 1));
-    if (image_) binaural_[1].init(settings.hrtf, std::max<uint32_t>(settings.max_block_frames, 1));
+    binaural_[0].init(settings.hrtf);
+    if (image_) binaural_[1].init(settings.hrtf);
   }
   const SynthStats bands = synth_.stats();
   rings_ = bands.modes_total > bands.modes_out_of_band;

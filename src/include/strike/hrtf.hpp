@@ -14,10 +14,12 @@
 // rounded to a sample, is put back: the interaural delay is interpolated as a delay, not as
 // a blend of two pulses at different times.
 //
-// Cost: 2 x taps multiply-adds per sample per sounding path (the direct sound and the ground's
-// image of each voice), twice that in a render call whose direction changed (the old and the
-// new filters are both run and cross-faded over the call), nothing for a silent path once its
-// last input has left the filter.
+// Cost, per sounding path (the direct sound and the ground's image of each voice) and per block
+// of kPartition (64) samples: 2 x 64 x 64 multiply-adds for the responses' first 64 taps, one
+// forward and one inverse complex FFT of 128 points, and 128 complex multiply-adds per further
+// partition (8 for KEMAR's 558 taps at 48 kHz): about a fifth of the direct convolution's 2 x 558
+// per sample (docs/listener.md). A block whose direction changed runs the old and the new filters
+// and cross-fades them; a silent path costs nothing once its last input has left the filter.
 #pragma once
 
 #include <array>
@@ -60,34 +62,74 @@ HrtfBlend hrtfBlend(const HrtfSet& set, const std::array<double, 3>& u);
 /// The interpolated responses of a blend: set.taps values into each of left and right.
 void hrtfResponses(const HrtfSet& set, const HrtfBlend& blend, float* left, float* right);
 
+namespace detail {
+class SmallFft;
+}
+
 /// One path's binaural filter: the interpolated responses for its direction, and its input's
-/// history. Allocates in init(), nothing after.
+/// history. The convolution is uniformly partitioned (hrtf.cpp): the responses' first
+/// kHrtfPartition taps run directly on each sample, the rest as partitions of that length
+/// multiplied with the input's blocks in the frequency domain, one block late, so nothing is
+/// delayed. Allocates in init(), nothing after.
 class BinauralPath {
  public:
-  void init(std::shared_ptr<const HrtfSet> set, size_t max_block_frames);
+  /// Samples per partition and per block of the frequency-domain part.
+  static constexpr size_t kPartition = 64;
+  static constexpr size_t kSpectrum = 2 * kPartition;  ///< the transforms' size
+  BinauralPath();
+  ~BinauralPath();
+  BinauralPath(BinauralPath&&) noexcept;
+  BinauralPath& operator=(BinauralPath&&) noexcept;
+  void init(std::shared_ptr<const HrtfSet> set);
   bool ready() const { return set_ != nullptr; }
   /// Forgets the past input (SoundEngine::reset).
   void clear();
-  /// The direction for the next block: `local` is the source relative to the listener in the
-  /// listener's frame (x right, y forward, z up), m; at the listener: straight ahead. `at_once`
-  /// switches without a cross-fade (a path's first block).
+  /// The direction from the next block of kPartition samples on: `local` is the source relative
+  /// to the listener in the listener's frame (x right, y forward, z up), m; at the listener:
+  /// straight ahead. `at_once` switches without a cross-fade (a path's first block).
   void aim(const std::array<double, 3>& local, bool at_once);
-  /// Convolves `in` (frames, <= max_block_frames) with the path's responses and adds the result
-  /// to left and right. A changed direction is cross-faded linearly over the block.
+  /// Convolves `in` (any number of frames) with the path's responses and adds the result to left
+  /// and right. A changed direction is cross-faded linearly over the block of kPartition samples
+  /// where it takes effect. The blocks are counted from the path's first sample: the output does
+  /// not depend on how the input is split into calls.
   void process(const float* in, size_t frames, float* left, float* right);
+  /// Advances a path that is not ringing() by `frames` of silence without computing them.
+  void skip(size_t frames);
   /// Samples of past input still in the filter: a silent path needs process() with zeros until
   /// this is false.
-  bool ringing() const { return set_ && quiet_run_ < set_->taps; }
+  bool ringing() const { return set_ && quiet_run_ < silentAfter(); }
 
  private:
-  void convolve(const float* h, size_t frames, float* out) const;
+  /// One direction's responses: the first kPartition taps of each ear, and the spectra of the
+  /// further partitions, both ears in one (left + i right, zero-padded to 2 kPartition, scaled by
+  /// 1 / (2 kPartition) for the inverse transform).
+  struct Filter {
+    std::vector<float> head[2];
+    std::vector<float> re, im;  ///< partitions_ x 2 kPartition
+  };
+  void makeFilter(const HrtfBlend& blend, Filter& filter);
+  size_t silentAfter() const;
+  void startBlock();
+  void endBlock();
+  void tailOf(const Filter& filter, float* left, float* right);
   std::shared_ptr<const HrtfSet> set_;
-  HrtfBlend blend_{}, next_blend_{};
-  bool changed_ = false;
-  std::vector<float> h_[2], next_h_[2];  ///< left, right
-  std::vector<float> history_;           ///< taps - 1 past samples, then the block's
-  std::vector<float> scratch_[2];
-  size_t quiet_run_ = 0;  ///< trailing zero input samples
+  std::unique_ptr<detail::SmallFft> fft_;
+  size_t partitions_ = 0;                       ///< of the taps after the first kPartition
+  HrtfBlend blend_{}, next_blend_{};            ///< filter_[0]'s and filter_[1]'s
+  HrtfBlend wanted_{};                          ///< the last aim()'s
+  bool fading_ = false;                         ///< this block cross-fades from filter_[0] to filter_[1]
+  bool block_started_ = false;                  ///< the block's tails are computed
+  Filter filter_[2];                            ///< in use, and the one fading in
+  std::vector<float> responses_[2];             ///< taps: scratch for makeFilter
+  std::vector<float> history_;                  ///< kPartition - 1 past samples, then up to kPartition new
+  std::vector<float> block_;                    ///< 2 kPartition: the previous and the current input block
+  std::vector<float> spectra_re_, spectra_im_;  ///< partitions_ x 2 kPartition: the last blocks' spectra
+  size_t newest_ = 0;                           ///< the ring's slot of the last completed block
+  std::vector<float> work_re_, work_im_;        ///< 2 kPartition
+  std::vector<float> tail_[2][2];               ///< [filter][ear] kPartition: this block's output of the partitions
+  std::vector<float> out_[2][2];                ///< [filter][ear] kPartition: scratch
+  size_t phase_ = 0;                            ///< samples of the current block done
+  size_t quiet_run_ = 0;                        ///< trailing zero input samples
 };
 
 }  // namespace strike

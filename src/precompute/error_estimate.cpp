@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Per-mode frequency error estimates (Richardson extrapolation against a coarser mesh, or Tet4 on
-// the corner nodes of a Tet10 mesh) and the tolerance-driven mesh choice. See error_estimate.hpp.
+// the corner nodes of a Tet10 mesh). The tolerance-driven mesh choice is tolerance_search.cpp.
+// See error_estimate.hpp.
 #include "strike/error_estimate.hpp"
 
 #include <Eigen/Geometry>
@@ -11,18 +12,18 @@
 #include <optional>
 #include <sstream>
 
-#include <sys/resource.h>
-
 #include "exclusive_solve.hpp"
+#include "mesh_sizing.hpp"
 #include "strike/constants.hpp"
 #include "strike/fem.hpp"
 
 namespace strike {
 namespace {
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using detail::meanEdge;
+using detail::meshWithTetRatio;
+using detail::secondsSince;
+using detail::SizedMesh;
 
 std::string lowerExtension(const std::string& path) {
   const size_t dot = path.find_last_of('.');
@@ -30,24 +31,6 @@ std::string lowerExtension(const std::string& path) {
   std::string ext = path.substr(dot + 1);
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext;
-}
-
-double meshVolume(const TetMesh& mesh) {
-  double volume = 0.0;
-  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
-    const Eigen::Vector3d p0 = mesh.nodes.row(mesh.tets(t, 0)).transpose();
-    const Eigen::Vector3d e1 = mesh.nodes.row(mesh.tets(t, 1)).transpose() - p0;
-    const Eigen::Vector3d e2 = mesh.nodes.row(mesh.tets(t, 2)).transpose() - p0;
-    const Eigen::Vector3d e3 = mesh.nodes.row(mesh.tets(t, 3)).transpose() - p0;
-    volume += std::abs(e1.dot(e2.cross(e3))) / 6.0;
-  }
-  return volume;
-}
-
-/// Edge of a regular tet with the mesh's mean tet volume (V_regular = a^3 / (6 sqrt 2)).
-double meanEdge(const TetMesh& mesh) {
-  return std::cbrt(6.0 * std::sqrt(2.0) * meshVolume(mesh) /
-                   static_cast<double>(std::max<Eigen::Index>(1, mesh.tets.rows())));
 }
 
 /// The Tet4 mesh on the corner nodes of a Tet10 mesh (nodes renumbered in order of first use).
@@ -111,53 +94,6 @@ Result<CoarseSolve> solveCoarse(const TetMesh& mesh, const PrecomputeSettings& s
 }
 
 double frequencyOf(double lambda) { return std::sqrt(std::max(lambda, 0.0)) / (2.0 * kPi); }
-
-struct SizedMesh {
-  LoadedMesh loaded;
-  double target_edge_m = 0.0;
-};
-
-/// A mesh of `spec` with between `lo` and `hi` times `base_tets` tets, as near `want` times as
-/// the search finds. TetGen's tet count is not a smooth function of the target edge (the mug:
-/// 5.5 mm gives 2.9x the automatic mesh's tets, 5 mm 8.3x, as the quality bound starts to split
-/// the wall), so the edge is searched: from `start_edge` it shrinks (count too low) or grows
-/// (too high) by 1.15 until the count lies in [lo, hi], then halves the step in log space between
-/// the last too-low and too-high edges. At most 8 meshings; the nearest in [lo, hi] wins, or an
-/// error when none lands there.
-Result<SizedMesh> meshWithTetRatio(const std::string& spec, double scale, int order, int64_t max_tets, double base_tets,
-                                   double start_edge, double lo, double hi, double want) {
-  MeshOptions options;
-  options.scale = scale;  // a file in millimetres is meshed in metres
-  options.order = order;
-  options.max_tets = max_tets;
-  double edge = start_edge, too_small = 0.0, too_large = 0.0;  // edges whose counts were too high / too low
-  Result<SizedMesh> best = badInput("no mesh of " + spec + " with " + std::to_string(lo) + " to " + std::to_string(hi) +
-                                    " times " + std::to_string(static_cast<long long>(base_tets)) + " tets was found");
-  double best_distance = INFINITY;
-  for (int attempt = 0; attempt < 8; ++attempt) {
-    options.target_edge_m = edge;
-    Result<LoadedMesh> mesh = loadTetMesh(spec, options);
-    if (!mesh) return mesh.error();
-    const double ratio = static_cast<double>(mesh->mesh.tets.rows()) / base_tets;
-    if (ratio >= lo && ratio <= hi) {
-      const double distance = std::fabs(std::log(ratio / want));
-      if (distance < best_distance) {
-        best_distance = distance;
-        best = SizedMesh{std::move(*mesh), edge};
-      }
-      if (distance < std::log(1.25)) break;
-    }
-    if (ratio < want)
-      too_large = edge;  // coarser than wanted: make the edge smaller
-    else
-      too_small = edge;
-    if (too_small > 0.0 && too_large > 0.0)
-      edge = std::sqrt(too_small * too_large);
-    else
-      edge = ratio < want ? edge / 1.15 : edge * 1.15;
-  }
-  return best;
-}
 
 }  // namespace
 
@@ -373,219 +309,6 @@ std::string lockingWarning(int order, const Material& material) {
   s << "Poisson ratio " << material.poisson << " is nearly incompressible: Tet4 elements lock and give frequencies"
     << " too high (1.5x at 0.49 on a rubber bar); use --order 2 (Tet10)";
   return s.str();
-}
-
-Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& settings, double tolerance) {
-  ToleranceOptions options;
-  options.tolerance = tolerance;
-  return computeModeBankToTolerance(settings, options);
-}
-
-namespace {
-
-/// Peak resident memory of this process so far, bytes (Linux reports ru_maxrss in KiB).
-double peakResidentBytes() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return 1024.0 * static_cast<double>(usage.ru_maxrss);
-}
-
-std::string gigabytes(double bytes) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.2f GB", bytes / 1e9);
-  return text;
-}
-
-}  // namespace
-
-namespace {
-
-/// A step's forecast: the last step's time and peak memory scaled by the DOF ratio.
-struct StepForecast {
-  double seconds = 0.0;  ///< 0: unknown (the first step)
-  double bytes = 0.0;
-};
-
-/// Forecast: the last step's time and peak memory scaled by the DOF ratio, as t ~ n^1.5 and
-/// memory ~ n^1.2 (measured on the mug, Tet10: 47k -> 118k DOF took 2.9x the time and 2.4x
-/// the memory). Before any step: 30 KB per DOF (the mug's first step with its finer-mesh
-/// estimate peaked at 1.42 GB for 47k DOF; without it 11.6 KB per DOF), time unknown.
-StepForecast forecastStep(const std::vector<ToleranceTrial>& trials, size_t dofs) {
-  double forecast_s = 0.0, forecast_bytes = 30e3 * static_cast<double>(dofs);
-  if (!trials.empty()) {
-    const ToleranceTrial& last = trials.back();
-    const double growth = static_cast<double>(dofs) / static_cast<double>(last.dofs);
-    forecast_s = last.seconds * std::pow(growth, 1.5);
-    forecast_bytes = last.peak_bytes * std::pow(growth, 1.2);
-  }
-  return {forecast_s, forecast_bytes};
-}
-
-/// "step N: Tet10, D DOF (T tets), forecast ...": what a step is about to cost.
-std::string announceStep(int step, size_t dofs, long long tets, const StepForecast& forecast) {
-  const double forecast_s = forecast.seconds, forecast_bytes = forecast.bytes;
-  char line[256];
-  std::snprintf(line, sizeof line, "step %d: Tet10, %zu DOF (%lld tets), forecast %s%s", step + 1, dofs, tets,
-                forecast_s > 0 ? "" : "time unknown, ", gigabytes(forecast_bytes).c_str());
-  std::string announce = line;
-  if (forecast_s > 0) {
-    std::snprintf(line, sizeof line, "step %d: Tet10, %zu DOF (%lld tets), forecast %.0f s, %s", step + 1, dofs, tets,
-                  forecast_s, gigabytes(forecast_bytes).c_str());
-    announce = line;
-  }
-  return announce;
-}
-
-/// Why a step's forecast does not fit --max-memory or --max-seconds; empty when it fits.
-std::string overBudget(const ToleranceOptions& options, const StepForecast& forecast, double elapsed) {
-  const double forecast_s = forecast.seconds, forecast_bytes = forecast.bytes;
-  char line[256];
-  std::string over;
-  if (options.max_bytes > 0 && forecast_bytes > options.max_bytes)
-    over = "its forecast memory " + gigabytes(forecast_bytes) + " exceeds --max-memory " + gigabytes(options.max_bytes);
-  else if (options.max_seconds > 0 && forecast_s > 0 && elapsed + forecast_s > options.max_seconds) {
-    std::snprintf(line, sizeof line, "%.1f s spent + %.1f s forecast exceeds --max-seconds %g", elapsed, forecast_s,
-                  options.max_seconds);
-    over = line;
-  }
-  return over;
-}
-
-/// What a step cost and estimated, and whether it met the tolerance.
-ToleranceTrial trialOf(const PrecomputeResult& trial, const LoadedMesh& loaded, double edge,
-                       const StepForecast& forecast, double tolerance) {
-  const double forecast_s = forecast.seconds, forecast_bytes = forecast.bytes;
-  ToleranceTrial t;
-  t.order = 2;
-  t.target_edge_m = edge > 0 ? edge : meanEdge(loaded.mesh);
-  t.dofs = trial.report.dofs;
-  t.seconds = trial.bank.total_seconds + trial.report.error_estimate_seconds;
-  t.peak_bytes = peakResidentBytes();
-  t.forecast_seconds = forecast_s;
-  t.forecast_bytes = forecast_bytes;
-  t.method = trial.report.error_estimate_method;
-  const std::vector<double>& e = trial.bank.frequency_error_estimate;
-  t.max_estimate = e.empty() ? INFINITY : *std::max_element(e.begin(), e.end());
-  t.met = !e.empty() && t.max_estimate <= tolerance;
-  if (trial.bank.modeCount() == 0) {  // nothing in the band to be wrong: refining cannot help
-    t.met = true;
-    t.max_estimate = 0.0;
-  }
-  return t;
-}
-
-/// The next step's mesh: the DOF growth for the error to fall to tolerance / 1.3.
-Result<SizedMesh> nextMesh(const PrecomputeSettings& settings, const ToleranceTrial& t, const LoadedMesh& loaded,
-                           double tolerance, bool exact_geometry) {
-  const double p = t.method == "richardson" && exact_geometry ? 4.0 : 2.0;
-  const double wanted = std::isfinite(t.max_estimate) ? std::pow(1.3 * t.max_estimate / tolerance, 3.0 / p) : 3.0;
-  const double want = std::clamp(wanted, 1.5, kMaxDofGrowthPerStep);
-  const double edge_now = t.target_edge_m;
-  return meshWithTetRatio(settings.mesh_spec, settings.mesh_scale, 2, settings.max_tets,
-                          static_cast<double>(loaded.mesh.tets.rows()), edge_now / std::cbrt(want), 1.3,
-                          kMaxDofGrowthPerStep, want);
-}
-
-}  // namespace
-
-Result<ToleranceResult> computeModeBankToTolerance(const PrecomputeSettings& settings,
-                                                   const ToleranceOptions& options) {
-  const double tolerance = options.tolerance;
-  if (!(tolerance > 0 && tolerance < 1))
-    return badInput("--tolerance = " + std::to_string(tolerance) + " (must be between 0 and 100%)");
-  if (!canRemesh(settings.mesh_spec))
-    return badInput("--tolerance needs a mesh that can be remeshed (a primitive or a surface .obj/.stl/.ply), got " +
-                    settings.mesh_spec);
-  const auto start = std::chrono::steady_clock::now();
-  auto say = [&](const std::string& line) {
-    if (options.log) options.log(line);
-  };
-  // Tet10 throughout: its error falls as h^4 where Tet4's falls as h^2 and locks in bending (the
-  // plate of the README: Tet4 23% off at 11.5k DOF, Tet10 0.5% at 14k). The first step is the
-  // automatic mesh; each next one is finer by the ratio the last estimate asks for (error ~ h^p,
-  // DOF ~ h^-3, with a 1.3 margin), but never more than 3x the DOF (the old search jumped from
-  // 66k to 1.41M DOF on a mug: 826 s, 22 GB) and at least 1.5x.
-  const bool exact_geometry = settings.mesh_spec.rfind("box:", 0) == 0;
-  ToleranceResult out;
-  double edge = 0.0;  // 0: automatic
-  std::optional<LoadedMesh> next_mesh;
-  for (int step = 0; step < kMaxToleranceSteps; ++step) {
-    PrecomputeSettings trial_settings = settings;
-    trial_settings.order = 2;
-    trial_settings.error_estimate = true;
-    trial_settings.acoustic_transfer = false;  // solved once, on the bank chosen
-    LoadedMesh loaded;
-    if (step == 0) {
-      MeshOptions mesh_options;
-      mesh_options.scale = settings.mesh_scale;
-      mesh_options.order = 2;
-      mesh_options.max_tets = settings.max_tets;
-      Result<LoadedMesh> first = loadTetMesh(settings.mesh_spec, mesh_options);
-      if (!first) return first.error();
-      loaded = std::move(*first);
-    } else {
-      loaded = std::move(*next_mesh);
-    }
-    trial_settings.target_edge_m = edge;
-    const size_t dofs = 3 * static_cast<size_t>(loaded.mesh.nodes.rows());
-    const StepForecast forecast = forecastStep(out.trials, dofs);
-    const double elapsed = secondsSince(start);
-    const std::string announce = announceStep(step, dofs, static_cast<long long>(loaded.mesh.tets.rows()), forecast);
-    const std::string over = overBudget(options, forecast, elapsed);
-    if (!over.empty()) {
-      if (out.trials.empty())
-        return badInput("--tolerance: the first step (" + std::to_string(dofs) +
-                        " DOF) does not fit the budget: " + over);
-      out.stopped_by_budget = true;
-      out.stop_reason =
-          "stopped before step " + std::to_string(step + 1) + " (" + std::to_string(dofs) + " DOF): " + over;
-      say(out.stop_reason);
-      break;
-    }
-    say(announce);
-    Result<PrecomputeResult> trial = computeModeBankForMesh(loaded, trial_settings);
-    // A later step whose own solve forecasts more than the budget ends the refinement as the
-    // step's forecast above would have (the finest result kept).
-    if (!trial && trial.error().kind == ErrorKind::BadInput && !out.trials.empty() && options.max_bytes > 0) {
-      out.stopped_by_budget = true;
-      out.stop_reason = "stopped in step " + std::to_string(step + 1) + ": " + trial.error().message;
-      say(out.stop_reason);
-      break;
-    }
-    if (!trial) return trial.error();
-    ToleranceTrial t = trialOf(*trial, loaded, edge, forecast, tolerance);
-    if (trial->bank.modeCount() == 0)
-      say("step " + std::to_string(step + 1) + ": no modes in the band, nothing to refine");
-    char line[256];
-    std::snprintf(line, sizeof line, "step %d: %.1f s, peak %s, max est. error %.3g%% (%s)%s", step + 1, t.seconds,
-                  gigabytes(t.peak_bytes).c_str(), 100.0 * t.max_estimate, t.method.c_str(), t.met ? ": met" : "");
-    say(line);
-    out.trials.push_back(t);
-    out.chosen = std::move(*trial);
-    if (t.met) {
-      out.met = true;
-      break;
-    }
-    if (step + 1 == kMaxToleranceSteps) break;
-    Result<SizedMesh> finer = nextMesh(settings, t, loaded, tolerance, exact_geometry);
-    if (!finer) {
-      out.stop_reason = "stopped after step " + std::to_string(step + 1) + ": " + finer.error().message;
-      say(out.stop_reason);
-      break;
-    }
-    edge = finer->target_edge_m;
-    next_mesh = std::move(finer->loaded);
-  }
-  if (settings.acoustic_transfer && !out.trials.empty()) {
-    TransferSettings transfer = settings.transfer;
-    if (options.max_seconds > 0) transfer.max_seconds = std::max(1e-3, options.max_seconds - secondsSince(start));
-    if (Status solved = solveTransferInto(out.chosen.bank, transfer, settings.transfer_max_freq_hz, settings.progress);
-        !solved)
-      return solved.error();
-    out.chosen.bank.total_seconds += out.chosen.bank.transfer_seconds;
-  }
-  out.total_seconds = secondsSince(start);
-  return out;
 }
 
 }  // namespace strike

@@ -19,8 +19,7 @@
 // The trajectory is the poses the voice was given, at the engine time of the physics step they
 // end (or now, outside a step), one kept every kKeyframeSpacing_s and linear between them. The
 // emission time is solved at every kSegmentFrames-th frame of the engine's clock (a contraction
-// by v / c per iteration) and linear between them, so the result does not depend on how the
-// frames are split into render calls. The lines are read with a windowed sinc
+// by v / c per iteration), once, and is linear between them. The lines are read with a windowed sinc
 // (fractional_delay.hpp). A body that comes to rest goes back to scheduled delays once it is
 // silent and its lines have been heard to the end: at rest, the same bytes as never moving.
 #include <algorithm>
@@ -91,6 +90,7 @@ void SoundEngine::followPose(VoiceState& v) {
     }
     v.sound_end_frame_ = frames_;
     v.heard_to_frame_ = static_cast<double>(frames_);
+    v.read_map_ = {};
     v.moving_ = true;
   } else if (v.moving_ && !moved && silent(v) &&
              v.heard_to_frame_ >= static_cast<double>(v.sound_end_frame_) + FractionalDelay::kTaps) {
@@ -142,17 +142,30 @@ double SoundEngine::emissionFrame(const VoiceState& v, int path, uint64_t frame)
 
 double SoundEngine::hearPath(VoiceState& v, int path, float* heard, size_t frames) {
   const float* line = v.line_[static_cast<size_t>(path)].data();
-  uint64_t base = frames_ - frames_ % kSegmentFrames;
-  double from = emissionFrame(v, path, base), to = emissionFrame(v, path, base + kSegmentFrames);
-  double x = from;
+  // The map from output frame to emission frame is linear over each segment, and each segment's
+  // ends are solved once: a pose that arrives later (or replaces the newest) bends the map from
+  // the next segment on and never moves a sample already mapped, so the read position never jumps.
+  VoiceState::ReadMap& m = v.read_map_[static_cast<size_t>(path)];
+  const uint64_t base = frames_ - frames_ % kSegmentFrames;
+  if (m.valid && m.base + kSegmentFrames == base) {
+    m.base = base;
+    m.from = m.to;
+    m.to = emissionFrame(v, path, base + kSegmentFrames);
+  } else if (!m.valid || m.base != base) {
+    m.base = base;
+    m.from = emissionFrame(v, path, base);
+    m.to = emissionFrame(v, path, base + kSegmentFrames);
+    m.valid = true;
+  }
+  double x = m.from;
   for (size_t n = 0; n < frames; ++n) {
     const uint64_t frame = frames_ + n;
-    if (frame == base + kSegmentFrames) {
-      base += kSegmentFrames;
-      from = to;
-      to = emissionFrame(v, path, base + kSegmentFrames);
+    if (frame == m.base + kSegmentFrames) {
+      m.base += kSegmentFrames;
+      m.from = m.to;
+      m.to = emissionFrame(v, path, m.base + kSegmentFrames);
     }
-    x = from + (to - from) * (static_cast<double>(frame - base) / static_cast<double>(kSegmentFrames));
+    x = m.from + (m.to - m.from) * (static_cast<double>(frame - m.base) / static_cast<double>(kSegmentFrames));
     heard[n] = fractional_delay_->read(line, v.line_mask_, x);
   }
   v.heard_from_m_[static_cast<size_t>(path)] = positionAt(v, x / settings_.synth.sample_rate_hz);

@@ -125,6 +125,14 @@ struct MovingSource {
   uint64_t line_mask_ = 0;
   uint64_t sound_end_frame_ = 0;  ///< just after the last non-zero sample written
   double heard_to_frame_ = 0.0;   ///< emission position of the last sample read (both paths)
+  /// Per path: the emission frame at the ends of the current kSegmentFrames-long segment of the
+  /// engine's clock (frames base and base + kSegmentFrames), solved once each.
+  struct ReadMap {
+    bool valid = false;
+    uint64_t base = 0;
+    double from = 0.0, to = 0.0;
+  };
+  std::array<ReadMap, 2> read_map_{};
   /// Each path's source position at the emission time of this render call's last sample.
   std::array<std::array<double, 3>, 2> heard_from_m_{};
 };

@@ -22,13 +22,14 @@ namespace fs = std::filesystem;
 constexpr double kStaleTemporarySeconds = 86400.0;
 
 /// A cache entry: 16 hex digits and .modes (a bank), .pieces (a body's convex pieces, written
-/// beside its bank by the render), .hull (a body's convex hull, likewise) or .transfer (a unit
-/// transfer of `--similar` with the transfer, normalized_problem.hpp); all pruned alike, and
-/// recomputed when missing.
+/// beside its bank by the render), .hull (a body's convex hull, likewise), .transfer (a unit
+/// transfer of `--similar` with the transfer, normalized_problem.hpp) or .hrtf (a binaural
+/// render's responses at its rate, hrtf_cache.hpp); all pruned alike, and recomputed when missing.
 bool isEntryName(const std::string& name) {
   if (name.size() < 17) return false;
   const std::string suffix = name.substr(16);
-  if (suffix != ".modes" && suffix != ".pieces" && suffix != ".hull" && suffix != ".transfer") return false;
+  if (suffix != ".modes" && suffix != ".pieces" && suffix != ".hull" && suffix != ".transfer" && suffix != ".hrtf")
+    return false;
   for (size_t i = 0; i < 16; ++i)
     if (!std::isxdigit(static_cast<unsigned char>(name[i]))) return false;
   return true;

@@ -12,14 +12,17 @@
 #include <memory>
 
 #include "bank_source.hpp"
+#include "hrtf_cache.hpp"
 #include "hull_cache.hpp"
 #include "pieces_cache.hpp"
 #include "playback.hpp"
 #include "strike/atomic_file.hpp"
 #include "strike/bank.hpp"
+#include "strike/bank_cache.hpp"
 #include "strike/contact_noise.hpp"
 #include "strike/element_order.hpp"
 #include "strike/materials.hpp"
+#include "strike/read_file.hpp"
 #include "strike/render_session.hpp"
 #include "strike/scene_checks.hpp"
 #include "strike/synth.hpp"
@@ -494,6 +497,27 @@ Status playScene(RenderRun& run) {
   return {};
 }
 
+// The binaural output's responses at the render's rate: from the cache when it holds this SOFA
+// file's at this rate (hrtf_cache.hpp), else read and resampled by libmysofa and written there.
+Result<std::shared_ptr<const HrtfSet>> headRelatedResponses(const RenderSettings& settings, double rate) {
+  const std::string& file = settings.hrtf_file.empty() ? kDefaultHrtfFile : settings.hrtf_file;
+  if (settings.cache_dir.empty()) return loadSofaHrtf(file, rate);
+  Result<std::string> bytes = readWholeFile(file, uint64_t(1) << 28);
+  if (!bytes) return loadSofaHrtf(file, rate);  // which names what is wrong with it
+  const uint64_t key = hrtfKey(*bytes, rate);
+  const std::string path = hrtfPath(settings.cache_dir, key);
+  if (Result<HrtfSet> cached = readHrtf(path, key)) {
+    auto set = std::make_shared<HrtfSet>(std::move(*cached));
+    if (prepareHrtfSet(*set).empty() && set->sample_rate_hz == rate) {
+      touchCacheEntry(path);
+      return std::shared_ptr<const HrtfSet>(std::move(set));
+    }
+  }
+  Result<std::shared_ptr<const HrtfSet>> loaded = loadSofaHrtf(file, rate);
+  if (loaded) (void)writeHrtf(path, key, **loaded);  // a failed cache write costs the next render time only
+  return loaded;
+}
+
 }  // namespace
 
 // The render as a pipeline: prepare bodies -> simulate -> provide banks -> play.
@@ -506,8 +530,7 @@ Result<RenderResult> renderScene(const Scene& scene, const RenderSettings& setti
   run.max_freq_hz = synthesizedTopHz(scene.max_freq_hz, run.rate);
   run.engine_settings = renderEngineSettings(scene, settings, run.rate, run.max_freq_hz);
   if (settings.output_format == OutputFormat::Binaural) {  // before any solve: a bad file fails at once
-    Result<std::shared_ptr<const HrtfSet>> hrtf =
-        loadSofaHrtf(settings.hrtf_file.empty() ? kDefaultHrtfFile : settings.hrtf_file, run.rate);
+    Result<std::shared_ptr<const HrtfSet>> hrtf = headRelatedResponses(settings, run.rate);
     if (!hrtf) return hrtf.error();
     run.engine_settings.hrtf = std::move(*hrtf);
   }

@@ -9,8 +9,8 @@
 
 #include "cli/args.hpp"
 #include "cli/commands.hpp"
-#include "strike/interrupt_cleanup.hpp"
-#include "strike/modal.hpp"
+#include "strike/core/interrupt_cleanup.hpp"
+#include "strike/modal/modal.hpp"
 
 namespace {
 

@@ -12,16 +12,16 @@
 #include <optional>
 #include <string>
 
-#include "strike/audio.hpp"
-#include "strike/bank.hpp"
-#include "strike/error_estimate.hpp"
-#include "strike/hit.hpp"
-#include "strike/materials.hpp"
-#include "strike/precompute.hpp"
-#include "strike/render.hpp"
-#include "strike/render_session.hpp"
-#include "strike/scene.hpp"
-#include "strike/similar_bank.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/precompute/error_estimate.hpp"
+#include "strike/scene/hit.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/precompute/precompute.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/render_session.hpp"
+#include "strike/scene/scene.hpp"
+#include "strike/precompute/similar_bank.hpp"
 
 namespace py = pybind11;
 

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-# Exact similarity (src/include/strike/similar_bank.hpp): a scaled, other-material copy of a
+# Exact similarity (src/include/strike/precompute/similar_bank.hpp): a scaled, other-material copy of a
 # solved bank against a direct solve of the scaled object, to solver precision.
 import numpy as np
 import pytest

@@ -9,8 +9,8 @@
 
 #include "analyze_lines.hpp"
 #include "impact_onsets.hpp"
-#include "strike/audio.hpp"
-#include "strike/constants.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/core/constants.hpp"
 
 namespace strike {
 namespace {

@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "analyze_lines.hpp"
-#include "strike/constants.hpp"
+#include "strike/core/constants.hpp"
 
 namespace strike::detail {
 namespace {

@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "strike/audio.hpp"
+#include "strike/audio/audio.hpp"
 
 namespace strike::detail {
 

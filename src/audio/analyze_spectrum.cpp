@@ -11,7 +11,7 @@
 
 #include "analyze_lines.hpp"
 #include "fftw_lock.hpp"
-#include "strike/constants.hpp"
+#include "strike/core/constants.hpp"
 
 namespace strike::detail {
 namespace {

@@ -12,9 +12,9 @@
 #include <cstring>
 #include <limits>
 
-#include "strike/atomic_file.hpp"  // temporaryPathFor
-#include "strike/audio.hpp"
-#include "strike/interrupt_cleanup.hpp"
+#include "strike/core/atomic_file.hpp"  // temporaryPathFor
+#include "strike/audio/audio.hpp"
+#include "strike/core/interrupt_cleanup.hpp"
 
 namespace strike {
 namespace {

@@ -4,7 +4,7 @@
 #include <array>
 #include <cstring>
 
-#include "strike/audio.hpp"
+#include "strike/audio/audio.hpp"
 
 namespace strike {
 namespace {

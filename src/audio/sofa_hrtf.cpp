@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SOFA files through libmysofa (sofa_hrtf.hpp).
-#include "strike/sofa_hrtf.hpp"
+#include "strike/audio/sofa_hrtf.hpp"
 
 #include <mysofa.h>
 

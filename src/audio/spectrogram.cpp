@@ -10,9 +10,9 @@
 
 #include "fftw_lock.hpp"
 #include "plot.hpp"
-#include "strike/atomic_file.hpp"
-#include "strike/audio.hpp"
-#include "strike/constants.hpp"
+#include "strike/core/atomic_file.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/core/constants.hpp"
 
 namespace strike {
 namespace {

@@ -27,9 +27,9 @@
 #include <cstring>
 #include <limits>
 
-#include "strike/bank.hpp"
-#include "strike/hash.hpp"
-#include "strike/read_file.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/core/hash.hpp"
+#include "strike/core/read_file.hpp"
 
 namespace strike {
 namespace {

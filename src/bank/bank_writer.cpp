@@ -2,8 +2,8 @@
 // writeBank: a bank to a file, atomically. Its own target (strike_bank_writer) because atomic
 // writes come with the interrupt-cleanup registry (strike_output), a process global that
 // libstrike, which links strike_bank, must not carry.
-#include "strike/atomic_file.hpp"
-#include "strike/bank.hpp"
+#include "strike/core/atomic_file.hpp"
+#include "strike/bank/bank.hpp"
 
 namespace strike {
 

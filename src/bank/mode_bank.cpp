@@ -4,7 +4,7 @@
 #include <cmath>
 #include <string>
 
-#include "strike/bank.hpp"
+#include "strike/bank/bank.hpp"
 
 namespace strike {
 

@@ -35,14 +35,14 @@
 //  - the phase and direction of the sound (magnitude only, rms over directions) and the near
 //    field (d ~ body size). The ground's image and air absorption are the paths' (sound_paths.cpp,
 //    air_absorption.cpp) and the room is left out, with either model.
-#include "strike/radiation_strength.hpp"
+#include "strike/bank/radiation_strength.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
 
-#include "strike/listener.hpp"
+#include "strike/core/air.hpp"
 
 namespace strike {
 

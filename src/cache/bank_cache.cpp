@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/bank_cache.hpp"
+#include "strike/cache/bank_cache.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>

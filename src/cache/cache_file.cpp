@@ -3,9 +3,9 @@
 
 #include <cstdio>
 
-#include "strike/atomic_file.hpp"
-#include "strike/hash.hpp"
-#include "strike/read_file.hpp"
+#include "strike/core/atomic_file.hpp"
+#include "strike/core/hash.hpp"
+#include "strike/core/read_file.hpp"
 
 namespace strike::cache_file {
 

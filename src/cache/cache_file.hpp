@@ -8,7 +8,7 @@
 #include <cstring>
 #include <string>
 
-#include "strike/result.hpp"
+#include "strike/core/result.hpp"
 
 namespace strike::cache_file {
 

@@ -9,7 +9,7 @@
 #include <cerrno>
 #include <utility>
 
-#include "strike/interrupt_cleanup.hpp"
+#include "strike/core/interrupt_cleanup.hpp"
 
 namespace strike {
 

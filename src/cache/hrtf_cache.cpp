@@ -2,7 +2,7 @@
 #include "hrtf_cache.hpp"
 
 #include "cache_file.hpp"
-#include "strike/hash.hpp"
+#include "strike/core/hash.hpp"
 
 namespace strike {
 namespace {

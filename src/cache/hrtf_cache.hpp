@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// A binaural render's head-related responses (HrtfSet, strike/hrtf.hpp) cached beside the mode
+// A binaural render's head-related responses (HrtfSet, strike/synth/hrtf.hpp) cached beside the mode
 // banks, resampled to the render's rate, keyed by a hash of the SOFA file's bytes and the rate:
 // reading the KEMAR set with libmysofa and resampling it to 48 kHz costs ~0.45 s of CPU every
 // render, reading it back ~5 ms. The same file at the same rate gives the same responses, bit for
@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <string>
 
-#include "strike/hrtf.hpp"
-#include "strike/result.hpp"
+#include "strike/synth/hrtf.hpp"
+#include "strike/core/result.hpp"
 
 namespace strike {
 

@@ -5,7 +5,7 @@
 #include <cstring>
 
 #include "cache_file.hpp"
-#include "strike/hash.hpp"
+#include "strike/core/hash.hpp"
 
 namespace strike {
 namespace {

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Bodies' convex hulls (SimHull, strike/sim.hpp) cached beside the mode banks, keyed by a hash
+// Bodies' convex hulls (SimHull, strike/sim/sim.hpp) cached beside the mode banks, keyed by a hash
 // of the points they are the hull of: Bullet's hull of a plate's 14,000 surface points costs
 // ~3 ms every render, reading it back ~0.05 ms. The same points give the same hull, bit for bit,
 // so a render is the same bytes with the cache cold or warm. Internal to strike_scene.
@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "strike/result.hpp"
-#include "strike/sim.hpp"
+#include "strike/core/result.hpp"
+#include "strike/sim/sim.hpp"
 
 namespace strike {
 

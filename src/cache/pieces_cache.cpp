@@ -5,8 +5,8 @@
 #include <cstring>
 
 #include "cache_file.hpp"
-#include "strike/bank.hpp"
-#include "strike/sim.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/sim/sim.hpp"
 
 namespace strike {
 namespace {

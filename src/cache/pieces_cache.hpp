@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "strike/result.hpp"
+#include "strike/core/result.hpp"
 
 namespace strike {
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// libstrike's context: the sound engine (strike/engine.hpp) that `strike render` also runs, owned
+// libstrike's context: the sound engine (strike/synth/engine.hpp) that `strike render` also runs, owned
 // by the audio thread, and the lock-free queues that carry the main thread's commands and any
 // thread's impacts and physics steps to it. Shared by the main thread's files
 // (strike.cpp, strike_context.cpp, strike_bank.cpp, strike_objects.cpp) and strike_audio.cpp
@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "ring.hpp"
-#include "strike/bank.hpp"
-#include "strike/engine.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/synth/engine.hpp"
 #include "strike/strike.h"
 
 namespace strike::detail {

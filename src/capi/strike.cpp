@@ -5,7 +5,7 @@
 // in one guard that maps exceptions to status codes, so nothing throws across the ABI.
 //
 // Design (see strike.h for the thread contract):
-//  - One engine: the context owns the SoundEngine that `strike render` runs (strike/engine.hpp):
+//  - One engine: the context owns the SoundEngine that `strike render` runs (strike/synth/engine.hpp):
 //    the contact scheduler, the voices and the listener model. Only the audio thread touches it.
 //  - Objects: each is a Voice (its oscillators, projector and contact state), built on the main
 //    thread with all the memory it will use and handed to the audio thread by an Install

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // libstrike, audio-thread half: impacts and physics steps in (from any thread, through lock-free
 // queues), audio out. strike_render() applies the main thread's commands, then the queued
-// physics steps and impacts, in order, to the sound engine (strike/engine.hpp), then renders.
+// physics steps and impacts, in order, to the sound engine (strike/synth/engine.hpp), then renders.
 // Nothing here allocates, locks or throws once the context exists.
 #include <algorithm>
 #include <cmath>

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "strike/synth.hpp"
+#include "strike/synth/synth.hpp"
 
 #include "capi_internal.hpp"
 #include "main_thread.hpp"

@@ -11,7 +11,7 @@
 #include <new>
 #include <vector>
 
-#include "strike/synth.hpp"
+#include "strike/synth/synth.hpp"
 
 #include "capi_internal.hpp"
 #include "main_thread.hpp"

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/atomic_file.hpp"
+#include "strike/core/atomic_file.hpp"
 
 #include <unistd.h>
 
@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "strike/interrupt_cleanup.hpp"
+#include "strike/core/interrupt_cleanup.hpp"
 
 namespace strike {
 

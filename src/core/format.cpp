@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/format.hpp"
+#include "strike/core/format.hpp"
 
 #include <sstream>
 

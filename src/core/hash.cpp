@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/hash.hpp"
+#include "strike/core/hash.hpp"
 
 #include <cstring>
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/interrupt_cleanup.hpp"
+#include "strike/core/interrupt_cleanup.hpp"
 
 #include <signal.h>
 #include <unistd.h>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/parse_size.hpp"
+#include "strike/core/parse_size.hpp"
 
 #include <cctype>
 #include <cerrno>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/read_file.hpp"
+#include "strike/core/read_file.hpp"
 
 #include <sys/stat.h>
 

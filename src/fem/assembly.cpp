@@ -20,7 +20,7 @@
 #include <Eigen/Dense>
 
 #include "quadrature.hpp"
-#include "strike/fem.hpp"
+#include "strike/fem/fem.hpp"
 
 namespace strike {
 

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <string>
 
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 

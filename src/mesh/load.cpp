@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "mesh_io.hpp"
-#include "strike/hash.hpp"
-#include "strike/mesh.hpp"
+#include "strike/core/hash.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 

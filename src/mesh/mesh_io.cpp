@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <system_error>
 
-#include "strike/read_file.hpp"
+#include "strike/core/read_file.hpp"
 
 namespace strike::detail {
 

@@ -9,8 +9,8 @@
 #include <string>
 #include <string_view>
 
-#include "strike/mesh.hpp"
-#include "strike/result.hpp"
+#include "strike/mesh/mesh.hpp"
+#include "strike/core/result.hpp"
 
 namespace strike::detail {
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "mesh_io.hpp"
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 #include "triangle_soup.hpp"
 
 namespace strike {

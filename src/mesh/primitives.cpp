@@ -12,9 +12,9 @@
 
 #include <Eigen/Geometry>  // cross()
 
-#include "strike/constants.hpp"
-#include "strike/format.hpp"
-#include "strike/mesh.hpp"
+#include "strike/core/constants.hpp"
+#include "strike/core/format.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "mesh_io.hpp"
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 

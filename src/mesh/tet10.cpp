@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 

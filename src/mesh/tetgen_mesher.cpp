@@ -19,8 +19,8 @@
 
 #include <Eigen/Geometry>  // cross()
 
-#include "strike/format.hpp"
-#include "strike/mesh.hpp"
+#include "strike/core/format.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "mesh_io.hpp"
-#include "strike/format.hpp"
-#include "strike/mesh.hpp"
+#include "strike/core/format.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 

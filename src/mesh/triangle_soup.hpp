@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "strike/format.hpp"  // formatNumber(v, 17): the readers' numbers in messages, exact
-#include "strike/mesh.hpp"
-#include "strike/result.hpp"
+#include "strike/core/format.hpp"  // formatNumber(v, 17): the readers' numbers in messages, exact
+#include "strike/mesh/mesh.hpp"
+#include "strike/core/result.hpp"
 
 namespace strike::detail {
 

@@ -7,7 +7,7 @@
 
 #include <Eigen/SparseCore>
 
-#include "strike/result.hpp"
+#include "strike/core/result.hpp"
 #include "two_parts.hpp"
 
 namespace strike::detail {

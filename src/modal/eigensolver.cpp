@@ -41,7 +41,7 @@
 
 #include "cholmod_solver.hpp"
 #include "lanczos.hpp"
-#include "strike/modal.hpp"
+#include "strike/modal/modal.hpp"
 #include "two_parts.hpp"
 
 // OpenBLAS thread control, weak so that another BLAS (no such functions) still links.

@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "cholmod_solver.hpp"
-#include "strike/modal.hpp"
-#include "strike/result.hpp"
+#include "strike/modal/modal.hpp"
+#include "strike/core/result.hpp"
 #include "two_parts.hpp"
 
 namespace strike::detail {

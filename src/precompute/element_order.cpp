@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/element_order.hpp"
+#include "strike/precompute/element_order.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -8,8 +8,8 @@
 #include <string>
 #include <utility>
 
-#include "strike/error_estimate.hpp"
-#include "strike/precompute.hpp"
+#include "strike/precompute/error_estimate.hpp"
+#include "strike/precompute/precompute.hpp"
 
 namespace strike {
 

@@ -2,7 +2,7 @@
 // Per-mode frequency error estimates (Richardson extrapolation against a coarser mesh, or Tet4 on
 // the corner nodes of a Tet10 mesh). The tolerance-driven mesh choice is tolerance_search.cpp.
 // See error_estimate.hpp.
-#include "strike/error_estimate.hpp"
+#include "strike/precompute/error_estimate.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -14,8 +14,8 @@
 
 #include "exclusive_solve.hpp"
 #include "mesh_sizing.hpp"
-#include "strike/constants.hpp"
-#include "strike/fem.hpp"
+#include "strike/core/constants.hpp"
+#include "strike/fem/fem.hpp"
 
 namespace strike {
 namespace {

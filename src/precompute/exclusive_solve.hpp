@@ -7,7 +7,7 @@
 
 #include <mutex>
 
-#include "strike/modal.hpp"
+#include "strike/modal/modal.hpp"
 
 namespace strike {
 

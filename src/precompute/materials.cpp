@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/materials.hpp"
+#include "strike/precompute/materials.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "strike/format.hpp"
+#include "strike/core/format.hpp"
 
 namespace strike {
 

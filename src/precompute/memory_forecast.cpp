@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "strike/modal.hpp"
-#include "strike/precompute.hpp"
+#include "strike/modal/modal.hpp"
+#include "strike/precompute/precompute.hpp"
 
 namespace strike {
 

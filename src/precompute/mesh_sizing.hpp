@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <string>
 
-#include "strike/mesh.hpp"
-#include "strike/result.hpp"
+#include "strike/mesh/mesh.hpp"
+#include "strike/core/result.hpp"
 
 namespace strike::detail {
 

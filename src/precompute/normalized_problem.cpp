@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/normalized_problem.hpp"
+#include "strike/precompute/normalized_problem.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "strike/hash.hpp"
-#include "strike/materials.hpp"
-#include "strike/similar_bank.hpp"
+#include "strike/core/hash.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/precompute/similar_bank.hpp"
 
 namespace strike {
 namespace {

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/precompute.hpp"
+#include "strike/precompute/precompute.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -7,11 +7,11 @@
 #include <map>
 
 #include "exclusive_solve.hpp"
-#include "strike/element_order.hpp"
-#include "strike/error_estimate.hpp"
-#include "strike/fem.hpp"
-#include "strike/materials.hpp"
-#include "strike/radiation_strength.hpp"
+#include "strike/precompute/element_order.hpp"
+#include "strike/precompute/error_estimate.hpp"
+#include "strike/fem/fem.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/bank/radiation_strength.hpp"
 
 namespace strike {
 namespace {

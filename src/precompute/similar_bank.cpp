@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: MIT
-#include "strike/similar_bank.hpp"
+#include "strike/precompute/similar_bank.hpp"
 
 #include <charconv>
 #include <cmath>
 #include <string>
 
-#include "strike/precompute.hpp"
-#include "strike/radiation_strength.hpp"
+#include "strike/precompute/precompute.hpp"
+#include "strike/bank/radiation_strength.hpp"
 
 namespace strike {
 

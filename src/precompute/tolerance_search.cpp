@@ -11,7 +11,7 @@
 #include <optional>
 
 #include "mesh_sizing.hpp"
-#include "strike/error_estimate.hpp"
+#include "strike/precompute/error_estimate.hpp"
 
 namespace strike {
 

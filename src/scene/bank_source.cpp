@@ -9,9 +9,9 @@
 #include <filesystem>
 
 #include "bank_strategy.hpp"
-#include "strike/atomic_file.hpp"
-#include "strike/bank_cache.hpp"
-#include "strike/render_session.hpp"
+#include "strike/core/atomic_file.hpp"
+#include "strike/cache/bank_cache.hpp"
+#include "strike/scene/render_session.hpp"
 
 namespace strike {
 namespace {

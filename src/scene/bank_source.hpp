@@ -15,12 +15,12 @@
 #include <string>
 #include <vector>
 
-#include "strike/bank.hpp"
-#include "strike/normalized_problem.hpp"
-#include "strike/precompute.hpp"
-#include "strike/render.hpp"
-#include "strike/sim.hpp"
-#include "strike/synth.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/precompute/normalized_problem.hpp"
+#include "strike/precompute/precompute.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/sim/sim.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike {
 

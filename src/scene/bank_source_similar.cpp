@@ -12,8 +12,8 @@
 
 #include "bank_strategy.hpp"
 #include "cache_lock.hpp"
-#include "strike/bank_cache.hpp"
-#include "strike/element_order.hpp"
+#include "strike/cache/bank_cache.hpp"
+#include "strike/precompute/element_order.hpp"
 
 namespace strike {
 namespace {

@@ -1,15 +1,15 @@
 // SPDX-License-Identifier: MIT
-// One impact on one object (strike/hit.hpp): moved out of tools/cli/cmd_hit.cpp unchanged so the
+// One impact on one object (strike/scene/hit.hpp): moved out of tools/cli/cmd_hit.cpp unchanged so the
 // CLI and the Python package share it.
-#include "strike/hit.hpp"
+#include "strike/scene/hit.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "strike/engine.hpp"
-#include "strike/materials.hpp"
-#include "strike/render.hpp"
+#include "strike/synth/engine.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/scene/render.hpp"
 
 namespace strike {
 

@@ -6,11 +6,11 @@
 #include <memory>
 #include <vector>
 
-#include "strike/audio.hpp"
-#include "strike/engine.hpp"
-#include "strike/progress.hpp"
-#include "strike/render.hpp"
-#include "strike/sim.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/synth/engine.hpp"
+#include "strike/core/progress.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/sim/sim.hpp"
 
 namespace strike {
 

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The render as a pipeline. Follow renderScene() from the bottom of the file: prepare bodies ->
 // simulate -> provide banks (bank_source.hpp: only for what was heard) -> play (playback.cpp).
-#include "strike/render.hpp"
-#include "strike/sofa_hrtf.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/audio/sofa_hrtf.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -16,16 +16,16 @@
 #include "hull_cache.hpp"
 #include "pieces_cache.hpp"
 #include "playback.hpp"
-#include "strike/atomic_file.hpp"
-#include "strike/bank.hpp"
-#include "strike/bank_cache.hpp"
-#include "strike/contact_noise.hpp"
-#include "strike/element_order.hpp"
-#include "strike/materials.hpp"
-#include "strike/read_file.hpp"
-#include "strike/render_session.hpp"
-#include "strike/scene_checks.hpp"
-#include "strike/synth.hpp"
+#include "strike/core/atomic_file.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/cache/bank_cache.hpp"
+#include "strike/synth/contact_noise.hpp"
+#include "strike/precompute/element_order.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/core/read_file.hpp"
+#include "strike/scene/render_session.hpp"
+#include "strike/scene/scene_checks.hpp"
+#include "strike/synth/synth.hpp"
 #include "surfaces.hpp"
 
 namespace strike {

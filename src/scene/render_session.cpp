@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/render_session.hpp"
+#include "strike/scene/render_session.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,8 @@
 #include <mutex>
 #include <utility>
 
-#include "strike/bank.hpp"
-#include "strike/synth.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike {
 namespace {

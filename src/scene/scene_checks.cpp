@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "strike/scene_checks.hpp"
+#include "strike/scene/scene_checks.hpp"
 
 #include <algorithm>
 #include <array>

@@ -8,11 +8,11 @@
 #include <set>
 
 #include "scene_json.hpp"
-#include "strike/atomic_file.hpp"
-#include "strike/listener.hpp"
-#include "strike/materials.hpp"
-#include "strike/scene.hpp"
-#include "strike/spatializer.hpp"
+#include "strike/core/atomic_file.hpp"
+#include "strike/core/air.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/scene/scene.hpp"
+#include "strike/synth/spatializer.hpp"
 
 namespace strike {
 namespace {

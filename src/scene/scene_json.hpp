@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "strike/materials.hpp"
-#include "strike/result.hpp"
-#include "strike/scene.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/core/result.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike::detail {
 

@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "scene_json.hpp"
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike::detail {
 namespace {

@@ -3,8 +3,8 @@
 
 #include <cmath>
 
-#include "strike/hash.hpp"
-#include "strike/materials.hpp"
+#include "strike/core/hash.hpp"
+#include "strike/precompute/materials.hpp"
 
 namespace strike {
 namespace {

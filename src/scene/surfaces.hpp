@@ -5,9 +5,9 @@
 // roughness) read the same numbers.
 #pragma once
 
-#include "strike/contact_noise.hpp"
-#include "strike/material.hpp"
-#include "strike/scene.hpp"
+#include "strike/synth/contact_noise.hpp"
+#include "strike/core/material.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike {
 

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // A driven body's pose between its keyframes (path.hpp).
-#include "strike/path.hpp"
+#include "strike/sim/path.hpp"
 
 #include <algorithm>
 #include <cmath>

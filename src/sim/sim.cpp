@@ -10,7 +10,7 @@
 // Static bodies and the ground keep body frame = mesh frame.
 //
 // This file builds the world and runs it; the other parts are listed in simulation.hpp.
-#include "strike/sim.hpp"
+#include "strike/sim/sim.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -15,8 +15,8 @@
 #include <utility>
 #include <vector>
 
-#include "strike/result.hpp"
-#include "strike/sim.hpp"
+#include "strike/core/result.hpp"
+#include "strike/sim/sim.hpp"
 
 #include <BulletCollision/CollisionDispatch/btConvexConvexAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btConvexPlaneCollisionAlgorithm.h>

@@ -2,7 +2,7 @@
 // ISO 9613-1:1993, sec. 6 and annex B: the relaxation frequencies of oxygen and nitrogen from
 // the molar concentration of water vapour, then the classical and rotational absorption plus the
 // two vibrational relaxations.
-#include "strike/air_absorption.hpp"
+#include "strike/synth/air_absorption.hpp"
 
 #include <cmath>
 

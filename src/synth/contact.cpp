@@ -7,7 +7,7 @@
 #include <cstring>
 #include <limits>
 
-#include "strike/synth.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike {
 namespace {

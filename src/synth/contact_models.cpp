@@ -4,7 +4,7 @@
 #include <memory>
 #include <vector>
 
-#include "strike/contact_model.hpp"
+#include "strike/synth/contact_model.hpp"
 #include "voice_state.hpp"
 
 namespace strike {

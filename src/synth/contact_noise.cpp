@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The audio-rate force of a rolling, sliding or scraping contact (strike/contact_noise.hpp;
+// The audio-rate force of a rolling, sliding or scraping contact (strike/synth/contact_noise.hpp;
 // docs/contact.md derives what follows). Per output sample, for each of the two surfaces:
 //  1. the contact point moves over the surface: where it is comes from the physics steps' spots
 //     (linear between steps), how far it went from the track speed (a resting body whose contact
@@ -19,7 +19,7 @@
 // 0.4 / omega_c (semi-implicit Euler). delta <= 0 is lost contact (F = 0): what makes a fast roll
 // over a bumpy surface rattle [Rath & Rocchesso 2005, "Continuous sonic feedback from a rolling
 // ball", IEEE MultiMedia 12(2)]. Output: the substeps' mean F minus N.
-#include "strike/contact_noise.hpp"
+#include "strike/synth/contact_noise.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -19,8 +19,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "strike/contact_model.hpp"
-#include "strike/engine.hpp"
+#include "strike/synth/contact_model.hpp"
+#include "strike/synth/engine.hpp"
 #include "voice_state.hpp"
 
 namespace strike {

@@ -15,7 +15,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "strike/engine.hpp"
+#include "strike/synth/engine.hpp"
 #include "voice_state.hpp"
 
 namespace strike {

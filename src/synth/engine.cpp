@@ -7,8 +7,8 @@
 #include <cstring>
 
 #include "fractional_delay.hpp"
-#include "strike/contact_model.hpp"
-#include "strike/engine.hpp"
+#include "strike/synth/contact_model.hpp"
+#include "strike/synth/engine.hpp"
 #include "voice_state.hpp"
 
 namespace strike {
@@ -103,7 +103,7 @@ double SoundEngine::delayTo(const std::array<double, 3>& world_point) const {
   return propagationDelay_s(distance(world_point, listener_.position_m));
 }
 
-// The listener model (listener.hpp): the level from the distance of the body's centre of mass
+// The listener model (strike/core/air.hpp): the level from the distance of the body's centre of mass
 // now; each path's channel gains from its direction in the listener's frame (spatializer.hpp):
 // the direct sound from the centre of mass, the ground's image from its mirror image.
 void SoundEngine::updateGains(VoiceState& v) {

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Binaural output (hrtf.hpp): the measured responses interpolated to a direction, and one path's
 // convolution with them.
-#include "strike/hrtf.hpp"
+#include "strike/synth/hrtf.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -26,7 +26,7 @@
 #include <cmath>
 
 #include "fractional_delay.hpp"
-#include "strike/engine.hpp"
+#include "strike/synth/engine.hpp"
 #include "voice_state.hpp"
 
 namespace strike {

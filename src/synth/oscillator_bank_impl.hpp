@@ -17,7 +17,7 @@
 
 #include "kernels.hpp"
 #include "modal_math.hpp"
-#include "strike/synth.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike::detail {
 

@@ -12,8 +12,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "strike/listener.hpp"
-#include "strike/synth.hpp"
+#include "strike/core/air.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike {
 

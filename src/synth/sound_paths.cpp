@@ -32,7 +32,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "strike/engine.hpp"
+#include "strike/synth/engine.hpp"
 #include "voice_state.hpp"
 
 namespace strike {

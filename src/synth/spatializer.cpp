@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // The spatializer's formats (spatializer.hpp): a pan and the AmbiX spherical harmonics.
-#include "strike/spatializer.hpp"
+#include "strike/synth/spatializer.hpp"
 
 #include <algorithm>
 #include <cmath>

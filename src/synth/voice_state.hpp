@@ -17,7 +17,7 @@
 #include <memory>
 #include <vector>
 
-#include "strike/engine.hpp"
+#include "strike/synth/engine.hpp"
 
 namespace strike {
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // AcousticTransfer's data helpers (acoustic_transfer.hpp). C++ standard library only: libstrike
 // reads banks with a transfer.
-#include "strike/acoustic_transfer.hpp"
+#include "strike/transfer/acoustic_transfer.hpp"
 
 #include <cmath>
 #include <string>

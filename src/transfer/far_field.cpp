@@ -8,7 +8,7 @@
 #include <cstring>
 
 #include "far_field_kernels.hpp"
-#include "strike/acoustic_transfer.hpp"
+#include "strike/transfer/acoustic_transfer.hpp"
 
 #if defined(STRIKE_BANK_X86)
 #include <cpuid.h>

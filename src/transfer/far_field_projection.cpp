@@ -5,7 +5,7 @@
 #include <array>
 
 #include "quadrature.hpp"
-#include "strike/acoustic_transfer.hpp"
+#include "strike/transfer/acoustic_transfer.hpp"
 
 namespace strike::transfer {
 

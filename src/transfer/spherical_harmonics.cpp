@@ -9,7 +9,7 @@
 #endif
 #include <array>
 
-#include "strike/acoustic_transfer.hpp"
+#include "strike/transfer/acoustic_transfer.hpp"
 
 namespace strike {
 

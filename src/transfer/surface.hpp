@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "kernels.hpp"
-#include "strike/bank.hpp"
-#include "strike/result.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/core/result.hpp"
 
 namespace strike::transfer {
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The acoustic transfer solver's driver: groups of modes, refinement to the target, the
 // estimate and the order kept per mode, and the rigid translation's dipole
-// (src/include/strike/transfer_solver.hpp, docs/acoustic-transfer.md).
+// (src/include/strike/transfer/transfer_solver.hpp, docs/acoustic-transfer.md).
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -15,7 +15,7 @@
 #include "../modal/two_parts.hpp"
 #include "error_estimate.hpp"
 #include "far_field_projection.hpp"
-#include "strike/transfer_solver.hpp"
+#include "strike/transfer/transfer_solver.hpp"
 #include "surface.hpp"
 #include "system.hpp"
 

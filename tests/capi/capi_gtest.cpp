@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "strike/strike.h"
-#include "strike/synth.hpp"
+#include "strike/synth/synth.hpp"
 #include "test_bank.hpp"
 
 namespace {

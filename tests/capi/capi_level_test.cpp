@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "cli/run_cli.hpp"
-#include "strike/audio.hpp"
-#include "strike/bank.hpp"
-#include "strike/materials.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/precompute/materials.hpp"
 #include "strike/strike.h"
 #include "test_bank.hpp"  // the hand-made plate: modes at 440, 1000, 2500, 5200 Hz
 

@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "strike/bank.hpp"
+#include "strike/bank/bank.hpp"
 #include "strike/strike.h"
 #include "test_bank.hpp"
 

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "strike/bank.hpp"
+#include "strike/bank/bank.hpp"
 
 namespace strike::test {
 

@@ -2,7 +2,7 @@
 // libFuzzer target: the mode bank decoder (magic, version, chunks, checksum) on arbitrary bytes,
 // and on the same bytes with a repaired checksum.
 #include "fuzz_util.hpp"
-#include "strike/bank.hpp"
+#include "strike/bank/bank.hpp"
 
 // STRIKE_FUZZ_ENTRY renames the entry so that the unit tests can link every target into one
 // program and replay the corpus and the kept crashers (tests/unit/catalogue/fuzz_replay_test.cpp).

@@ -2,7 +2,7 @@
 // libFuzzer target: the scene JSON parser and validator (in memory; mesh paths are not opened).
 #include <string>
 
-#include "strike/scene.hpp"
+#include "strike/scene/scene.hpp"
 
 // STRIKE_FUZZ_ENTRY renames the entry so that the unit tests can link every target into one
 // program and replay the corpus and the kept crashers (tests/unit/catalogue/fuzz_replay_test.cpp).

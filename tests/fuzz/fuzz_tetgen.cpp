@@ -4,7 +4,7 @@
 #include <cstring>
 
 #include "fuzz_util.hpp"
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 
 // STRIKE_FUZZ_ENTRY renames the entry so that the unit tests can link every target into one
 // program and replay the corpus and the kept crashers (tests/unit/catalogue/fuzz_replay_test.cpp).

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "strike/bank.hpp"
+#include "strike/bank/bank.hpp"
 
 namespace strike::fuzz {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "check.hpp"
-#include "strike/constants.hpp"
+#include "strike/core/constants.hpp"
 #include "struck_bank.hpp"
 
 namespace {

@@ -8,7 +8,7 @@
 
 #include "capi/test_bank.hpp"
 #include "check.hpp"
-#include "strike/bank.hpp"
+#include "strike/bank/bank.hpp"
 #include "strike/strike.h"
 
 namespace strike::runtime_test {

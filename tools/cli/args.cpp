@@ -8,7 +8,7 @@
 #include <cstdlib>
 #include <sstream>
 
-#include "strike/parse_size.hpp"
+#include "strike/core/parse_size.hpp"
 
 namespace strike::cli {
 

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "strike/audio.hpp"
-#include "strike/result.hpp"
-#include "strike/synth.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/core/result.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike::cli {
 

@@ -7,7 +7,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "output_check.hpp"
-#include "strike/audio.hpp"
+#include "strike/audio/audio.hpp"
 
 namespace strike::cli {
 namespace {

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: MIT
-// `strike cache list|size|prune`: the bank cache of `strike render` (strike/bank_cache.hpp).
+// `strike cache list|size|prune`: the bank cache of `strike render` (strike/cache/bank_cache.hpp).
 #include <algorithm>
 #include <cstdio>
 #include <ctime>
 
 #include "args.hpp"
 #include "commands.hpp"
-#include "strike/bank.hpp"
-#include "strike/bank_cache.hpp"
-#include "strike/render.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/cache/bank_cache.hpp"
+#include "strike/scene/render.hpp"
 
 namespace strike::cli {
 namespace {

@@ -7,10 +7,10 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "output_check.hpp"
-#include "strike/audio.hpp"
-#include "strike/bank.hpp"
-#include "strike/hit.hpp"
-#include "strike/render.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/scene/hit.hpp"
+#include "strike/scene/render.hpp"
 
 namespace strike::cli {
 namespace {

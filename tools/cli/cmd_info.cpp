@@ -8,8 +8,8 @@
 
 #include "args.hpp"
 #include "commands.hpp"
-#include "strike/bank.hpp"
-#include "strike/synth.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike::cli {
 namespace {

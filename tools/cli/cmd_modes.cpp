@@ -11,14 +11,14 @@
 #include "modes_similar.hpp"
 #include "output_check.hpp"
 #include "progress_reporter.hpp"
-#include "strike/element_order.hpp"
-#include "strike/error_estimate.hpp"
-#include "strike/materials.hpp"
-#include "strike/mesh.hpp"
-#include "strike/normalized_problem.hpp"
-#include "strike/parse_size.hpp"
-#include "strike/precompute.hpp"
-#include "strike/render.hpp"
+#include "strike/precompute/element_order.hpp"
+#include "strike/precompute/error_estimate.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/mesh/mesh.hpp"
+#include "strike/precompute/normalized_problem.hpp"
+#include "strike/core/parse_size.hpp"
+#include "strike/precompute/precompute.hpp"
+#include "strike/scene/render.hpp"
 
 namespace strike::cli {
 namespace {
@@ -455,7 +455,7 @@ int runModes(const std::vector<std::string>& raw_args) {
   if (args.has("--error-estimate") && args.has("--no-error-estimate"))
     return reportError("modes", badInput("--error-estimate and --no-error-estimate contradict each other"));
   // Default: on when the mesh can be coarsened (Richardson, ~10-25% extra; see
-  // src/include/strike/error_estimate.hpp), off for tet files (Tet4 on corners costs more, bounds less).
+  // src/include/strike/precompute/error_estimate.hpp), off for tet files (Tet4 on corners costs more, bounds less).
   settings.error_estimate =
       args.has("--error-estimate") || (!args.has("--no-error-estimate") && canRemesh(settings.mesh_spec));
 

@@ -8,11 +8,11 @@
 #include "commands.hpp"
 #include "output_check.hpp"
 #include "progress_reporter.hpp"
-#include "strike/audio.hpp"
-#include "strike/bank_cache.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
-#include "strike/synth.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/cache/bank_cache.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
+#include "strike/synth/synth.hpp"
 #include "via_library.hpp"
 
 namespace strike::cli {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "strike/result.hpp"
+#include "strike/core/result.hpp"
 
 namespace strike::cli {
 

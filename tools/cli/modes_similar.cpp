@@ -4,10 +4,10 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "strike/bank.hpp"
-#include "strike/hash.hpp"
-#include "strike/normalized_problem.hpp"
-#include "strike/read_file.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/core/hash.hpp"
+#include "strike/precompute/normalized_problem.hpp"
+#include "strike/core/read_file.hpp"
 
 namespace strike::cli {
 namespace {

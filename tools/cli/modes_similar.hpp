@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: MIT
-// `strike modes --similar`: the object's normalized solve (src/include/strike/normalized_problem.hpp)
+// `strike modes --similar`: the object's normalized solve (src/include/strike/precompute/normalized_problem.hpp)
 // from the bank cache that `strike render --similar` fills, or solved and put there, then scaled.
 #pragma once
 
 #include <string>
 
-#include "strike/precompute.hpp"
+#include "strike/precompute/precompute.hpp"
 
 namespace strike::cli {
 

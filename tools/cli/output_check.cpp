@@ -10,7 +10,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "strike/atomic_file.hpp"
+#include "strike/core/atomic_file.hpp"
 
 namespace strike::cli {
 namespace {

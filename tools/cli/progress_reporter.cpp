@@ -5,7 +5,7 @@
 
 #include <cstdio>
 
-#include "strike/interrupt_cleanup.hpp"
+#include "strike/core/interrupt_cleanup.hpp"
 
 namespace strike::cli {
 

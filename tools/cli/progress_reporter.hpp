@@ -9,7 +9,7 @@
 #include <chrono>
 #include <string>
 
-#include "strike/progress.hpp"
+#include "strike/core/progress.hpp"
 
 namespace strike::cli {
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "strike/bank.hpp"
+#include "strike/bank/bank.hpp"
 #include "strike/strike.h"
 
 namespace strike::cli {

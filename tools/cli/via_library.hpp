@@ -2,7 +2,7 @@
 // `strike render --via-library`: renderScene's steps sent through libstrike's C API.
 #pragma once
 
-#include "strike/render.hpp"
+#include "strike/scene/render.hpp"
 
 namespace strike::cli {
 

@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "strike/fem.hpp"
-#include "strike/mesh.hpp"
-#include "strike/modal.hpp"
+#include "strike/fem/fem.hpp"
+#include "strike/mesh/mesh.hpp"
+#include "strike/modal/modal.hpp"
 
 namespace {
 

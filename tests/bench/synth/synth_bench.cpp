@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "strike/synth.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace {
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "audio/test_util.hpp"
-#include "strike/audio.hpp"
+#include "strike/audio/audio.hpp"
 
 namespace strike {
 namespace {

@@ -7,8 +7,8 @@
 #include <cmath>
 
 #include "audio/test_util.hpp"
-#include "strike/audio.hpp"
-#include "strike/spatializer.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/synth/spatializer.hpp"
 
 namespace strike {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "audio/test_util.hpp"
 #include "common/same_bytes.hpp"
-#include "strike/audio.hpp"
+#include "strike/audio/audio.hpp"
 
 namespace strike {
 namespace {

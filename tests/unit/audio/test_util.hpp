@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "strike/audio.hpp"
-#include "strike/constants.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/core/constants.hpp"
 
 namespace strike::test {
 

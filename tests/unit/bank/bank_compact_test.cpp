@@ -9,7 +9,7 @@
 
 #include <unistd.h>
 
-#include "strike/bank.hpp"
+#include "strike/bank/bank.hpp"
 
 namespace strike {
 namespace {

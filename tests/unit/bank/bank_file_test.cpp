@@ -9,8 +9,8 @@
 #include <random>
 
 #include "common/same_bytes.hpp"
-#include "strike/atomic_file.hpp"
-#include "strike/bank.hpp"
+#include "strike/core/atomic_file.hpp"
+#include "strike/bank/bank.hpp"
 
 namespace strike {
 namespace {

@@ -18,7 +18,7 @@
 #include <thread>
 #include <vector>
 
-#include "strike/interrupt_cleanup.hpp"
+#include "strike/core/interrupt_cleanup.hpp"
 
 #include "cli/run_cli.hpp"
 #include "common/same_bytes.hpp"

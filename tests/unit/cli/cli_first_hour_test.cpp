@@ -20,7 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "run_cli.hpp"
-#include "strike/bank.hpp"
+#include "strike/bank/bank.hpp"
 
 namespace strike {
 namespace {

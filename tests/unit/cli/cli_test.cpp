@@ -21,8 +21,8 @@
 #include "common/same_bytes.hpp"
 #include "references/beam_theory.hpp"
 #include "run_cli.hpp"
-#include "strike/audio.hpp"
-#include "strike/bank.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/bank/bank.hpp"
 
 namespace strike {
 namespace {

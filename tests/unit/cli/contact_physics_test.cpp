@@ -16,7 +16,7 @@
 
 #include "common/same_bytes.hpp"
 #include "run_cli.hpp"
-#include "strike/audio.hpp"
+#include "strike/audio/audio.hpp"
 
 namespace strike {
 namespace {

@@ -20,7 +20,7 @@
 #include <string>
 
 #include "run_cli.hpp"
-#include "strike/audio.hpp"
+#include "strike/audio/audio.hpp"
 
 namespace strike {
 namespace {

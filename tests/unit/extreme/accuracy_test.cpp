@@ -11,9 +11,9 @@
 
 #include "references/beam_theory.hpp"
 #include "references/lamb_sphere.hpp"
-#include "strike/element_order.hpp"
-#include "strike/mesh.hpp"
-#include "strike/precompute.hpp"
+#include "strike/precompute/element_order.hpp"
+#include "strike/mesh/mesh.hpp"
+#include "strike/precompute/precompute.hpp"
 
 namespace strike {
 namespace {

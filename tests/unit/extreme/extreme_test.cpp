@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "strike/precompute.hpp"
+#include "strike/precompute/precompute.hpp"
 
 namespace strike {
 namespace {

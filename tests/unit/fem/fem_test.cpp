@@ -7,7 +7,7 @@
 #include <cmath>
 
 #include "quadrature.hpp"
-#include "strike/fem.hpp"
+#include "strike/fem/fem.hpp"
 
 namespace strike {
 namespace {

@@ -7,7 +7,7 @@
 #include <map>
 #include <utility>
 
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 namespace {

@@ -6,8 +6,8 @@
 #include <string>
 
 #include "mesh/mesh_test_util.hpp"
-#include "strike/constants.hpp"
-#include "strike/mesh.hpp"
+#include "strike/core/constants.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 namespace {

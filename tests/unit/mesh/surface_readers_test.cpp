@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "mesh/mesh_test_util.hpp"
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 namespace {

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "mesh/mesh_test_util.hpp"
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 namespace {

@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "mesh/mesh_test_util.hpp"
-#include "strike/mesh.hpp"
+#include "strike/mesh/mesh.hpp"
 
 namespace strike {
 namespace {

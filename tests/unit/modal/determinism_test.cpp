@@ -24,8 +24,8 @@
 #include <thread>
 #include <vector>
 
-#include "strike/fem.hpp"
-#include "strike/modal.hpp"
+#include "strike/fem/fem.hpp"
+#include "strike/modal/modal.hpp"
 
 // OpenBLAS thread control, weak so that another BLAS still links (then the case is skipped).
 extern "C" __attribute__((weak)) void openblas_set_num_threads(int num_threads);

@@ -9,9 +9,9 @@
 #include <cmath>
 #include <functional>
 
-#include "strike/constants.hpp"
-#include "strike/fem.hpp"
-#include "strike/modal.hpp"
+#include "strike/core/constants.hpp"
+#include "strike/fem/fem.hpp"
+#include "strike/modal/modal.hpp"
 
 namespace strike {
 namespace {

@@ -13,11 +13,11 @@
 #include <complex>
 #include <vector>
 
-#include "strike/listener.hpp"
-#include "strike/materials.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
-#include "strike/synth.hpp"
+#include "strike/core/air.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike {
 namespace {

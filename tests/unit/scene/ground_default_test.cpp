@@ -15,11 +15,11 @@
 #include <string>
 #include <vector>
 
-#include "strike/bank.hpp"
-#include "strike/listener.hpp"
-#include "strike/materials.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/core/air.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike {
 namespace {

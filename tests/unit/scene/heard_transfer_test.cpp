@@ -15,13 +15,13 @@
 #include <string>
 #include <vector>
 
-#include "strike/bank.hpp"
-#include "strike/hit.hpp"
-#include "strike/materials.hpp"
-#include "strike/precompute.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
-#include "strike/synth.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/scene/hit.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/precompute/precompute.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike {
 namespace {

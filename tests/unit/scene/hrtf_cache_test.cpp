@@ -12,8 +12,8 @@
 #include <fstream>
 #include <string>
 
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike {
 namespace {

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike {
 namespace {

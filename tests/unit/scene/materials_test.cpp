@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "strike/materials.hpp"
+#include "strike/precompute/materials.hpp"
 
 namespace strike {
 namespace {

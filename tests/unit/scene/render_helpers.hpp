@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike::render_helpers {
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
-// RenderSession (src/include/strike/render_session.hpp): renders with a session, cold and warm,
+// RenderSession (src/include/strike/scene/render_session.hpp): renders with a session, cold and warm,
 // give the same samples as renders without one, and its memory stays under its cap.
-#include "strike/render_session.hpp"
+#include "strike/scene/render_session.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -18,10 +18,10 @@
 #include <string>
 #include <thread>
 
-#include "strike/bank.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
-#include "strike/synth.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike {
 namespace {

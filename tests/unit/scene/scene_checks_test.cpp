@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Scenes that cannot be right are named with their numbers.
-#include "strike/scene_checks.hpp"
+#include "strike/scene/scene_checks.hpp"
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "strike/scene.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike {
 namespace {

@@ -12,10 +12,10 @@
 #include <utility>
 #include <vector>
 
-#include "strike/materials.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
-#include "strike/sim.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
+#include "strike/sim/sim.hpp"
 
 namespace strike {
 namespace {

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Exact similarity reuse (src/include/strike/normalized_problem.hpp): a bank scaled from the
+// Exact similarity reuse (src/include/strike/precompute/normalized_problem.hpp): a bank scaled from the
 // normalized solve against a direct solve of the object itself, and a render of two objects of one
 // shape at different sizes and materials that solves once and does not depend on the cache.
 #include <gtest/gtest.h>
@@ -9,10 +9,10 @@
 #include <filesystem>
 #include <string>
 
-#include "strike/hash.hpp"
-#include "strike/normalized_problem.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
+#include "strike/core/hash.hpp"
+#include "strike/precompute/normalized_problem.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike {
 namespace {

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The acoustic transfer with exact similarity reuse (src/include/strike/normalized_problem.hpp):
+// The acoustic transfer with exact similarity reuse (src/include/strike/precompute/normalized_problem.hpp):
 // one unit transfer per shape, wave speed E/rho and number of modes kept, scaled to every size
 // and density; against a direct solve of each object, against the scaling law to the bit, and a
 // render that solves it once, reads it from the cache, and gives the same bytes either way.
@@ -13,12 +13,12 @@
 #include <filesystem>
 #include <string>
 
-#include "strike/bank.hpp"
-#include "strike/bank_cache.hpp"
-#include "strike/hash.hpp"
-#include "strike/normalized_problem.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/cache/bank_cache.hpp"
+#include "strike/core/hash.hpp"
+#include "strike/precompute/normalized_problem.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike {
 namespace {

@@ -18,9 +18,9 @@
 #include <vector>
 
 #include "references/lamb_sphere.hpp"
-#include "strike/acoustic_transfer.hpp"
-#include "strike/hit.hpp"
-#include "strike/precompute.hpp"
+#include "strike/transfer/acoustic_transfer.hpp"
+#include "strike/scene/hit.hpp"
+#include "strike/precompute/precompute.hpp"
 
 namespace strike {
 namespace {

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "render_helpers.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike {
 namespace {

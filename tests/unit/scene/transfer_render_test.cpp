@@ -8,9 +8,9 @@
 #include <cstdlib>
 #include <vector>
 
-#include "strike/hit.hpp"
-#include "strike/materials.hpp"
-#include "strike/precompute.hpp"
+#include "strike/scene/hit.hpp"
+#include "strike/precompute/materials.hpp"
+#include "strike/precompute/precompute.hpp"
 
 namespace strike {
 namespace {

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "strike/sim.hpp"
+#include "strike/sim/sim.hpp"
 
 namespace strike::sim_bodies {
 

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "bodies.hpp"
-#include "strike/path.hpp"
-#include "strike/sim.hpp"
+#include "strike/sim/path.hpp"
+#include "strike/sim/sim.hpp"
 
 namespace strike {
 namespace {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "bodies.hpp"
-#include "strike/sim.hpp"
+#include "strike/sim/sim.hpp"
 
 namespace strike {
 namespace {

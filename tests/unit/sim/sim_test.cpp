@@ -14,7 +14,7 @@
 
 #include "bodies.hpp"
 #include "common/same_bytes.hpp"
-#include "strike/sim.hpp"
+#include "strike/sim/sim.hpp"
 
 namespace strike {
 namespace {

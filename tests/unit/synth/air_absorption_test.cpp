@@ -7,7 +7,7 @@
 #include <memory>
 #include <vector>
 
-#include "strike/engine.hpp"
+#include "strike/synth/engine.hpp"
 
 namespace strike {
 namespace {

@@ -10,8 +10,8 @@
 #include <memory>
 #include <vector>
 
-#include "strike/engine.hpp"
-#include "strike/sofa_hrtf.hpp"
+#include "strike/synth/engine.hpp"
+#include "strike/audio/sofa_hrtf.hpp"
 
 namespace strike {
 namespace {

@@ -12,7 +12,7 @@
 #include <memory>
 #include <vector>
 
-#include "strike/contact_model.hpp"
+#include "strike/synth/contact_model.hpp"
 #include "synth_fixtures.hpp"
 
 namespace strike {

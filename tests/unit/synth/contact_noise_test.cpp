@@ -10,9 +10,9 @@
 #include <cstdio>
 #include <vector>
 
-#include "strike/contact_noise.hpp"
-#include "strike/engine.hpp"
-#include "strike/synth.hpp"
+#include "strike/synth/contact_noise.hpp"
+#include "strike/synth/engine.hpp"
+#include "strike/synth/synth.hpp"
 #include "synth_fixtures.hpp"
 
 namespace strike {

@@ -8,7 +8,7 @@
 #include <limits>
 #include <memory>
 
-#include "strike/synth.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike {
 namespace {

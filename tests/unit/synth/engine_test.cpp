@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The sound engine (strike/engine.hpp): force steps against closed forms, the contact
+// The sound engine (strike/synth/engine.hpp): force steps against closed forms, the contact
 // scheduler's resting, pushing and sleeping bodies, and the listener following a moving body.
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <memory>
 #include <vector>
 
-#include "strike/engine.hpp"
+#include "strike/synth/engine.hpp"
 #include "synth_fixtures.hpp"
 
 namespace strike {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "strike/synth.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike {
 namespace {

@@ -10,7 +10,7 @@
 #include <memory>
 #include <vector>
 
-#include "strike/engine.hpp"
+#include "strike/synth/engine.hpp"
 #include "synth_fixtures.hpp"
 
 namespace strike {

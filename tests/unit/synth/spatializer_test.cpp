@@ -10,8 +10,8 @@
 #include <random>
 #include <vector>
 
-#include "strike/engine.hpp"
-#include "strike/spatializer.hpp"
+#include "strike/synth/engine.hpp"
+#include "strike/synth/spatializer.hpp"
 
 namespace strike {
 namespace {

@@ -6,7 +6,7 @@
 #include <complex>
 #include <vector>
 
-#include "strike/synth.hpp"
+#include "strike/synth/synth.hpp"
 
 namespace strike::test {
 

@@ -10,10 +10,10 @@
 #include <cstdlib>
 #include <vector>
 
-#include "strike/bank.hpp"
-#include "strike/mesh.hpp"
-#include "strike/precompute.hpp"
-#include "strike/transfer_solver.hpp"
+#include "strike/bank/bank.hpp"
+#include "strike/mesh/mesh.hpp"
+#include "strike/precompute/precompute.hpp"
+#include "strike/transfer/transfer_solver.hpp"
 #include "transfer/assembly.hpp"
 #include "transfer/hmatrix.hpp"
 

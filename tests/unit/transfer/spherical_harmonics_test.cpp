@@ -14,7 +14,7 @@
 
 #include <Eigen/Core>
 
-#include "strike/acoustic_transfer.hpp"
+#include "strike/transfer/acoustic_transfer.hpp"
 
 namespace strike {
 namespace {

@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "references/axisymmetric_dipole.hpp"
-#include "strike/mesh.hpp"
-#include "strike/similar_bank.hpp"
-#include "strike/transfer_solver.hpp"
+#include "strike/mesh/mesh.hpp"
+#include "strike/precompute/similar_bank.hpp"
+#include "strike/transfer/transfer_solver.hpp"
 
 namespace strike {
 namespace {

@@ -16,7 +16,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include "strike/bank.hpp"
+#include "strike/bank/bank.hpp"
 #include "transfer/assembly.hpp"
 
 namespace strike {

@@ -30,10 +30,10 @@
 #include "output_check.hpp"
 #include "references/beam_theory.hpp"  // src/references: the Timoshenko free-free bar reference
 #include "references/lamb_sphere.hpp"  // src/references: Lamb's free-sphere modes
-#include "strike/constants.hpp"
-#include "strike/precompute.hpp"
-#include "strike/synth.hpp"
-#include "strike/transfer_solver.hpp"
+#include "strike/core/constants.hpp"
+#include "strike/precompute/precompute.hpp"
+#include "strike/synth/synth.hpp"
+#include "strike/transfer/transfer_solver.hpp"
 
 namespace strike::cli {
 namespace {

@@ -5,8 +5,8 @@
 
 #include <string>
 
-#include "strike/audio.hpp"
-#include "strike/result.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/core/result.hpp"
 
 namespace strike::cli {
 

@@ -18,9 +18,9 @@
 #include <fstream>
 
 #include "bench_studies.hpp"
-#include "strike/audio.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
+#include "strike/audio/audio.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike::cli {
 namespace {

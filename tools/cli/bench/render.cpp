@@ -15,8 +15,8 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "output_check.hpp"
-#include "strike/render.hpp"
-#include "strike/scene.hpp"
+#include "strike/scene/render.hpp"
+#include "strike/scene/scene.hpp"
 
 namespace strike::cli {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "bench_studies.hpp"
-#include "strike/audio.hpp"
+#include "strike/audio/audio.hpp"
 
 namespace strike::cli {
 

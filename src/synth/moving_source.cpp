@@ -197,6 +197,19 @@ void SoundEngine::updateMovingGains(VoiceState& v) {
   }
 }
 
+void SoundEngine::hearNothing(VoiceState& v, float* const* out, size_t frames) {
+  const uint64_t end = frames_ + frames;
+  for (int k = 0; k < (imageApart(v) ? 2 : 1); ++k)
+    v.heard_from_m_[static_cast<size_t>(k)] = positionAt(v, emissionFrame(v, k, end) / settings_.synth.sample_rate_hz);
+  v.read_map_ = {};
+  updateMovingGains(v);
+  // As mixPath leaves them after mixing silence.
+  std::copy(v.target_gain_, v.target_gain_ + settings_.channels, v.cur_gain_);
+  if (v.image_) std::copy(v.image_->target_gain, v.image_->target_gain + settings_.channels, v.image_->cur_gain);
+  flushBinaural(v, 0, out, frames);
+  if (imageApart(v)) flushBinaural(v, 1, out, frames);
+}
+
 void SoundEngine::renderMoving(VoiceState& v, float* const* out, size_t frames, uint64_t& active) {
   VoiceState::ImagePath* image = imageApart(v) ? v.image_.get() : nullptr;
   float* direct = v.mono_.data();
@@ -225,6 +238,8 @@ void SoundEngine::renderMoving(VoiceState& v, float* const* out, size_t frames, 
     for (size_t n = 0; n < frames; ++n) direct[n] -= image->signal[n];
   // Into the delay lines, then out at each path's emission times.
   const int paths = image ? 2 : 1;
+  const bool heard_out = v.heard_to_frame_ >= static_cast<double>(v.sound_end_frame_) + FractionalDelay::kTaps;
+  const uint64_t sound_end = v.sound_end_frame_;
   for (int k = 0; k < paths; ++k) {
     const float* sent = k == 0 ? direct : image->signal.data();
     std::vector<float>& line = v.line_[static_cast<size_t>(k)];
@@ -235,13 +250,19 @@ void SoundEngine::renderMoving(VoiceState& v, float* const* out, size_t frames, 
     }
     if (sounds) v.sound_end_frame_ = frames_ + frames;
   }
+  active += v.synth_.activeModeCount() + (image ? image->synth.activeModeCount() : 0);
+  if (heard_out && v.sound_end_frame_ == sound_end) {
+    // Nothing sent since what has been heard to the end: every tap reads zeros, so the paths
+    // are silent without reading them (the map is solved afresh when sound is sent again).
+    hearNothing(v, out, frames);
+    return;
+  }
   // The longer path (the image's) is heard last.
   v.heard_to_frame_ = hearPath(v, 0, direct, frames);
   if (image) v.heard_to_frame_ = std::min(v.heard_to_frame_, hearPath(v, 1, image->signal.data(), frames));
   updateMovingGains(v);
   mixPath(direct, v.cur_gain_, v.target_gain_, v.binaural_[0], out, frames);
   if (image) mixPath(image->signal.data(), image->cur_gain, image->target_gain, v.binaural_[1], out, frames);
-  active += v.synth_.activeModeCount() + (image ? image->synth.activeModeCount() : 0);
 }
 
 }  // namespace strike

@@ -41,11 +41,11 @@
 #include <memory>
 #include <vector>
 
-#include "strike/synth/air_absorption.hpp"
 #include "strike/bank/bank.hpp"
+#include "strike/core/air.hpp"
+#include "strike/synth/air_absorption.hpp"
 #include "strike/synth/contact_noise.hpp"
 #include "strike/synth/hrtf.hpp"
-#include "strike/core/air.hpp"
 #include "strike/synth/spatializer.hpp"
 #include "strike/synth/synth.hpp"
 
@@ -406,6 +406,9 @@ class SoundEngine {
   /// Reads one path's delay line for this call's frames into `heard`; returns the emission
   /// position (frame) of the last one.
   double hearPath(VoiceState& v, int path, float* heard, size_t frames);
+  /// A moving voice's call when its lines hold only zeros where they are read: gains and
+  /// binaural tails only.
+  void hearNothing(VoiceState& v, float* const* out, size_t frames);
   /// updateGains for a moving voice: level and direction of each path from where it was heard.
   void updateMovingGains(VoiceState& v);
   /// Where the ground's mirror image of `point` is, when the image path exists for it.

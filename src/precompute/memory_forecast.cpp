@@ -7,10 +7,31 @@
 #include <string>
 #include <vector>
 
+#include "../transfer/quadrature.hpp"
 #include "strike/modal/modal.hpp"
 #include "strike/precompute/precompute.hpp"
 
 namespace strike {
+
+namespace {
+
+/// The points of a rule for a piece of k e from two to three edges away (transfer::ruleFor): 7
+/// up to k e = 2.5, then the product rule's n^2, split in four while k e is above them all.
+double rulePoints(double ke) {
+  double pieces = 1.0;
+  while (ke > 2.5 && transfer::productOrder(ke, false) == 0) {
+    pieces *= 4.0;
+    ke *= 0.5;
+  }
+  const int n = ke > 2.5 ? transfer::productOrder(ke, false) : 0;
+  return pieces * (n > 0 ? n * n : 7.0);
+}
+
+/// A near triangle's points: its rule up to k e = 2.5; above, its rule for the half of them two
+/// to three edges away and its quarters' for the half nearer (areas 5 : 4 on a flat surface).
+double nearPointsOf(double ke) { return ke <= 2.5 ? 7.0 : 0.5 * rulePoints(ke) + 0.5 * 4.0 * rulePoints(0.5 * ke); }
+
+}  // namespace
 
 double transferMemoryForecastBytes(const ModeBank& bank, const TransferSettings& settings) {
   // What the solver holds at its peak (the largest group's solves; TransferModeStats counts
@@ -25,9 +46,10 @@ double transferMemoryForecastBytes(const ModeBank& bank, const TransferSettings&
       transferSystemBytes(static_cast<uint64_t>(elements), settings.direct_max_elements, settings.hierarchical);
   // The near caches (near_quadrature.hpp) at the top heard wavenumber (modes up to 20 kHz have a
   // transfer): per collocation point, the triangles t within kFarRatio (3) of their longest edge
-  // e_t, about (pi (3 e_t)^2 / area) of each on a surface seen as flat, each split until
-  // k e <= 2.5 (4 pieces a level) with 7 points a piece, twice that for the levels rounded up
-  // and the pieces nearer x; 36 bytes a point, twice for the vectors' growth; the caches of a
+  // e_t, about (pi (3 e_t)^2 / area) of each on a surface seen as flat, each given its rule
+  // (nearPointsOf: 7 points, or the product rule of its k e; its quarters' nearer than two
+  // edges); twice that for the levels rounded up and the
+  // pieces nearer still; 36 bytes a point, twice for the vectors' growth; the caches of a
   // group's refinement steps (x 2.5 unknowns each) held together: 1 + 0.4 + 0.16.
   const double top_hz = bank.max_freq_hz > 0 ? std::min(bank.max_freq_hz, 20000.0) : 20000.0;
   const double k = 2.0 * M_PI * top_hz / settings.speed_of_sound_m_s;
@@ -56,8 +78,8 @@ double transferMemoryForecastBytes(const ModeBank& bank, const TransferSettings&
   }
   if (area > 0)
     for (double e2 : edge2) {
-      const double split = std::max(1.0, k * k * e2 / (2.5 * 2.5));  // pieces (k e / 2.5)^2
-      points_per_row += std::min(1.0, M_PI * 9.0 * e2 / area) * 14.0 * split;
+      const double ke = k * std::sqrt(e2);
+      points_per_row += std::min(1.0, M_PI * 9.0 * e2 / area) * 2.0 * nearPointsOf(ke);
     }
   const double rows = 1.1 * elements;
   const double near = rows * points_per_row * 36.0 * 2.0 * 1.56;

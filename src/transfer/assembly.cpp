@@ -11,10 +11,10 @@ namespace strike::transfer {
 
 namespace {
 
-/// int G and int dG/dn over the big triangles (BigTriangles) whose four quarters all take the
-/// 7-point rule from x, into w.big_g and w.big_dg: integrateTriangle's points, weights and
-/// arithmetic (kernel(): G = e^{ikr} (1/r / 4 pi), dG/dr / r = G (-1/r^2 + ik/r)), the sums
-/// in its order. The others (and the near ones) are marked SIZE_MAX in w.big_first.
+/// int G and int dG/dn over the big triangles (BigTriangles) that take their far rule from x,
+/// into w.big_g and w.big_dg: integrateTriangle's points, weights and arithmetic (kernel():
+/// G = e^{ikr} (1/r / 4 pi), dG/dr / r = G (-1/r^2 + ik/r)), the sums in its order. The others
+/// (and the near ones) are marked SIZE_MAX in w.big_first.
 void integrateBigTriangles(const Surface& s, const BigTriangles& big, double k, const V3& x, size_t b_begin,
                            size_t b_end, RowScratch& w) {
   const size_t count = big.size();
@@ -23,28 +23,26 @@ void integrateBigTriangles(const Surface& s, const BigTriangles& big, double k, 
             w.big_first.begin() + static_cast<std::ptrdiff_t>(b_end), SIZE_MAX);
   w.big_g.resize(count);
   w.big_dg.resize(count);
-  for (auto* v : {&w.big_r, &w.big_w, &w.big_dn}) v->resize((b_end - b_begin) * kBigPoints);
+  for (auto* v : {&w.big_r, &w.big_w, &w.big_dn}) v->resize(big.first[b_end] - big.first[b_begin]);
   size_t points = 0;
   for (size_t b = b_begin; b < b_end; ++b) {
     const uint32_t t = big.tri[b];
-    if (w.near_stamp[t] == w.stamp) continue;  // near: in the cache
-    bool seven = true;
-    for (size_t q = 4 * b; q < 4 * b + 4; ++q)
-      seven = seven && ruleFor((x - big.quarter_centroid[q]).norm(), big.quarter_edge[q], k, 1).points == 7;
-    if (!seven) continue;
+    if (w.near_stamp[t] == w.stamp || !big.rule[b]) continue;  // near (in the cache), or no far rule
+    if (ruleFor((x - big.centroid[b]).norm(), big.edge[b], k, 0).rule != big.rule[b]) continue;
     const V3& normal = s.tris[t].normal;
+    const size_t b_points = big.first[b + 1] - big.first[b];
     bool finite = true;
-    for (size_t i = 0; i < static_cast<size_t>(kBigPoints); ++i) {
-      const V3 yx = big.point[b * kBigPoints + i] - x;
+    for (size_t i = 0; i < b_points; ++i) {
+      const V3 yx = big.point[big.first[b] + i] - x;
       const double r = yx.norm();
       finite = finite && r > 0;
       w.big_r[points + i] = r;
-      w.big_w[points + i] = big.weight[b * kBigPoints + i];
+      w.big_w[points + i] = big.weight[big.first[b] + i];
       w.big_dn[points + i] = yx.dot(normal);
     }
     if (!finite) continue;  // (x on the triangle: integrateTriangle skips that point)
     w.big_first[b] = points;
-    points += kBigPoints;
+    points += b_points;
   }
   for (auto* v : {&w.big_phase, &w.big_sin, &w.big_cos, &w.big_g_re, &w.big_g_im, &w.big_dg_re, &w.big_dg_im})
     v->resize(points);
@@ -76,7 +74,8 @@ void integrateBigTriangles(const Surface& s, const BigTriangles& big, double k, 
   for (size_t b = b_begin; b < b_end; ++b) {
     if (w.big_first[b] == SIZE_MAX) continue;
     double g_re = 0.0, g_im = 0.0, dg_re = 0.0, dg_im = 0.0;
-    for (size_t i = w.big_first[b]; i < w.big_first[b] + kBigPoints; ++i) {
+    const size_t end = w.big_first[b] + (big.first[b + 1] - big.first[b]);
+    for (size_t i = w.big_first[b]; i < end; ++i) {
       g_re += w.big_g_re[i];
       g_im += w.big_g_im[i];
       dg_re += w.big_dg_re[i];

@@ -82,24 +82,26 @@ Pieces makePieces(const Surface& s, const Cut& cut, double k) {
   return p;
 }
 
-BigTriangles bigTriangles(const Surface& s, const Pieces& p) {
+BigTriangles bigTriangles(const Surface& s, const Pieces& p, double k) {
   BigTriangles big;
   big.of_piece.assign(p.size(), -1);
+  big.first.push_back(0);
   for (size_t j = 0; j < p.size(); ++j) {
     if (p.one_point[j] || p.leaf_tri[j] < 0) continue;
     const uint32_t t = static_cast<uint32_t>(p.leaf_tri[j]);
     const Triangle& tri = s.tris[t];
+    const V3 &a = tri.v[0], &b = tri.v[1], &c = tri.v[2];
     big.of_piece[j] = static_cast<int32_t>(big.tri.size());
     big.tri.push_back(t);
-    const double quarter = 0.25 * tri.area;  // as integrateTriangle passes it down
-    for (const Corners& q : quarters(tri.v[0], tri.v[1], tri.v[2])) {
-      big.quarter_centroid.push_back((q[0] + q[1] + q[2]) / 3.0);
-      big.quarter_edge.push_back(longestEdge(q[0], q[1], q[2]));
-      for (int i = 0; i < 7; ++i) {
-        big.point.push_back(V3(kRule7[i][0] * q[0] + kRule7[i][1] * q[1] + kRule7[i][2] * q[2]));
-        big.weight.push_back(kRule7[i][3] * quarter);
-      }
+    big.centroid.push_back((a + b + c) / 3.0);
+    big.edge.push_back(longestEdge(a, b, c));
+    const RuleChoice far = ruleFor(1e300, big.edge.back(), k, 0);
+    big.rule.push_back(far.rule);
+    for (int i = 0; far.rule && i < far.points; ++i) {
+      big.point.push_back(V3(far.rule[i][0] * a + far.rule[i][1] * b + far.rule[i][2] * c));
+      big.weight.push_back(far.rule[i][3] * tri.area);
     }
+    big.first.push_back(big.point.size());
   }
   return big;
 }

@@ -43,24 +43,24 @@ Pieces makePieces(const Surface& s, const Cut& cut, double k);
 
 /// The triangles too large in wavelengths for one point or for their quarters as points
 /// (k D > 2 kPointPhase: the plate's 2 cm triangles at its top modes), which integrateTriangle
-/// integrates row by row. It always splits them in four at the first level (k D > 2.5), and
-/// then gives each quarter the 7-point rule whenever the quarter is more than two of its edges
-/// from x (their k d is above the 3-point rule's): those quarters' points do not depend on x, so
-/// they are laid out here once per solve, and a row evaluates their kernels in vectorized passes
-/// with integrateTriangle's own arithmetic, in its order (the same bits). A triangle with a
-/// quarter that needs more (x nearer) goes through integrateTriangle as before.
+/// integrates row by row. From an x beyond kFarRatio of its diameters it gives such a triangle
+/// the product rule of its k D (ruleFor): those points do not depend on x, so they are laid out
+/// here once per solve, and a row evaluates their kernels in vectorized passes with
+/// integrateTriangle's own arithmetic, in its order (the same bits). A triangle nearer x (or
+/// too large for every product rule) goes through integrateTriangle.
 struct BigTriangles {
-  std::vector<int32_t> of_piece;  // per piece: its index here, or -1
-  std::vector<uint32_t> tri;      // per big triangle
-  std::vector<V3> quarter_centroid;
-  std::vector<double> quarter_edge;  // longest edge (chooseRule's d)
-  std::vector<V3> point;             // 7 per quarter, 28 per triangle, in integrateTriangle's order
+  std::vector<int32_t> of_piece;          // per piece: its index here, or -1
+  std::vector<uint32_t> tri;              // per big triangle
+  std::vector<V3> centroid;               // (a + b + c) / 3, as integrateTriangle computes it
+  std::vector<double> edge;               // longest edge (ruleFor's d)
+  std::vector<const double (*)[4]> rule;  // its rule from far (null: none, split)
+  std::vector<size_t> first;              // its points: [first[b], first[b + 1])
+  std::vector<V3> point;                  // in integrateTriangle's order
   std::vector<double> weight;
   size_t size() const { return tri.size(); }
 };
-constexpr int kBigPoints = 28;  // 4 quarters x 7 points
 
-BigTriangles bigTriangles(const Surface& s, const Pieces& p);
+BigTriangles bigTriangles(const Surface& s, const Pieces& p, double k);
 
 /// The boundary data of several modes at one wavenumber, per piece: Q = int q dS and the first
 /// moment D = int (y - centroid) q dS (index rhs * pieces + piece).

@@ -4,6 +4,37 @@
 
 namespace strike::transfer {
 
+namespace {
+
+/// The product rules of orders 0..kProductMaxOrder, built once: with u, v Gauss-Legendre nodes
+/// on [0, 1], the point (1 - u, u (1 - v), u v) with weight 2 w_u w_v u (the Jacobian of the
+/// collapse of the square onto the triangle, over the triangle's area 1/2).
+struct ProductRules {
+  double rule[kProductMaxOrder + 1][kProductMaxOrder * kProductMaxOrder][4] = {};
+  ProductRules() {
+    std::vector<double> x, w;
+    for (int n = 1; n <= kProductMaxOrder; ++n) {
+      gaussLegendre(n, x, w);
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          const double u = 0.5 * (1.0 + x[i]), v = 0.5 * (1.0 + x[j]);
+          double* point = rule[n][i * n + j];
+          point[0] = 1.0 - u;
+          point[1] = u * (1.0 - v);
+          point[2] = u * v;
+          point[3] = 2.0 * (0.5 * w[i]) * (0.5 * w[j]) * u;
+        }
+    }
+  }
+};
+
+}  // namespace
+
+const double (*productRule(int n))[4] {
+  static const ProductRules rules;
+  return rules.rule[n];
+}
+
 void integrateTriangle(const V3& x, const V3& a, const V3& b, const V3& c, const V3& normal, double area, double k,
                        int depth, cd& int_g, cd& int_dg) {
   if (depth == 0) {  // a far whole triangle: one point with its phase spread

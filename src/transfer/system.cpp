@@ -86,7 +86,7 @@ ModeSolve solveSystem(const Surface& s, const std::vector<NodeData>& data, doubl
   const NearCache& near = cached->second;
   out.pieces = makePieces(s, cut, k);
   out.piece_data = pieceData(s, out.pieces, data);
-  const BigTriangles big = bigTriangles(s, out.pieces);
+  const BigTriangles big = bigTriangles(s, out.pieces, k);
   const size_t n = cut.nodes.size(), rhs = data.size();
   chief = std::min(chief, s.chief_candidates.size());
   if (chief == 0 && n > options.direct_max_elements && options.hierarchical)

@@ -64,7 +64,7 @@ Systems systemsAt(double k, double aca_tolerance, bool two_threads, double eta =
   const transfer::NearCache near = transfer::buildNearCache(s, out.cut, k);
   const transfer::Pieces pieces = transfer::makePieces(s, out.cut, k);
   const transfer::PieceData piece_data = transfer::pieceData(s, pieces, data);
-  const transfer::BigTriangles big = transfer::bigTriangles(s, pieces);
+  const transfer::BigTriangles big = transfer::bigTriangles(s, pieces, k);
   transfer::RowScratch w;
   out.dense.assign(n, std::vector<cd>(n));
   out.dense_b.assign(2 * n, cd(0.0));

@@ -50,7 +50,7 @@ TEST(WeakestDirection, DISABLED_PrintsTheSmallestSingularValuesOfABankFromTheEnv
     const transfer::NearCache near = transfer::buildNearCache(s, cut, k);
     const transfer::Pieces pieces = transfer::makePieces(s, cut, k);
     const transfer::PieceData piece_data = transfer::pieceData(s, pieces, data);
-    const transfer::BigTriangles big = transfer::bigTriangles(s, pieces);
+    const transfer::BigTriangles big = transfer::bigTriangles(s, pieces, k);
     transfer::RowScratch scratch;
     Eigen::MatrixXcd A(n, n);
     for (Eigen::Index r = 0; r < n; ++r) {

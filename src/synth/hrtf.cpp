@@ -13,6 +13,8 @@ namespace strike {
 namespace {
 
 constexpr uint32_t kMaxHrtfTaps = 16384;
+// cos(0.5 degree): the change of direction that builds a new filter (BinauralPath::aim).
+constexpr double kHrtfSameDirectionCosine = 0.9999619230641713;
 
 uint32_t thresholdOnset(const float* response, uint32_t taps) {
   float peak = 0.0f;
@@ -161,7 +163,7 @@ void BinauralPath::init(std::shared_ptr<const HrtfSet> set) {
   for (auto& filter : out_)
     for (std::vector<float>& ear : filter) ear.assign(kPartition, 0.0f);
   newest_ = phase_ = 0;
-  fading_ = block_started_ = false;
+  fading_ = block_started_ = aimed_ = false;
   quiet_run_ = silentAfter();
 }
 
@@ -188,6 +190,15 @@ void BinauralPath::aim(const std::array<double, 3>& local, bool at_once) {
   const double length = std::sqrt(local[0] * local[0] + local[1] * local[1] + local[2] * local[2]);
   std::array<double, 3> u = {1.0, 0.0, 0.0};  // the listener's frame to SOFA's (x forward, y left)
   if (length > 1e-9) u = {local[1] / length, -local[0] / length, local[2] / length};
+  // A direction within kHrtfSameDirection of the one last taken keeps its filter: a moving body
+  // would otherwise search the measured directions and build a filter (8 FFTs for KEMAR) every
+  // call for changes far below the set's spacing (5 degrees and more for KEMAR).
+  if (!at_once && aimed_) {
+    const double dot = u[0] * aimed_at_[0] + u[1] * aimed_at_[1] + u[2] * aimed_at_[2];
+    if (dot >= kHrtfSameDirectionCosine) return;
+  }
+  aimed_ = true;
+  aimed_at_ = u;
   wanted_ = hrtfBlend(*set_, u);
   if (!at_once) return;  // taken at the next block's start
   blend_ = wanted_;

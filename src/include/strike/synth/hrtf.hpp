@@ -86,7 +86,8 @@ class BinauralPath {
   void clear();
   /// The direction from the next block of kPartition samples on: `local` is the source relative
   /// to the listener in the listener's frame (x right, y forward, z up), m; at the listener:
-  /// straight ahead. `at_once` switches without a cross-fade (a path's first block).
+  /// straight ahead. `at_once` switches without a cross-fade (a path's first block). A direction
+  /// within 0.5 degree of the one last taken keeps the filter (hrtf.cpp).
   void aim(const std::array<double, 3>& local, bool at_once);
   /// Convolves `in` (any number of frames) with the path's responses and adds the result to left
   /// and right. A changed direction is cross-faded linearly over the block of kPartition samples
@@ -114,9 +115,11 @@ class BinauralPath {
   void tailOf(const Filter& filter, float* left, float* right);
   std::shared_ptr<const HrtfSet> set_;
   std::unique_ptr<detail::SmallFft> fft_;
-  size_t partitions_ = 0;                       ///< of the taps after the first kPartition
-  HrtfBlend blend_{}, next_blend_{};            ///< filter_[0]'s and filter_[1]'s
-  HrtfBlend wanted_{};                          ///< the last aim()'s
+  size_t partitions_ = 0;             ///< of the taps after the first kPartition
+  HrtfBlend blend_{}, next_blend_{};  ///< filter_[0]'s and filter_[1]'s
+  HrtfBlend wanted_{};                ///< the last aim()'s
+  std::array<double, 3> aimed_at_{};  ///< the direction of wanted_, SOFA frame, unit
+  bool aimed_ = false;
   bool fading_ = false;                         ///< this block cross-fades from filter_[0] to filter_[1]
   bool block_started_ = false;                  ///< the block's tails are computed
   Filter filter_[2];                            ///< in use, and the one fading in

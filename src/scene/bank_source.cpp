@@ -9,8 +9,8 @@
 #include <filesystem>
 
 #include "bank_strategy.hpp"
-#include "strike/core/atomic_file.hpp"
 #include "strike/cache/bank_cache.hpp"
+#include "strike/core/atomic_file.hpp"
 #include "strike/scene/render_session.hpp"
 
 namespace strike {
@@ -65,7 +65,6 @@ Status readStruckShapes(BankContext& context, size_t index) {
   RenderSession* session = context.settings.session;
   body.rows.reset();
   body.locator.reset();
-  body.located = {};
   body.located_bank.reset();
   const ModeBank& bank = *body.bank;
   const bool has_radiation = bank.radiation_m2.size() == bank.modeCount();
@@ -100,21 +99,18 @@ Status readStruckShapes(BankContext& context, size_t index) {
   std::sort(points.begin(), points.end());
   points.erase(std::unique(points.begin(), points.end()), points.end());
   std::vector<uint32_t> vertices;
-  LocatedPoints located;
-  located.vertices.resize(points.size());
-  located.weights.resize(points.size());
-  for (size_t p = 0; p < points.size(); ++p) {
-    locator.nearest(points[p].data(), located.vertices[p].data(), located.weights[p].data());
-    vertices.insert(vertices.end(), located.vertices[p].begin(), located.vertices[p].end());
+  for (const std::array<double, 3>& point : points) {
+    std::array<uint32_t, 3> nearest_vertices;
+    std::array<double, 3> weights;
+    locator.nearest(point.data(), nearest_vertices.data(), weights.data());
+    vertices.insert(vertices.end(), nearest_vertices.begin(), nearest_vertices.end());
   }
-  located.points = std::move(points);
   Result<ShapeRows> rows = body.file->readShapeRows(std::move(vertices));
   if (!rows) return rows.error();
   report.shape_vertices_read += rows->vertices.size();
   report.shape_vertices_total += bank.surfaceVertexCount();
   body.rows = std::move(*rows);
   body.locator = std::move(shared_locator);  // the voice projects with it (the same bank object)
-  body.located = std::move(located);         // and looks these points up instead of locating them again
   body.located_bank = std::move(surface.bank);
   return {};
 }

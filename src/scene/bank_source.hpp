@@ -44,7 +44,6 @@ struct Body {
   bool silent = false;                            ///< ...but no mode in the synthesized band
   std::optional<ShapeRows> rows;                  ///< shapes read at the struck vertices only (readStruckShapes)
   std::shared_ptr<const SurfaceLocator> locator;  ///< built for `bank` by readStruckShapes, for its voice
-  LocatedPoints located;  ///< the contact points readStruckShapes located with `locator`, for its voice
   /// With a RenderSession: the session's copy of `bank` (the same header) that `locator` points
   /// into, for the voice (a locator projects only for the bank object it was built for).
   std::shared_ptr<const ModeBank> located_bank;

@@ -392,7 +392,6 @@ Status addVoices(RenderRun& run, SoundOutput& output) {
     voice.bank = body.located_bank ? body.located_bank : body.bank;  // the session's, equal to body.bank
     if (body.rows) voice.rows = std::move(*body.rows), voice.use_rows = true;
     voice.locator = body.locator;
-    voice.located = std::move(body.located);
     voice.pressure_scale = outputPerPascal(run.settings.gain);
     voice.weights = pressureWeights(*body.bank, run.engine_settings.reference_distance_m, voice.pressure_scale);
     voice.is_static = body.object->is_static;

@@ -277,20 +277,6 @@ ContactProjector::ContactProjector(const ModeBank& bank, std::shared_ptr<const S
   shapes_.reserve(bank.modeCount() * 9 * max_points_);
 }
 
-bool LocatedPoints::find(const double point[3], uint32_t vertices_out[3], double weights_out[3]) const {
-  const std::array<double, 3> p = {point[0], point[1], point[2]};
-  const auto at = std::lower_bound(points.begin(), points.end(), p);
-  // The same bits (a -0 and a +0 compare equal, and the sort kept only one of them).
-  if (at == points.end() || std::memcmp(at->data(), point, sizeof p) != 0) return false;
-  const size_t i = static_cast<size_t>(at - points.begin());
-  for (int k = 0; k < 3; ++k) vertices_out[k] = vertices[i][k], weights_out[k] = weights[i][k];
-  return true;
-}
-
-void ContactProjector::locate(const double point[3], uint32_t vertices[3], double weights[3]) const {
-  if (!located_.find(point, vertices, weights)) locator_->nearest(point, vertices, weights);
-}
-
 void ContactProjector::useRows(ShapeRows rows) {
   rows_ = std::move(rows);
   use_rows_ = true;
@@ -315,7 +301,7 @@ void ContactProjector::projectImpulseInto(const double point[3], const double im
   if (slot == remembered) {
     uint32_t v[3];
     double w[3];
-    locate(point, v, w);
+    locator_->nearest(point, v, w);
     if (remembered < max_points_) {
       points_.resize(points_.size() + 3);
       weights_.resize(weights_.size() + 3);
@@ -371,7 +357,7 @@ void ContactProjector::projectOnce(const double point[3], const double impulse[3
   }
   uint32_t v[3];
   double w[3];
-  locate(point, v, w);
+  locator_->nearest(point, v, w);
   const float* read[3] = {rows_.row(v[0]), rows_.row(v[1]), rows_.row(v[2])};
   // The same sums in the same order as projectImpulseInto (a missing row projects to zero).
   for (size_t m = 0; m < nm; ++m) {

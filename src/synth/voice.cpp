@@ -191,7 +191,6 @@ VoiceState::VoiceState(const VoiceDesc& desc, const EngineSettings& settings)
       projector_(*desc.bank, desc.locator) {
   const ModeBank& bank = *bank_;
   if (desc.use_rows) projector_.useRows(desc.rows);
-  if (desc.locator.get() == &projector_.locator()) projector_.useLocated(desc.located);  // found by it
   // An output with directions hears the ground's image from below: a signal of its own.
   const bool pressure = desc.pressure_scale > 0.0 && std::isfinite(desc.pressure_scale);
   // A moving body's image is heard through a delay line of its own, in mono too.

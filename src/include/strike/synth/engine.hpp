@@ -146,9 +146,6 @@ struct VoiceDesc {
   /// A SurfaceLocator built for this very `bank` object, or null: the voice builds its own (one
   /// per bank surface: ~5 M instructions for a few thousand triangles).
   std::shared_ptr<const SurfaceLocator> locator;
-  /// Contact points that `locator` has located already (ContactProjector::useLocated); used only
-  /// with that locator.
-  LocatedPoints located;
   /// Per mode: output units per unit modal acceleration at the reference distance (pressure
   /// weights over the output's full scale); empty means 1 (modal acceleration).
   std::vector<double> weights;

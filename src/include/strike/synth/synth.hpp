@@ -254,17 +254,6 @@ class SurfaceLocator {
   std::vector<uint32_t> cell_start_;  ///< CSR: triangles of cell c are cell_tris_[cell_start_[c] .. cell_start_[c+1])
   std::vector<uint32_t> cell_tris_;
 };
-/// Points already located on a bank's surface, each with what SurfaceLocator::nearest gave for
-/// it: a render locates every contact point once to read the shapes there (readStruckShapes),
-/// and its voice looks them up instead of searching the grid again.
-struct LocatedPoints {
-  std::vector<std::array<double, 3>> points;  ///< mesh frame, ascending (lexicographic), no repeats
-  std::vector<std::array<uint32_t, 3>> vertices;
-  std::vector<std::array<double, 3>> weights;
-  /// Fills vertices and weights for `point` when it is one of `points`, else returns false.
-  bool find(const double point[3], uint32_t vertices_out[3], double weights_out[3]) const;
-};
-
 /// SurfaceLocator::projectImpulseInto with a memory of the last `max_points` points: a resting
 /// body's contacts sit on the same hull vertices step after step (the 20-plate render benchmark:
 /// 230,000 sustained contacts at 1,600 distinct points), so a repeated point skips the nearest-
@@ -281,9 +270,6 @@ class ContactProjector {
   /// shapes are read only at the vertices its contacts touch). The rows must hold every vertex
   /// locator().nearest() gives for the points projected; a missing vertex projects to zero.
   void useRows(ShapeRows rows);
-  /// Points this projector's locator has already located (LocatedPoints): looked up before the
-  /// grid is searched. The same vertices and weights, so the same result to the bit.
-  void useLocated(LocatedPoints located) { located_ = std::move(located); }
   const SurfaceLocator& locator() const { return *locator_; }
   void projectImpulseInto(const double point[3], const double impulse[3], double* out);
   /// The same result without remembering the point: for a point that will not come back (an
@@ -295,9 +281,6 @@ class ContactProjector {
   const ModeBank* bank_;
   bool use_rows_ = false;
   ShapeRows rows_;
-  LocatedPoints located_;
-  /// located_'s answer for the point, else the locator's.
-  void locate(const double point[3], uint32_t vertices[3], double weights[3]) const;
   size_t max_points_;
   size_t next_ = 0;              ///< slot to overwrite when full (round robin)
   std::vector<double> points_;   ///< 3 per remembered point

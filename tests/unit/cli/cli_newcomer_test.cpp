@@ -120,6 +120,21 @@ TEST(NewcomerOutputs, BenchCreatesItsOutputFolder) {
   CliResult not_folder = runCli("bench render '" + dir + "/drop.json' -o '" + dir + "/file' --repeat 1");
   EXPECT_EQ(not_folder.exit_code, 1);
   EXPECT_NE(not_folder.err.find("exists and is not a folder"), std::string::npos) << not_folder.err;
+  // --output: what an output costs over mono, both at the same step; each run is a CSV row named
+  // by its output.
+  CliResult ambix = runCli("bench render '" + dir + "/drop.json' -o '" + out + "' --repeat 1 --no-transfer --output " +
+                           "ambix1 --cache '" + dir + "/cache'");
+  ASSERT_EQ(ambix.exit_code, 0) << ambix.err;
+  EXPECT_NE(ambix.out.find("ambix1/mono"), std::string::npos) << ambix.out;
+  std::ifstream csv(out + "/render.csv");
+  std::string line, configs;
+  std::getline(csv, line);  // the header
+  while (std::getline(csv, line))
+    configs += line.substr(line.find(',') + 1, line.find(',', 2) - line.find(',') - 1) + " ";
+  EXPECT_EQ(configs, "mono ambix1 ");
+  CliResult bad = runCli("bench render '" + dir + "/drop.json' -o '" + out + "' --output surround");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("--output = surround"), std::string::npos) << bad.err;
 }
 
 // ---- Item 10: scenes that cannot be right ------------------------------------------------------

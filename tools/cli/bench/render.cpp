@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: MIT
 // `strike bench render SCENE.json -o DIR`: render speed, phase by phase, against a baseline run
 // in the same process. The machine is shared and noisy, so each repetition renders the baseline
-// (the 0.5 ms physics step used before) and then the current settings back to back, and the
-// table reports medians and their ratio; process CPU time and the load average are recorded next
-// to every wall time. Banks come from the cache (fill it with one `strike render` first).
+// and then the current settings back to back, and the table reports medians and their ratio;
+// process CPU time and the load average are recorded next to every wall time. The baseline is the
+// 0.5 ms physics step used before, or, with --output FORMAT, a mono render at the same step: what
+// that output costs over mono. Banks come from the cache (fill it with one `strike render` first).
 #include <time.h>
 
 #include <algorithm>
@@ -23,18 +24,25 @@ namespace {
 
 CommandSpec benchRenderSpec() {
   CommandSpec spec;
-  spec.usage = "strike bench render SCENE.json -o DIR [--cache DIR] [--repeat N]";
+  spec.usage = "strike bench render SCENE.json -o DIR [--cache DIR] [--repeat N] [--output FORMAT] [--no-transfer]";
   spec.summary =
       "Renders the scene N times with the baseline settings (0.5 ms physics step) and N times with the\n"
       "current ones (1 ms), alternating, and writes DIR/render.csv: per run the load, simulate, modes (read\n"
       "the shapes where contacts landed, or eigen-solve), synthesize and total wall times, the process CPU time, the "
       "real-time factor (audio seconds per wall second)\n"
       "and the 1-minute load average. Prints the medians and current/baseline ratios. Reads banks from\n"
-      "the cache and computes missing ones (the first run then reports their eigen-solves).";
+      "the cache and computes missing ones (the first run then reports their eigen-solves).\n"
+      "With --output FORMAT the baseline is a mono render and the current one renders FORMAT, both at the\n"
+      "current step: the ratio is what that output costs over mono.";
   spec.options = {{"-o", "DIR", "output folder; created if missing"},
                   {"--cache", "DIR", "mode bank cache folder; default $STRIKE_CACHE_DIR or ~/.cache/strike"},
-                  {"--repeat", "N", "renders per configuration; default 5"}};
-  spec.examples = "  strike bench render tests/bench/render/bench-20-plates.json -o /tmp --repeat 5\n";
+                  {"--repeat", "N", "renders per configuration; default 5"},
+                  {"--output", "mono|stereo|binaural|ambix1|ambix2|ambix3",
+                   "render this output against a mono baseline (the KEMAR responses for binaural)"},
+                  {"--no-transfer", "", "the banks `strike render --no-transfer` caches (no acoustic transfer)"}};
+  spec.examples =
+      "  strike bench render tests/bench/render/bench-20-plates.json -o /tmp --repeat 5\n"
+      "  strike bench render tests/bench/render/bench-20-plates.json -o /tmp --output binaural\n";
   spec.min_positional = 1;
   spec.max_positional = 1;
   return spec;
@@ -86,17 +94,28 @@ int runBenchRender(const std::vector<std::string>& raw_args) {
          "1min\n";
 
   struct Config {
-    const char* name;
+    std::string name;
     double substep_s;
+    OutputFormat output;
   };
-  const Config configs[2] = {{"baseline", 0.5e-3}, {"current", RenderSettings{}.substep_s}};
+  const double step_s = RenderSettings{}.substep_s;
+  Config configs[2] = {{"baseline", 0.5e-3, OutputFormat::Mono}, {"current", step_s, OutputFormat::Mono}};
+  if (parsed->has("--output")) {
+    const std::optional<OutputFormat> format = parseOutputFormat(parsed->text("--output"));
+    if (!format)
+      return reportError("bench", badInput("--output = " + parsed->text("--output") +
+                                           " (must be mono, stereo, binaural, ambix1, ambix2 or ambix3)"));
+    configs[0] = {"mono", step_s, OutputFormat::Mono};
+    configs[1] = {parsed->text("--output"), step_s, *format};
+  }
   std::vector<Run> runs[2];
   for (long long r = 0; r < *repeat; ++r) {
     for (int c = 0; c < 2; ++c) {
       RenderSettings settings;
       settings.cache_dir = parsed->text("--cache", defaultCacheDir());
       settings.substep_s = configs[c].substep_s;
-      settings.acoustic_transfer = true;  // the banks `strike render` caches by default
+      settings.output_format = configs[c].output;
+      settings.acoustic_transfer = !parsed->has("--no-transfer");  // the banks `strike render` caches
       const double loadavg = loadAverage();
       const double cpu_start = cpuSeconds();
       Result<RenderResult> result = renderScene(*scene, settings);
@@ -121,7 +140,7 @@ int runBenchRender(const std::vector<std::string>& raw_args) {
           << "," << run.modes_s << "," << run.synthesize_s << "," << run.other_s << "," << run.total_s << ","
           << run.cpu_s << "," << run.realtime << "," << run.loadavg << "\n";
       std::fprintf(stderr, "  %-8s run %lld: total %.3f s, cpu %.3f s, %.1fx real time (load average %.2f)\n",
-                   configs[c].name, r, run.total_s, run.cpu_s, run.realtime, run.loadavg);
+                   configs[c].name.c_str(), r, run.total_s, run.cpu_s, run.realtime, run.loadavg);
     }
   }
   csv.close();
@@ -138,7 +157,8 @@ int runBenchRender(const std::vector<std::string>& raw_args) {
       {"cpu s", &Run::cpu_s},     {"x real time", &Run::realtime}};
   std::printf("strike bench render: %s, %lld runs each (medians), wrote %s\n", parsed->positional[0].c_str(), *repeat,
               csv_path.c_str());
-  std::printf("%-14s %12s %12s %16s\n", "", "baseline", "current", "current/baseline");
+  const std::string ratio = configs[1].name + "/" + configs[0].name;
+  std::printf("%-14s %12s %12s %16s\n", "", configs[0].name.c_str(), configs[1].name.c_str(), ratio.c_str());
   std::printf("%-14s %12.2f %12.2f\n", "step ms", configs[0].substep_s * 1e3, configs[1].substep_s * 1e3);
   for (const auto& [name, field] : fields) {
     const double base = column(0, field), now = column(1, field);
